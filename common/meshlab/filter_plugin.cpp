@@ -1,0 +1,229 @@
+#include "filter_plugin.h"
+
+#include <vcg/complex/append.h>
+
+#include <cmath>
+#include <sstream>
+
+#include "pectus/errors.h"
+
+namespace pectus::ml {
+
+// ---------------------------------------------------------------------------------------------
+// snapshots
+
+namespace {
+void enableLike(CMeshO& dst, const CMeshO& src) {
+  if (src.vert.IsVFAdjacencyEnabled()) dst.vert.EnableVFAdjacency();
+  if (src.vert.IsMarkEnabled()) dst.vert.EnableMark();
+  if (src.vert.IsTexCoordEnabled()) dst.vert.EnableTexCoord();
+  if (src.vert.IsCurvatureEnabled()) dst.vert.EnableCurvature();
+  if (src.vert.IsCurvatureDirEnabled()) dst.vert.EnableCurvatureDir();
+  if (src.vert.IsRadiusEnabled()) dst.vert.EnableRadius();
+  if (src.face.IsQualityEnabled()) dst.face.EnableQuality();
+  if (src.face.IsColorEnabled()) dst.face.EnableColor();
+  if (src.face.IsMarkEnabled()) dst.face.EnableMark();
+  if (src.face.IsFFAdjacencyEnabled()) dst.face.EnableFFAdjacency();
+  if (src.face.IsVFAdjacencyEnabled()) dst.face.EnableVFAdjacency();
+  if (src.face.IsCurvatureDirEnabled()) dst.face.EnableCurvatureDir();
+  if (src.face.IsWedgeTexCoordEnabled()) dst.face.EnableWedgeTexCoord();
+}
+}  // namespace
+
+struct FilterContext::Snapshot {
+  MeshModel* model = nullptr;
+  int dataMask = 0;
+  CMeshO copy;
+};
+
+FilterContext::FilterContext(MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb,
+                             std::function<void(const std::string&)> logger, QString filterName)
+    : md_(md), par_(par), cb_(cb), logger_(std::move(logger)), filterName_(std::move(filterName)),
+      previousCurrent_(md.mm()) {}
+
+FilterContext::~FilterContext() {
+  if (!done_) rollback();
+}
+
+MeshModel& FilterContext::current() {
+  if (md_.mm() == nullptr) throw InputError("there is no current layer: load or create a mesh first");
+  return *md_.mm();
+}
+
+void FilterContext::log(const std::string& line) const {
+  if (logger_) logger_(line);
+}
+
+void FilterContext::progress(int percent, const char* what) const {
+  if (cb_) cb_(std::max(0, std::min(100, percent)), what);
+}
+
+CMeshO& FilterContext::modify(MeshModel& m) {
+  for (const auto& s : snapshots_)
+    if (s->model == &m) return m.cm;
+  for (MeshModel* a : added_)
+    if (a == &m) return m.cm;  // a layer of our own: removed on failure anyway
+  auto s = std::make_unique<Snapshot>();
+  s->model = &m;
+  s->dataMask = m.dataMask();
+  enableLike(s->copy, m.cm);
+  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(s->copy, m.cm, false, false);
+  s->copy.Tr = m.cm.Tr;
+  s->copy.bbox = m.cm.bbox;
+  snapshots_.push_back(std::move(s));
+  return m.cm;
+}
+
+MeshModel& FilterContext::addLayer(const QString& label, bool setCurrent) {
+  MeshModel* mm = md_.addNewMesh("", label, setCurrent);
+  if (mm == nullptr) throw std::runtime_error("MeshLab could not add a layer");
+  added_.push_back(mm);
+  return *mm;
+}
+
+void FilterContext::commit() { done_ = true; }
+
+void FilterContext::rollback() {
+  done_ = true;
+  for (auto it = added_.rbegin(); it != added_.rend(); ++it) md_.delMesh(*it);
+  added_.clear();
+  for (auto& s : snapshots_) {
+    MeshModel& m = *s->model;
+    const int now = m.dataMask();
+    m.clearDataMask(now & ~s->dataMask);
+    m.updateDataMask(s->dataMask);
+    m.cm.Clear();
+    vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(m.cm, s->copy, false, false);
+    m.cm.Tr = s->copy.Tr;
+    m.cm.bbox = s->copy.bbox;
+    if (m.cm.face.IsFFAdjacencyEnabled()) vcg::tri::UpdateTopology<CMeshO>::FaceFace(m.cm);
+    if (m.cm.vert.IsVFAdjacencyEnabled() && m.cm.face.IsVFAdjacencyEnabled())
+      vcg::tri::UpdateTopology<CMeshO>::VertexFace(m.cm);
+  }
+  snapshots_.clear();
+  if (previousCurrent_ != nullptr) md_.setCurrentMesh(previousCurrent_->id());
+}
+
+// ---------------------------------------------------------------------------------------------
+// checked parameters
+
+namespace {
+std::string q(const QString& s) { return s.toStdString(); }
+}  // namespace
+
+float FilterContext::floatIn(const QString& name, double lo, double hi, bool loOpen, bool hiOpen) const {
+  const double v = par_.getFloat(name);
+  const bool ok = std::isfinite(v) && (loOpen ? v > lo : v >= lo) && (hiOpen ? v < hi : v <= hi);
+  if (!ok) {
+    std::ostringstream s;
+    s << "parameter '" << q(name) << "' must be in " << (loOpen ? "(" : "[") << lo << ", " << hi
+      << (hiOpen ? ")" : "]") << ", got " << v;
+    throw InputError(s.str());
+  }
+  return float(v);
+}
+
+int FilterContext::intIn(const QString& name, int lo, int hi) const {
+  const int v = par_.getInt(name);
+  if (v < lo || v > hi)
+    throw InputError("parameter '" + q(name) + "' must be an integer in [" + std::to_string(lo) + ", " +
+                     std::to_string(hi) + "], got " + std::to_string(v));
+  return v;
+}
+
+int FilterContext::enumIn(const QString& name, int count) const {
+  const int v = par_.getEnum(name);
+  if (v < 0 || v >= count)
+    throw InputError("parameter '" + q(name) + "' must be one of 0.." + std::to_string(count - 1) + ", got " +
+                     std::to_string(v));
+  return v;
+}
+
+MeshModel& FilterContext::mesh(const QString& name) const {
+  MeshModel* m = par_.getMesh(name);
+  if (m == nullptr) throw InputError("parameter '" + q(name) + "' does not name an existing layer");
+  return *m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// plugin base
+
+FilterPluginBase::~FilterPluginBase() {
+  for (QAction* a : actionList) delete a;
+}
+
+void FilterPluginBase::addFilter(QObject* owner, const FilterSpec& spec) {
+  specs_.push_back(spec);
+  typeList << spec.id;
+  actionList << new QAction(spec.name, owner);
+}
+
+const FilterSpec& FilterPluginBase::spec(int id) const {
+  for (const auto& s : specs_)
+    if (s.id == id) return s;
+  static const FilterSpec none;
+  return none;
+}
+
+QString FilterPluginBase::filterName(FilterIDType id) const { return spec(id).name; }
+QString FilterPluginBase::filterInfo(FilterIDType id) const { return spec(id).info; }
+MeshFilterInterface::FilterClass FilterPluginBase::getClass(QAction* a) { return spec(ID(a)).cls; }
+MeshFilterInterface::FILTER_ARITY FilterPluginBase::filterArity(QAction* a) const { return spec(ID(a)).arity; }
+int FilterPluginBase::getRequirements(QAction* a) { return spec(ID(a)).requirements; }
+int FilterPluginBase::postCondition(QAction* a) const { return spec(ID(a)).postCondition; }
+
+void FilterPluginBase::initParameterSet(QAction* a, MeshModel&, RichParameterList&) { (void)a; }
+
+void FilterPluginBase::initParameterSet(QAction* a, MeshDocument& md, RichParameterList& par) {
+  try {
+    initParameters(ID(a), md, par);
+  } catch (const std::exception& e) {
+    Log(GLLogStream::WARNING, (filterName(ID(a)) + ": " + e.what()).toUtf8().constData());
+  }
+}
+
+bool FilterPluginBase::applyFilter(QAction* a, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) {
+  const int id = ID(a);
+  const QString name = filterName(id);
+  auto logger = [this](const std::string& s) { Log(GLLogStream::FILTER, s.c_str()); };
+  std::string failure;
+  {
+    FilterContext ctx(md, par, cb, logger, name);
+    try {
+      if (spec(id).needsCurrentMesh) ctx.current();
+      run(id, ctx);
+      ctx.commit();
+      ctx.progress(100, "done");
+      return true;
+    } catch (const InputError& e) {
+      failure = e.what();
+    } catch (const std::bad_alloc&) {
+      failure = "out of memory";
+    } catch (const std::exception& e) {
+      failure = std::string("internal error: ") + e.what();
+    } catch (...) {
+      failure = "unknown internal error";
+    }
+    ctx.rollback();
+  }
+  const std::string msg = name.toStdString() + " failed: " + failure + " (the layers are unchanged)";
+  Log(GLLogStream::WARNING, msg.c_str());
+  errorMessage = QString::fromStdString(msg);
+  return false;
+}
+
+std::string formatHistogram(const std::vector<std::size_t>& h) {
+  std::ostringstream s;
+  for (std::size_t i = 0; i < h.size(); ++i) s << (i ? " " : "") << h[i];
+  return s.str();
+}
+
+std::string fmt(double v, int precision) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
+}  // namespace pectus::ml

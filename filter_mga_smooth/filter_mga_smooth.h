@@ -1,0 +1,22 @@
+// MeshLab adapter of the MGA smoothing plugin: maps parameters, layers, progress and errors to the
+// host-free cores (common/ and this folder's core files). No algorithm lives here.
+#pragma once
+#include "filter_plugin.h"
+
+class FilterMgaSmoothPlugin : public QObject, public pectus::ml::FilterPluginBase {
+  Q_OBJECT
+  MESHLAB_PLUGIN_IID_EXPORTER(MESH_FILTER_INTERFACE_IID)
+  Q_INTERFACES(MeshFilterInterface)
+
+ public:
+  enum { FP_ELEMENT_QUALITY };
+  FilterMgaSmoothPlugin();
+  QString pluginName() const override { return "FilterPectusMgaSmooth"; }
+
+ protected:
+  void initParameters(int id, MeshDocument& md, RichParameterList& par) override;
+  void run(int id, pectus::ml::FilterContext& ctx) override;
+
+ private:
+  void runElementQuality(pectus::ml::FilterContext& ctx);
+};
