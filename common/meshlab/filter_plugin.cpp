@@ -3,6 +3,8 @@
 #include <vcg/complex/append.h>
 
 #include <cmath>
+#include <cstring>
+#include <set>
 #include <sstream>
 
 #include "pectus/errors.h"
@@ -28,12 +30,54 @@ void enableLike(CMeshO& dst, const CMeshO& src) {
   if (src.face.IsCurvatureDirEnabled()) dst.face.EnableCurvatureDir();
   if (src.face.IsWedgeTexCoordEnabled()) dst.face.EnableWedgeTexCoord();
 }
+
+// Named per-vertex/per-face custom attributes (vcg's AddPerFaceAttribute, e.g. tissue labels) are
+// not copied by MeshCopy into a mesh that lacks them: keep their raw bytes beside the copy.
+struct AttributeBytes {
+  std::string name;
+  std::size_t count = 0;
+  std::vector<char> bytes;
+};
+
+std::vector<AttributeBytes> saveAttributes(const std::set<vcg::PointerToAttribute>& attrs, std::size_t count) {
+  std::vector<AttributeBytes> out;
+  for (const auto& a : attrs) {
+    if (a._name.empty()) continue;
+    auto* h = static_cast<vcg::SimpleTempDataBase*>(a._handle);
+    AttributeBytes b{a._name, count, {}};
+    b.bytes.resize(h->SizeOf() * count);
+    if (count) std::memcpy(b.bytes.data(), h->DataBegin(), b.bytes.size());
+    out.push_back(std::move(b));
+  }
+  return out;
+}
+
+void restoreAttributes(std::set<vcg::PointerToAttribute>& attrs, const std::vector<AttributeBytes>& saved) {
+  for (auto it = attrs.begin(); it != attrs.end();) {
+    const AttributeBytes* b = nullptr;
+    for (const auto& s : saved)
+      if (s.name == it->_name) b = &s;
+    auto* h = static_cast<vcg::SimpleTempDataBase*>(it->_handle);
+    if (b == nullptr) {  // added by the failed filter (or unnamed): drop it
+      if (!it->_name.empty()) {
+        delete h;
+        it = attrs.erase(it);
+        continue;
+      }
+    } else {
+      h->Resize(b->count);
+      if (b->count) std::memcpy(h->DataBegin(), b->bytes.data(), b->bytes.size());
+    }
+    ++it;
+  }
+}
 }  // namespace
 
 struct FilterContext::Snapshot {
   MeshModel* model = nullptr;
   int dataMask = 0;
   CMeshO copy;
+  std::vector<AttributeBytes> vertAttr, faceAttr;
 };
 
 FilterContext::FilterContext(MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb,
@@ -70,6 +114,8 @@ CMeshO& FilterContext::modify(MeshModel& m) {
   vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(s->copy, m.cm, false, false);
   s->copy.Tr = m.cm.Tr;
   s->copy.bbox = m.cm.bbox;
+  s->vertAttr = saveAttributes(m.cm.vert_attr, m.cm.vert.size());
+  s->faceAttr = saveAttributes(m.cm.face_attr, m.cm.face.size());
   snapshots_.push_back(std::move(s));
   return m.cm;
 }
@@ -96,6 +142,8 @@ void FilterContext::rollback() {
     vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(m.cm, s->copy, false, false);
     m.cm.Tr = s->copy.Tr;
     m.cm.bbox = s->copy.bbox;
+    restoreAttributes(m.cm.vert_attr, s->vertAttr);
+    restoreAttributes(m.cm.face_attr, s->faceAttr);
     if (m.cm.face.IsFFAdjacencyEnabled()) vcg::tri::UpdateTopology<CMeshO>::FaceFace(m.cm);
     if (m.cm.vert.IsVFAdjacencyEnabled() && m.cm.face.IsVFAdjacencyEnabled())
       vcg::tri::UpdateTopology<CMeshO>::VertexFace(m.cm);
