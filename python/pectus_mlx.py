@@ -1,0 +1,186 @@
+"""Build complete MeshLab 2020.09 filter scripts (.mlx) and run them with meshlabserver.
+
+Standard library only (pymeshlab wraps a newer MeshLab and does not work with Debian's 2020.09).
+meshlabserver aborts when a parameter is missing or mistyped, so every parameter is given a type:
+
+    from pectus_mlx import Filter, Float, Int, Bool, Enum, Script, run
+    s = Script([Filter("Compute Element Quality (Triangle Alpha / Quad Beta)",
+                       elementType=Enum(0, ["Auto", "Triangles (alpha)", "Quads (beta)"]),
+                       colorize=Bool(True))])
+    res = run(["in.ply"], s, outputs=[("out.ply", "fq fc")])
+    print(res.rc, res.log)
+"""
+from __future__ import annotations
+
+import os
+import shutil
+import subprocess
+import tempfile
+from dataclasses import dataclass, field
+from typing import Iterable, Sequence
+from xml.sax.saxutils import quoteattr
+
+
+@dataclass
+class _P:
+    value: object
+
+    def xml(self, name: str) -> str:
+        raise NotImplementedError
+
+
+class Float(_P):
+    def xml(self, name):
+        return f'<Param name={quoteattr(name)} type="RichFloat" value="{float(self.value)!r}"/>'
+
+
+class Int(_P):
+    def xml(self, name):
+        return f'<Param name={quoteattr(name)} type="RichInt" value="{int(self.value)}"/>'
+
+
+class Bool(_P):
+    def xml(self, name):
+        return f'<Param name={quoteattr(name)} type="RichBool" value="{"true" if self.value else "false"}"/>'
+
+
+class String(_P):
+    def xml(self, name):
+        return f'<Param name={quoteattr(name)} type="RichString" value={quoteattr(str(self.value))}/>'
+
+
+class AbsPerc(_P):
+    def xml(self, name):
+        return f'<Param name={quoteattr(name)} type="RichAbsPerc" value="{float(self.value)!r}" min="0" max="1e9"/>'
+
+
+class Mesh(_P):
+    """A layer, by its index in the document (0 = first loaded)."""
+
+    def xml(self, name):
+        return f'<Param name={quoteattr(name)} type="RichMesh" value="{int(self.value)}"/>'
+
+
+@dataclass
+class Enum(_P):
+    values: Sequence[str] = ()
+
+    def xml(self, name):
+        vals = "".join(f" enum_val{i}={quoteattr(v)}" for i, v in enumerate(self.values))
+        return (f'<Param name={quoteattr(name)} type="RichEnum" value="{int(self.value)}" '
+                f'enum_cardinality="{len(self.values)}"{vals}/>')
+
+
+@dataclass
+class SaveFile(_P):
+    ext: str = ".csv"
+
+    def xml(self, name):
+        return (f'<Param name={quoteattr(name)} type="RichSaveFile" value={quoteattr(str(self.value))} '
+                f'ext={quoteattr(self.ext)} exts_cardinality="0"/>')
+
+
+@dataclass
+class OpenFile(_P):
+    exts: Sequence[str] = ()
+
+    def xml(self, name):
+        e = "".join(f" exts{i}={quoteattr(v)}" for i, v in enumerate(self.exts))
+        return (f'<Param name={quoteattr(name)} type="RichOpenFile" value={quoteattr(str(self.value))} '
+                f'exts_cardinality="{len(self.exts)}"{e}/>')
+
+
+class Point3(_P):
+    def xml(self, name):
+        x, y, z = (float(c) for c in self.value)
+        return f'<Param name={quoteattr(name)} type="RichPoint3f" x="{x!r}" y="{y!r}" z="{z!r}"/>'
+
+
+@dataclass
+class Filter:
+    name: str
+    params: dict = field(default_factory=dict)
+
+    def __init__(self, name: str, **params: _P):
+        self.name = name
+        self.params = params
+        for k, v in params.items():
+            if not isinstance(v, _P):
+                raise TypeError(f"parameter {k} of {name!r} needs a type (Float, Int, Bool, Enum, ...), got {v!r}")
+
+    def xml(self) -> str:
+        body = "".join(f"  {p.xml(k)}\n" for k, p in self.params.items())
+        return f" <filter name={quoteattr(self.name)}>\n{body} </filter>\n"
+
+
+@dataclass
+class Script:
+    filters: list
+
+    def xml(self) -> str:
+        return "<!DOCTYPE FilterScript>\n<FilterScript>\n" + "".join(f.xml() for f in self.filters) + "</FilterScript>\n"
+
+    def write(self, path: str) -> str:
+        with open(path, "w", encoding="utf-8") as fh:
+            fh.write(self.xml())
+        return path
+
+
+@dataclass
+class Result:
+    rc: int
+    stdout: str
+
+    @property
+    def log(self) -> list[str]:
+        """The filters' Log() lines (meshlabserver prints them as 'LOG: <level> <text>')."""
+        out = []
+        for line in self.stdout.splitlines():
+            if line.startswith("LOG: "):
+                parts = line[5:].split(" ", 1)
+                out.append(parts[1] if len(parts) == 2 and parts[0].isdigit() else line[5:])
+        return out
+
+
+def find_meshlabserver(prefix: str | None = None) -> str:
+    prefix = prefix or os.environ.get("PECTUS_PREFIX")
+    if prefix:
+        exe = os.path.join(prefix, "bin", "meshlabserver")
+        if os.path.exists(exe):
+            return exe
+    exe = shutil.which("meshlabserver")
+    if not exe:
+        raise FileNotFoundError("meshlabserver not found: set PECTUS_PREFIX or install meshlab")
+    return exe
+
+
+def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tuple] = (),
+        prefix: str | None = None, timeout: float = 3600, cwd: str | None = None) -> Result:
+    """Run meshlabserver under xvfb-run. outputs: (path, "vc fq ...", layer_index or None).
+    Returns the exit code and everything printed (stdout + stderr)."""
+    exe = find_meshlabserver(prefix)
+    cmd = ["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", exe]
+    for i in inputs:
+        cmd += ["-i", i]
+    tmp = None
+    if isinstance(script, Script):
+        fd, tmp = tempfile.mkstemp(suffix=".mlx")
+        os.close(fd)
+        script.write(tmp)
+        script = tmp
+    for out in outputs:
+        path, mask = out[0], out[1] if len(out) > 1 else ""
+        cmd += ["-o", path]
+        if len(out) > 2 and out[2] is not None:
+            cmd += ["-l", str(out[2])]
+        if mask:
+            cmd += ["-m"] + mask.split()
+    if script:
+        cmd += ["-s", script]
+    try:
+        p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=timeout, cwd=cwd,
+                           text=True, errors="replace")
+        return Result(p.returncode, p.stdout)
+    finally:
+        if tmp:
+            os.unlink(tmp)

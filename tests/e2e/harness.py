@@ -1,0 +1,162 @@
+"""End-to-end test helpers: meshlabserver from the private prefix, PLY/OFF read and write, checks.
+Tests are plain scripts (run by ctest): call check(...) for each assertion, finish() at the end."""
+from __future__ import annotations
+
+import os
+import struct
+import sys
+import tempfile
+
+import numpy as np
+
+import pectus_mlx as mlx
+
+SOURCE = os.environ.get("PECTUS_SOURCE", os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..")))
+PREFIX = os.environ.get("PECTUS_PREFIX", os.path.join(SOURCE, "build", "prefix"))
+DATA = os.path.join(SOURCE, "tests", "data")
+_failures: list[str] = []
+_passed = 0
+
+
+def workdir(name: str) -> str:
+    d = tempfile.mkdtemp(prefix=f"pectus-{name}-")
+    return d
+
+
+def run(inputs, script, outputs=(), timeout=1800):
+    r = mlx.run(inputs, script, outputs, prefix=PREFIX, timeout=timeout)
+    return r
+
+
+def check(cond: bool, what: str, detail: str = "") -> bool:
+    global _passed
+    if cond:
+        _passed += 1
+        print(f"ok   {what}")
+    else:
+        _failures.append(what)
+        print(f"FAIL {what} {detail}")
+    return cond
+
+
+def finish():
+    print(f"{_passed} passed, {len(_failures)} failed")
+    sys.exit(1 if _failures else 0)
+
+
+# ---------------------------------------------------------------------------------------------
+# mesh files
+
+_PLY_TYPES = {"char": "b", "int8": "b", "uchar": "B", "uint8": "B", "short": "h", "int16": "h", "ushort": "H",
+              "uint16": "H", "int": "i", "int32": "i", "uint": "I", "uint32": "I", "float": "f", "float32": "f",
+              "double": "d", "float64": "d"}
+
+
+def read_ply(path: str) -> dict:
+    """Reads ascii or binary_little_endian PLY. Returns {'vertex': {prop: array}, 'face': {prop: array,
+    'vertex_indices': list of lists}} plus 'V' (n,3) and 'F' (list of index lists)."""
+    with open(path, "rb") as fh:
+        data = fh.read()
+    end = data.index(b"end_header") + len(b"end_header")
+    while data[end:end + 1] in (b"\r", b"\n"):
+        end += 1
+        if data[end - 1:end] == b"\n":
+            break
+    header = data[:end].decode("ascii", "replace").splitlines()
+    fmt = "ascii"
+    elements = []
+    for line in header:
+        t = line.split()
+        if not t:
+            continue
+        if t[0] == "format":
+            fmt = t[1]
+        elif t[0] == "element":
+            elements.append((t[1], int(t[2]), []))
+        elif t[0] == "property":
+            if t[1] == "list":
+                elements[-1][2].append((t[4], ("list", t[2], t[3])))
+            else:
+                elements[-1][2].append((t[2], t[1]))
+    out = {}
+    body = data[end:]
+    if fmt == "ascii":
+        tokens = body.split()
+        pos = 0
+        for name, count, props in elements:
+            cols = {p[0]: [] for p in props}
+            for _ in range(count):
+                for pname, ptype in props:
+                    if isinstance(ptype, tuple):
+                        n = int(tokens[pos]); pos += 1
+                        cols[pname].append([int(x) for x in tokens[pos:pos + n]]); pos += n
+                    else:
+                        cols[pname].append(float(tokens[pos])); pos += 1
+            out[name] = {k: (v if isinstance(v and v[0], list) else np.array(v)) for k, v in cols.items()}
+    else:
+        assert fmt == "binary_little_endian", fmt
+        pos = 0
+        for name, count, props in elements:
+            cols = {p[0]: [] for p in props}
+            for _ in range(count):
+                for pname, ptype in props:
+                    if isinstance(ptype, tuple):
+                        ct = "<" + _PLY_TYPES[ptype[1]]
+                        n = struct.unpack_from(ct, body, pos)[0]; pos += struct.calcsize(ct)
+                        it = "<" + str(n) + _PLY_TYPES[ptype[2]]
+                        cols[pname].append(list(struct.unpack_from(it, body, pos))); pos += struct.calcsize(it)
+                    else:
+                        t = "<" + _PLY_TYPES[ptype]
+                        cols[pname].append(struct.unpack_from(t, body, pos)[0]); pos += struct.calcsize(t)
+            out[name] = {k: (v if (v and isinstance(v[0], list)) else np.array(v)) for k, v in cols.items()}
+    v = out.get("vertex", {})
+    out["V"] = np.stack([v["x"], v["y"], v["z"]], axis=1) if "x" in v else np.zeros((0, 3))
+    out["F"] = out.get("face", {}).get("vertex_indices", [])
+    return out
+
+
+def write_off(path: str, V, F):
+    with open(path, "w") as fh:
+        fh.write(f"OFF\n{len(V)} {len(F)} 0\n")
+        for p in V:
+            fh.write(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g}\n")
+        for f in F:
+            fh.write(f"{len(f)} " + " ".join(str(int(i)) for i in f) + "\n")
+    return path
+
+
+def write_ply(path: str, V, F):
+    with open(path, "w") as fh:
+        fh.write(f"ply\nformat ascii 1.0\nelement vertex {len(V)}\nproperty float x\nproperty float y\nproperty float z\n"
+                 f"element face {len(F)}\nproperty list uchar int vertex_indices\nend_header\n")
+        for p in V:
+            fh.write(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g}\n")
+        for f in F:
+            fh.write(f"{len(f)} " + " ".join(str(int(i)) for i in f) + "\n")
+    return path
+
+
+def grid(n: int, quads: bool, jitter: float = 0.0, seed: int = 1, z=None):
+    """(n+1)^2 vertices on [0,n]^2, interior vertices jittered; quads or triangles."""
+    rng = np.random.default_rng(seed)
+    V = []
+    for j in range(n + 1):
+        for i in range(n + 1):
+            x, y = float(i), float(j)
+            if 0 < i < n and 0 < j < n and jitter:
+                x += rng.uniform(-jitter, jitter)
+                y += rng.uniform(-jitter, jitter)
+            V.append((x, y, 0.0 if z is None else z(x, y)))
+    F = []
+    for j in range(n):
+        for i in range(n):
+            a = j * (n + 1) + i
+            b, c, d = a + 1, a + n + 2, a + n + 1
+            F += [[a, b, c, d]] if quads else [[a, b, c], [a, c, d]]
+    return np.array(V), F
+
+
+def file_digest(path: str) -> str:
+    import hashlib
+    with open(path, "rb") as fh:
+        return hashlib.sha256(fh.read()).hexdigest()
