@@ -1,0 +1,121 @@
+// The adapter contract on a real MeshDocument (Debian's libmeshlab-common): a filter that modifies a
+// layer, adds one, and then fails must leave the document exactly as it was, log why, return false.
+#include <gtest/gtest.h>
+
+#include <vcg/complex/algorithms/create/platonic.h>
+
+#include "filter_plugin.h"
+#include "pectus/errors.h"
+#include "pectus/labels.h"
+
+namespace {
+
+class FakePlugin : public QObject, public pectus::ml::FilterPluginBase {
+ public:
+  enum { FP_BREAK, FP_OK, FP_CRASH };
+  std::function<void(pectus::ml::FilterContext&)> body;
+  FakePlugin() {
+    pectus::ml::FilterSpec s;
+    s.id = FP_BREAK; s.name = "Break"; s.info = "x"; addFilter(this, s);
+    s.id = FP_OK; s.name = "Ok"; addFilter(this, s);
+    s.id = FP_CRASH; s.name = "Crash"; addFilter(this, s);
+  }
+  QString pluginName() const override { return "Fake"; }
+  void initParameters(int, MeshDocument&, RichParameterList& par) override {
+    par.addParam(RichFloat("x", 1.0f, "x", "x"));
+  }
+  void run(int id, pectus::ml::FilterContext& ctx) override {
+    if (id == FP_CRASH) throw std::runtime_error("boom");
+    body(ctx);
+  }
+};
+
+std::vector<float> coords(const CMeshO& m) {
+  std::vector<float> c;
+  for (const auto& v : m.vert) for (int k = 0; k < 3; ++k) c.push_back(v.cP()[k]);
+  return c;
+}
+
+}  // namespace
+
+TEST(Adapter, FailedFilterRollsBackEveryLayer) {
+  MeshDocument md;
+  MeshModel* a = md.addNewMesh("", "a");
+  vcg::tri::Icosahedron(a->cm);
+  a->updateDataMask(MeshModel::MM_FACEQUALITY);
+  for (auto& f : a->cm.face) f.Q() = 0.25f;
+  pectus::writeFaceLabels(a->cm, std::vector<int>(a->cm.face.size(), 2), std::vector<int>(a->cm.face.size(), 107));
+  const auto before = coords(a->cm);
+  const int fn = a->cm.fn, mask = a->dataMask();
+
+  FakePlugin p;
+  p.body = [&](pectus::ml::FilterContext& ctx) {
+    CMeshO& m = ctx.modify(ctx.current());
+    for (auto& v : m.vert) v.P() *= 2.0f;
+    vcg::tri::Allocator<CMeshO>::DeleteFace(m, m.face[0]);
+    auto h = vcg::tri::Allocator<CMeshO>::GetPerFaceAttribute<int>(m, pectus::kTissueAttr);
+    h[3] = 99;
+    ctx.current().updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_VERTQUALITY);
+    ctx.addLayer("new");
+    throw pectus::InputError("parameter 'x' is wrong");
+  };
+  RichParameterList par;
+  p.initParameterSet(p.actions()[0], md, par);
+  EXPECT_FALSE(p.applyFilter(p.actions()[0], md, par, nullptr));
+  EXPECT_EQ(md.size(), 1);
+  EXPECT_EQ(md.mm(), a);
+  EXPECT_EQ(coords(a->cm), before);
+  EXPECT_EQ(a->cm.fn, fn);
+  EXPECT_FALSE(a->cm.face[0].IsD());
+  EXPECT_EQ(a->dataMask(), mask);
+  auto labels = pectus::readFaceLabels(a->cm);
+  ASSERT_TRUE(labels.has_value());
+  EXPECT_EQ(labels->tissue[3], 2);
+  EXPECT_EQ(labels->part[3], 107);
+  EXPECT_NE(p.errorMsg().indexOf("parameter 'x' is wrong"), -1);
+  EXPECT_NE(p.errorMsg().indexOf("unchanged"), -1);
+}
+
+TEST(Adapter, ExceptionsNeverEscapeAndSuccessCommits) {
+  MeshDocument md;
+  MeshModel* a = md.addNewMesh("", "a");
+  vcg::tri::Tetrahedron(a->cm);
+  FakePlugin p;
+  RichParameterList par;
+  p.initParameterSet(p.actions()[2], md, par);
+  EXPECT_FALSE(p.applyFilter(p.actions()[2], md, par, nullptr));
+  EXPECT_NE(p.errorMsg().indexOf("internal error: boom"), -1);
+
+  p.body = [&](pectus::ml::FilterContext& ctx) {
+    for (auto& v : ctx.modify(ctx.current()).vert) v.P() *= 3.0f;
+    ctx.addLayer("kept");
+  };
+  EXPECT_TRUE(p.applyFilter(p.actions()[1], md, par, nullptr));
+  EXPECT_EQ(md.size(), 2);
+  EXPECT_FLOAT_EQ(std::abs(a->cm.vert[0].P()[0]), 3.0f);
+}
+
+TEST(Adapter, CheckedParametersNameTheParameter) {
+  MeshDocument md;
+  md.addNewMesh("", "a");
+  RichParameterList par;
+  par.addParam(RichFloat("accuracy", -1.0f, "Accuracy", ""));
+  pectus::ml::FilterContext ctx(md, par, nullptr, nullptr, "t");
+  try {
+    ctx.floatIn("accuracy", 0, 1, true);
+    FAIL() << "no throw";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'accuracy' must be in (0, 1], got -1"), std::string::npos) << e.what();
+  }
+  ctx.commit();
+}
+
+TEST(Adapter, NoCurrentLayerIsAMessage) {
+  MeshDocument md;
+  FakePlugin p;
+  p.body = [](pectus::ml::FilterContext&) {};
+  RichParameterList par;
+  par.addParam(RichFloat("x", 1.0f, "x", "x"));
+  EXPECT_FALSE(p.applyFilter(p.actions()[1], md, par, nullptr));
+  EXPECT_NE(p.errorMsg().indexOf("no current layer"), -1);
+}
