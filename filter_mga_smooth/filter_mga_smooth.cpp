@@ -78,7 +78,7 @@ void FilterMgaSmoothPlugin::runElementQuality(FilterContext& ctx) {
                                  (q.mesh.triangles() ? " + " + std::to_string(q.mesh.triangles()) + " triangles (alpha)" : "")
                            : "Element quality (triangle alpha): " + std::to_string(q.mesh.elements.size()) + " triangles";
   ctx.log(head + "; min " + fmt(q.stats.min) + " mean " + fmt(q.stats.mean) + " max " + fmt(q.stats.max) +
-          "; invalid (<= 0): " + std::to_string(q.stats.invalid));
+          "; invalid (not positive): " + std::to_string(q.stats.invalid));
   ctx.log("Element quality histogram, 10 bins on [0,1]: " + pectus::ml::formatHistogram(q.stats.histogram));
 }
 
