@@ -1,0 +1,465 @@
+#include "pectus/fe/solver.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <sstream>
+
+#include <Eigen/CholmodSupport>
+#include <Eigen/Dense>
+#include <Eigen/Sparse>
+
+#include "pectus/errors.h"
+
+namespace pectus::fe {
+
+using Eigen::Matrix3d;
+using Eigen::Vector3d;
+
+std::map<int, Material> thesisMaterials(double nuBone, double nuCartilage) {
+  return {{1, {11500.0, nuBone}}, {2, {12.25, nuCartilage}}, {3, {11500.0, nuBone}}};
+}
+
+void Problem::addForce(int node, const Vector3d& f) {
+  if (mesh && force.size() != mesh->nodes.size()) force.resize(mesh->nodes.size(), Vector3d::Zero());
+  force.at(node) += f;
+}
+
+namespace {
+
+// Quadrature and shape functions ---------------------------------------------------------------
+struct Gauss { double L[4]; double w; };
+const std::vector<Gauss>& rule(int order) {
+  static const std::vector<Gauss> r1{{{0.25, 0.25, 0.25, 0.25}, 1.0 / 6.0}};
+  static const double a = 0.5854101966249685, b = 0.1381966011250105;
+  static const std::vector<Gauss> r2{{{a, b, b, b}, 1.0 / 24}, {{b, a, b, b}, 1.0 / 24},
+                                     {{b, b, a, b}, 1.0 / 24}, {{b, b, b, a}, 1.0 / 24}};
+  return order == 2 ? r2 : r1;
+}
+
+// derivatives of the shape functions w.r.t. (xi, eta, zeta) at volume coordinates L (L0 = 1-xi-eta-zeta)
+void shapeDerivs(int order, const double L[4], Eigen::Matrix<double, 10, 3>& dN) {
+  Eigen::Matrix<double, 10, 4> dL = Eigen::Matrix<double, 10, 4>::Zero();  // dN/dL_k
+  if (order == 1) {
+    for (int i = 0; i < 4; ++i) dL(i, i) = 1.0;
+  } else {
+    for (int i = 0; i < 4; ++i) dL(i, i) = 4.0 * L[i] - 1.0;
+    for (int k = 0; k < 6; ++k) {
+      int a = kTetEdges[k][0], b = kTetEdges[k][1];
+      dL(4 + k, a) = 4.0 * L[b];
+      dL(4 + k, b) = 4.0 * L[a];
+    }
+  }
+  for (int i = 0; i < 10; ++i)
+    for (int j = 0; j < 3; ++j) dN(i, j) = dL(i, j + 1) - dL(i, 0);
+}
+
+inline Eigen::Matrix<double, 6, 6> elasticity(const Material& m) {
+  const double lam = m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu)), mu = m.E / (2 * (1 + m.nu));
+  Eigen::Matrix<double, 6, 6> D = Eigen::Matrix<double, 6, 6>::Zero();
+  D.topLeftCorner<3, 3>().setConstant(lam);
+  for (int i = 0; i < 3; ++i) D(i, i) += 2 * mu, D(3 + i, 3 + i) = mu;
+  return D;
+}
+
+inline Eigen::Matrix<double, 6, 1> voigt(const Matrix3d& s, bool engineeringShear) {
+  const double f = engineeringShear ? 2.0 : 1.0;
+  Eigen::Matrix<double, 6, 1> v;
+  v << s(0, 0), s(1, 1), s(2, 2), f * s(0, 1), f * s(1, 2), f * s(0, 2);
+  return v;
+}
+
+double vonMisesOf(const Matrix3d& s) {
+  return std::sqrt(0.5 * ((s(0, 0) - s(1, 1)) * (s(0, 0) - s(1, 1)) + (s(1, 1) - s(2, 2)) * (s(1, 1) - s(2, 2)) +
+                          (s(2, 2) - s(0, 0)) * (s(2, 2) - s(0, 0))) +
+                   3.0 * (s(0, 1) * s(0, 1) + s(1, 2) * s(1, 2) + s(0, 2) * s(0, 2)));
+}
+// ANSYS EPEL,EQV: 1/(1+nu') sqrt(1/2 sum (ei-ej)^2 + 3/4 sum gamma^2), gamma engineering shear = 2 e_ij
+double eqStrainOf(const Matrix3d& e, double nu) {
+  const double g01 = 2 * e(0, 1), g12 = 2 * e(1, 2), g02 = 2 * e(0, 2);
+  return std::sqrt(0.5 * ((e(0, 0) - e(1, 1)) * (e(0, 0) - e(1, 1)) + (e(1, 1) - e(2, 2)) * (e(1, 1) - e(2, 2)) +
+                          (e(2, 2) - e(0, 0)) * (e(2, 2) - e(0, 0))) +
+                   0.75 * (g01 * g01 + g12 * g12 + g02 * g02)) /
+         (1.0 + nu);
+}
+
+class Cholmod : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
+ public:
+  double rcond() { return m_cholmodFactor ? cholmod_rcond(m_cholmodFactor, &cholmod()) : 0.0; }
+};
+
+}  // namespace
+
+struct Solver::Impl {
+  Problem p;
+  const TetMesh* m = nullptr;
+  int nen = 4;
+  std::vector<int> freeIndex;                 // per dof: free index or -1
+  std::vector<const Material*> mat;           // per tet
+  std::vector<Eigen::Matrix<double, 6, 6>> D; // per tet (pointer-free copy by tissue would be smaller)
+  std::map<int, Eigen::Matrix<double, 6, 6>> Dby;
+  Eigen::VectorXd fext;                        // full, 3n
+  Eigen::VectorXd prescribed;                  // full, 3n (0 for free dofs)
+  std::vector<char> isConstrained;
+  Eigen::SparseMatrix<double> K;               // free x free, lower triangle
+  Cholmod chol;
+  bool analysed = false;
+
+  int nFree = 0;
+  Impl() { chol.cholmod().print = 0; }  // errors are reported by exceptions, not on stderr
+
+  // position of K(row, col) (row >= col) in K.valuePtr()
+  int pos(int row, int col) const {
+    const int* b = K.innerIndexPtr() + K.outerIndexPtr()[col];
+    const int* e = K.innerIndexPtr() + K.outerIndexPtr()[col + 1];
+    const int* it = std::lower_bound(b, e, row);
+    return static_cast<int>(it - K.innerIndexPtr());
+  }
+
+  // element gradients dN/dX at quadrature point, returns det(J)*w
+  double gradients(int t, const Gauss& g, Eigen::Matrix<double, 10, 3>& G) const {
+    Eigen::Matrix<double, 10, 3> dN;
+    shapeDerivs(m->order, g.L, dN);
+    Matrix3d J = Matrix3d::Zero();
+    for (int a = 0; a < nen; ++a) J += m->nodes[m->tets[t][a]] * dN.row(a);
+    const double det = J.determinant();
+    const Matrix3d Jinv = J.inverse();
+    G.topRows(nen) = dN.topRows(nen) * Jinv;
+    return det * g.w;
+  }
+
+  // assemble tangent (free-free lower) and internal forces (all dofs) at displacement u
+  void assemble(const Eigen::VectorXd& u, bool nonlinear, Eigen::VectorXd& fint) {
+    std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
+    fint.setZero(u.size());
+    double* val = K.valuePtr();
+    double* fi = fint.data();
+    const int nt = m->numTets();
+    const int ndof = 3 * nen;
+#pragma omp parallel for schedule(dynamic, 256)
+    for (int t = 0; t < nt; ++t) {
+      Eigen::Matrix<double, 30, 30> Ke;
+      Eigen::Matrix<double, 30, 1> fe;
+      Ke.topLeftCorner(ndof, ndof).setZero();
+      fe.head(ndof).setZero();
+      Eigen::Matrix<double, 10, 3> G, ue;
+      for (int a = 0; a < nen; ++a) ue.row(a) = u.segment<3>(3 * m->tets[t][a]).transpose();
+      const auto& Dm = D[t];
+      for (const Gauss& g : rule(m->order)) {
+        const double w = gradients(t, g, G);
+        const Matrix3d H = ue.topRows(nen).transpose() * G.topRows(nen);  // du_i/dX_j
+        Matrix3d F = Matrix3d::Identity();
+        Matrix3d E;
+        if (nonlinear) {
+          F += H;
+          E = 0.5 * (H + H.transpose() + H.transpose() * H);
+        } else {
+          E = 0.5 * (H + H.transpose());
+        }
+        const Eigen::Matrix<double, 6, 1> Sv = Dm * voigt(E, true);
+        Matrix3d S;
+        S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
+        const Matrix3d P = F * S;  // first Piola (linear: sigma)
+        Eigen::Matrix<double, 6, 30> B;
+        for (int a = 0; a < nen; ++a) {
+          const Vector3d Ga = G.row(a).transpose();
+          fe.segment<3>(3 * a) += w * P * Ga;
+          for (int i = 0; i < 3; ++i) {
+            B(0, 3 * a + i) = F(i, 0) * Ga(0);
+            B(1, 3 * a + i) = F(i, 1) * Ga(1);
+            B(2, 3 * a + i) = F(i, 2) * Ga(2);
+            B(3, 3 * a + i) = F(i, 0) * Ga(1) + F(i, 1) * Ga(0);
+            B(4, 3 * a + i) = F(i, 1) * Ga(2) + F(i, 2) * Ga(1);
+            B(5, 3 * a + i) = F(i, 0) * Ga(2) + F(i, 2) * Ga(0);
+          }
+        }
+        const auto Bn = B.leftCols(ndof);
+        Ke.topLeftCorner(ndof, ndof).noalias() += w * (Bn.transpose() * Dm * Bn);
+        if (nonlinear) {
+          for (int a = 0; a < nen; ++a)
+            for (int b = 0; b < nen; ++b) {
+              const double k = w * G.row(a).dot(S * G.row(b).transpose());
+              for (int i = 0; i < 3; ++i) Ke(3 * a + i, 3 * b + i) += k;
+            }
+        }
+      }
+      int dofs[30];
+      for (int a = 0; a < nen; ++a)
+        for (int i = 0; i < 3; ++i) dofs[3 * a + i] = 3 * m->tets[t][a] + i;
+      for (int r = 0; r < ndof; ++r) {
+#pragma omp atomic
+        fi[dofs[r]] += fe(r);
+      }
+      for (int c = 0; c < ndof; ++c) {
+        const int fc = freeIndex[dofs[c]];
+        if (fc < 0) continue;
+        for (int r = 0; r < ndof; ++r) {
+          const int fr = freeIndex[dofs[r]];
+          if (fr < fc) continue;  // lower triangle only (and skips constrained: -1)
+          const int k = pos(fr, fc);
+#pragma omp atomic
+          val[k] += Ke(r, c);
+        }
+      }
+    }
+  }
+
+  Eigen::VectorXd freePart(const Eigen::VectorXd& full) const {
+    Eigen::VectorXd r(nFree);
+    for (size_t d = 0; d < freeIndex.size(); ++d)
+      if (freeIndex[d] >= 0) r(freeIndex[d]) = full(d);
+    return r;
+  }
+
+  void factorize(double& seconds) {
+    auto t0 = std::chrono::steady_clock::now();
+    if (!analysed) {
+      chol.analyzePattern(K);
+      analysed = true;
+    }
+    chol.factorize(K);
+    seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (chol.info() != Eigen::Success)
+      throw InputError(
+          "The stiffness matrix is singular or not positive definite: the model is not held enough (fix more "
+          "nodes so that every part of the mesh is connected to a fixed node), or an element is inverted.");
+    const double rc = chol.rcond();
+    if (!(rc > 1e-15)) {
+      std::ostringstream s;
+      s << "The stiffness matrix is numerically singular (reciprocal condition estimate " << rc
+        << "): the fixed nodes do not prevent a rigid-body motion of some part of the model; fix more nodes "
+           "(at least three non-collinear nodes per connected part).";
+      throw InputError(s.str());
+    }
+  }
+
+  Eigen::VectorXd solveFree(const Eigen::VectorXd& rhs) {
+    Eigen::VectorXd x = chol.solve(rhs);
+    if (!x.allFinite())
+      throw InputError("The linear solve produced non-finite displacements (singular stiffness matrix): fix more nodes.");
+    return x;
+  }
+
+  void stresses(const Eigen::VectorXd& u, bool nonlinear, Result& res) const {
+    const int nt = m->numTets();
+    res.vonMises.assign(nt, 0.0);
+    res.eqStrain.assign(nt, 0.0);
+    const Gauss c{{0.25, 0.25, 0.25, 0.25}, 1.0};
+#pragma omp parallel for schedule(static)
+    for (int t = 0; t < nt; ++t) {
+      Eigen::Matrix<double, 10, 3> G, ue;
+      for (int a = 0; a < nen; ++a) ue.row(a) = u.segment<3>(3 * m->tets[t][a]).transpose();
+      gradients(t, c, G);
+      const Matrix3d H = ue.topRows(nen).transpose() * G.topRows(nen);
+      Matrix3d E = nonlinear ? Matrix3d(0.5 * (H + H.transpose() + H.transpose() * H)) : Matrix3d(0.5 * (H + H.transpose()));
+      const Eigen::Matrix<double, 6, 1> Sv = D[t] * voigt(E, true);
+      Matrix3d S;
+      S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
+      if (nonlinear) {
+        const Matrix3d F = Matrix3d::Identity() + H;
+        S = F * S * F.transpose() / F.determinant();
+      }
+      res.vonMises[t] = vonMisesOf(S);
+      res.eqStrain[t] = eqStrainOf(E, mat[t]->nu);
+    }
+  }
+};
+
+Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
+  Impl& I = *impl_;
+  I.p = prob;
+  if (!prob.mesh) throw InputError("FE problem without a mesh.");
+  const TetMesh& m = *prob.mesh;
+  I.m = &m;
+  I.nen = m.nodesPerTet();
+  if (m.tets.empty()) throw InputError("The FE mesh has no tetrahedra.");
+  if (m.tissue.size() != m.tets.size()) throw InputError("The FE mesh needs one tissue label per tetrahedron.");
+  const int n = m.numNodes();
+  for (int t = 0; t < m.numTets(); ++t) {
+    for (int a = 0; a < I.nen; ++a)
+      if (m.tets[t][a] < 0 || m.tets[t][a] >= n) throw InputError("Tetrahedron " + std::to_string(t) + " has an invalid node index.");
+    if (!(m.tetVolume(t) > 0))
+      throw InputError("Tetrahedron " + std::to_string(t) + " is inverted or flat (volume <= 0).");
+  }
+  for (const auto& kv : prob.materials) {
+    if (!(kv.second.E > 0) || !(kv.second.nu > -1 && kv.second.nu < 0.5))
+      throw InputError("Material of tissue " + std::to_string(kv.first) + ": need E > 0 and -1 < Poisson ratio < 0.5.");
+    I.Dby[kv.first] = elasticity(kv.second);
+  }
+  I.D.resize(m.numTets());
+  I.mat.resize(m.numTets());
+  for (int t = 0; t < m.numTets(); ++t) {
+    auto it = prob.materials.find(m.tissue[t]);
+    if (it == prob.materials.end())
+      throw InputError("No material for tissue label " + std::to_string(m.tissue[t]) + " (tetrahedron " + std::to_string(t) + ").");
+    I.mat[t] = &it->second;
+    I.D[t] = I.Dby[m.tissue[t]];
+  }
+  // rebind material pointers to our copy
+  for (int t = 0; t < m.numTets(); ++t) I.mat[t] = &I.p.materials.at(m.tissue[t]);
+
+  if (prob.fixed.empty())
+    throw InputError("No fixed nodes: the stiffness matrix is singular (the model can move as a rigid body). "
+                     "Fix at least the nodes where the model is held (e.g. the costovertebral joints).");
+  I.isConstrained.assign(3 * n, 0);
+  I.prescribed.setZero(3 * n);
+  for (const auto& d : prob.fixed) {
+    if (d.node < 0 || d.node >= n || d.dof < 0 || d.dof > 2) throw InputError("Fixed node/dof out of range.");
+    I.isConstrained[3 * d.node + d.dof] = 1;
+    I.prescribed(3 * d.node + d.dof) = d.value;
+  }
+  I.fext.setZero(3 * n);
+  if (!prob.force.empty()) {
+    if (static_cast<int>(prob.force.size()) != n) throw InputError("Force vector size differs from the node count.");
+    for (int i = 0; i < n; ++i) I.fext.segment<3>(3 * i) = prob.force[i];
+  }
+  // nodes used by tets; unused nodes get no dofs
+  std::vector<char> used(n, 0);
+  for (const auto& e : m.tets)
+    for (int a = 0; a < I.nen; ++a) used[e[a]] = 1;
+  I.freeIndex.assign(3 * n, -1);
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d)
+      if (used[i] && !I.isConstrained[3 * i + d]) I.freeIndex[3 * i + d] = I.nFree++;
+  if (I.nFree == 0) throw InputError("Every degree of freedom is fixed: nothing to solve.");
+
+  // node adjacency -> lower-triangular pattern of the free dofs
+  std::vector<std::vector<int>> adj(n);
+  for (const auto& e : m.tets)
+    for (int a = 0; a < I.nen; ++a)
+      for (int b = 0; b < I.nen; ++b) adj[e[a]].push_back(e[b]);
+  std::vector<int> outer(I.nFree + 1, 0);
+  std::vector<int> inner;
+  inner.reserve(static_cast<size_t>(I.nFree) * 40);
+  std::vector<std::vector<int>> colRows;
+  int col = 0;
+  for (int i = 0; i < n; ++i) {
+    auto& a = adj[i];
+    std::sort(a.begin(), a.end());
+    a.erase(std::unique(a.begin(), a.end()), a.end());
+    for (int d = 0; d < 3; ++d) {
+      const int fc = I.freeIndex[3 * i + d];
+      if (fc < 0) continue;
+      std::vector<int> rows;
+      for (int j : a)
+        for (int e = 0; e < 3; ++e) {
+          const int fr = I.freeIndex[3 * j + e];
+          if (fr >= fc) rows.push_back(fr);
+        }
+      std::sort(rows.begin(), rows.end());
+      inner.insert(inner.end(), rows.begin(), rows.end());
+      outer[++col] = static_cast<int>(inner.size());
+    }
+    std::vector<int>().swap(a);
+  }
+  std::vector<double> zeros(inner.size(), 0.0);
+  I.K = Eigen::Map<Eigen::SparseMatrix<double>>(I.nFree, I.nFree, static_cast<Eigen::Index>(inner.size()),
+                                                 outer.data(), inner.data(), zeros.data());
+}
+
+Solver::~Solver() = default;
+
+int Solver::numFreeDofs() const { return impl_->nFree; }
+
+Result Solver::solveLinear(double scale) {
+  Impl& I = *impl_;
+  Result res;
+  res.u = scale * I.prescribed;
+  Eigen::VectorXd fint;
+  I.assemble(res.u, false, fint);
+  Eigen::VectorXd r = I.freePart(scale * I.fext - fint);
+  I.factorize(lastFactorSeconds_);
+  const Eigen::VectorXd du = I.solveFree(r);
+  for (size_t d = 0; d < I.freeIndex.size(); ++d)
+    if (I.freeIndex[d] >= 0) res.u(d) += du(I.freeIndex[d]);
+  // residual check: catches near-singular systems the factorisation let through
+  Eigen::VectorXd fint2;
+  I.assemble(res.u, false, fint2);
+  const double rn = I.freePart(scale * I.fext - fint2).norm();
+  const double ref = std::max({I.freePart(scale * I.fext).norm(), fint2.norm(), 1e-30});
+  if (!(rn <= 1e-6 * ref))
+    throw InputError("The linear system could not be solved accurately (relative residual " + std::to_string(rn / ref) +
+                     "): the model is nearly singular; fix more nodes.");
+  res.increments = 1;
+  res.newtonIterations = 1;
+  I.stresses(res.u, false, res);
+  return res;
+}
+
+Result Solver::solveNonlinear(const NewtonOptions& opt, double scale) {
+  Impl& I = *impl_;
+  if (opt.loadSteps < 1 || opt.maxIterations < 1) throw InputError("Newton: need at least one load step and one iteration.");
+  Result res;
+  res.nonlinear = true;
+  Eigen::VectorXd u = Eigen::VectorXd::Zero(I.fext.size()), fint;
+  const double fextNorm = I.freePart(I.fext).norm() * std::abs(scale);
+  double lam = 0, dlam = 1.0 / opt.loadSteps;
+  int cut = 0;
+  while (lam < 1.0 - 1e-12) {
+    const double target = std::min(1.0, lam + dlam);
+    Eigen::VectorXd uTrial = u;
+    for (size_t d = 0; d < I.freeIndex.size(); ++d)
+      if (I.isConstrained[d]) uTrial(d) = target * scale * I.prescribed(d);
+    bool converged = false;
+    double duNorm = 0;
+    for (int it = 0; it <= opt.maxIterations; ++it) {
+      I.assemble(uTrial, true, fint);
+      const Eigen::VectorXd r = I.freePart(target * scale * I.fext - fint);
+      double reactions = 0;
+      for (size_t d = 0; d < I.freeIndex.size(); ++d)
+        if (I.isConstrained[d]) reactions += fint(d) * fint(d);
+      const double ref = std::max({target * fextNorm, std::sqrt(reactions), 1e-30});
+      const double rn = r.norm();
+      if (!std::isfinite(rn)) break;
+      if (rn <= opt.tolResidual * ref && (it == 0 || duNorm <= opt.tolDisplacement * std::max(uTrial.norm(), 1e-30))) {
+        converged = true;
+        break;
+      }
+      if (it == opt.maxIterations) break;
+      try {
+        I.factorize(lastFactorSeconds_);
+      } catch (const InputError&) {
+        if (it == 0 && lam == 0) throw;  // singular at the undeformed state: a real input problem
+        break;                             // lost positive definiteness (buckling/inversion): cut back
+      }
+      const Eigen::VectorXd du = I.chol.solve(r);
+      if (!du.allFinite()) break;
+      duNorm = du.norm();
+      for (size_t d = 0; d < I.freeIndex.size(); ++d)
+        if (I.freeIndex[d] >= 0) uTrial(d) += du(I.freeIndex[d]);
+      ++res.newtonIterations;
+    }
+    if (converged) {
+      u = uTrial;
+      lam = target;
+      ++res.increments;
+    } else {
+      if (++cut > opt.maxCutbacks) {
+        std::ostringstream s;
+        s << "The nonlinear (Newton) solve did not converge at load factor " << target << " after " << opt.maxCutbacks
+          << " step cut-backs: the load is too large for the model (instability or inverted elements); "
+             "reduce the force, use more load steps or check the boundary conditions.";
+        throw InputError(s.str());
+      }
+      dlam *= 0.5;
+    }
+  }
+  res.u = u;
+  I.stresses(res.u, true, res);
+  return res;
+}
+
+std::vector<double> averageToNodes(const TetMesh& m, const std::vector<double>& perTet) {
+  std::vector<double> sum(m.nodes.size(), 0.0), w(m.nodes.size(), 0.0);
+  for (int t = 0; t < m.numTets(); ++t) {
+    const double v = std::abs(m.tetVolume(t));
+    for (int a = 0; a < m.nodesPerTet(); ++a) {
+      sum[m.tets[t][a]] += v * perTet[t];
+      w[m.tets[t][a]] += v;
+    }
+  }
+  for (size_t i = 0; i < sum.size(); ++i) sum[i] = w[i] > 0 ? sum[i] / w[i] : 0.0;
+  return sum;
+}
+
+}  // namespace pectus::fe
