@@ -1,0 +1,52 @@
+// Micro-genetic algorithm (thesis chapter 2.2; Krishnakumar 1989, Carroll 1996): a population of five
+// binary strings, elitism (the best string always survives), selection (roulette wheel as the thesis,
+// or tournament), crossover with probability one, no mutation; when the population has nominally
+// converged (almost every bit equal to the best string's), it restarts: the best is kept and the
+// others are drawn anew. Maximises the fitness. Seeded and reproducible.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <random>
+#include <vector>
+
+namespace pectus::mga {
+
+enum class Selection { Roulette, Tournament };
+
+struct Options {
+  int population = 5;
+  double accuracy = 1e-3;       ///< wanted accuracy of each design parameter (eq. 1-1)
+  int maxGenerations = 60;      ///< over all restarts
+  int maxRestarts = 8;
+  double convergedBitFraction = 0.05;  ///< nominal convergence: fewer differing bits than this fraction
+  Selection selection = Selection::Roulette;
+  int tournamentSize = 2;
+  std::uint64_t seed = 1;
+};
+
+struct Range { double lo = 0, hi = 1; };
+
+struct Result {
+  std::vector<double> x;        ///< best design parameters
+  double fitness = 0;
+  int generations = 0;
+  int restarts = 0;
+  int evaluations = 0;
+  std::vector<double> bestHistory;  ///< best fitness after each generation (never decreases)
+};
+
+/// Substring length for a parameter interval `a` and accuracy `acc`: the smallest nl with
+/// a/acc <= 2^nl - 1, i.e. 2^(nl-1) < a/acc <= 2^nl of eq. 1-1 (at least 1 bit).
+int substringLength(double interval, double accuracy);
+
+/// Runs the micro-GA. `fitness` gets the decoded parameters; higher is better.
+/// `seedPoint` (optional, size = ranges.size()) is encoded into the first individual, so the search
+/// starts from a known solution (e.g. the node's current position) and can never end worse than it.
+Result optimize(const std::vector<Range>& ranges, const std::function<double(const std::vector<double>&)>& fitness,
+                const Options& opt, const std::vector<double>* seedPoint = nullptr);
+
+/// A per-item seed from a global seed and an item index (splitmix64): results do not depend on the
+/// order or the thread items are processed in.
+std::uint64_t itemSeed(std::uint64_t seed, std::uint64_t item);
+
+}  // namespace pectus::mga

@@ -1,0 +1,474 @@
+// Ferguson bicubic envelope (thesis 6.3.2, Figs. 6-8..6-10, eqs. 6-1..6-3).
+//
+// The surface: (n+1) x m key points P(i,j) = O + L(i,j) (cos phi_j, sin phi_j) at heights
+// z_i = zLo + i (zHi-zLo)/n, phi_j = 2 pi j / m; each patch is a Ferguson bicubic (Hermite, zero
+// twists) with the key points' tangents by central differences (one-sided on the end rings), so
+// the patches join with C1 continuity and the z of the surface is linear in u.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include "pectus/errors.h"
+#include "thoracic_volume.h"
+
+namespace pectus::vol {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+inline double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+inline void hermite(double t, double h[4], double dh[4]) {
+  const double t2 = t * t, t3 = t2 * t;
+  h[0] = 2 * t3 - 3 * t2 + 1, h[1] = -2 * t3 + 3 * t2, h[2] = t3 - 2 * t2 + t, h[3] = t3 - t2;
+  if (dh) dh[0] = 6 * t2 - 6 * t, dh[1] = -6 * t2 + 6 * t, dh[2] = 3 * t2 - 4 * t + 1, dh[3] = 3 * t2 - 2 * t;
+}
+
+// The u-combination of a patch's geometry matrix (xy only): A_b(u) and dA_b/du
+struct Column {
+  Eigen::Vector2d A[4], dA[4];
+};
+
+struct Surf {
+  const Envelope& e;
+  double dz;
+  std::vector<double> c, s;
+  explicit Surf(const Envelope& env) : e(env), dz((env.zHi - env.zLo) / env.n), c(env.m), s(env.m) {
+    for (int j = 0; j < e.m; ++j) c[j] = std::cos(e.phi[j]), s[j] = std::sin(e.phi[j]);
+  }
+  int wrap(int j) const { return ((j % e.m) + e.m) % e.m; }
+  Eigen::Vector2d P(int i, int j) const {
+    j = wrap(j);
+    const double L = e.L[std::size_t(i) * e.m + j];
+    return e.axis + L * Eigen::Vector2d(c[j], s[j]);
+  }
+  Eigen::Vector2d Pu(int i, int j) const {
+    if (i == 0) return P(1, j) - P(0, j);
+    if (i == e.n) return P(e.n, j) - P(e.n - 1, j);
+    return 0.5 * (P(i + 1, j) - P(i - 1, j));
+  }
+  Eigen::Vector2d Pv(int i, int j) const { return 0.5 * (P(i, j + 1) - P(i, j - 1)); }
+  Column column(int i, int j, double u) const {
+    double h[4], dh[4];
+    hermite(u, h, dh);
+    const Eigen::Vector2d p00 = P(i, j), p10 = P(i + 1, j), p01 = P(i, j + 1), p11 = P(i + 1, j + 1);
+    const Eigen::Vector2d u00 = Pu(i, j), u10 = Pu(i + 1, j), u01 = Pu(i, j + 1), u11 = Pu(i + 1, j + 1);
+    const Eigen::Vector2d v00 = Pv(i, j), v10 = Pv(i + 1, j), v01 = Pv(i, j + 1), v11 = Pv(i + 1, j + 1);
+    Column C;
+    C.A[0] = h[0] * p00 + h[1] * p10 + h[2] * u00 + h[3] * u10;
+    C.A[1] = h[0] * p01 + h[1] * p11 + h[2] * u01 + h[3] * u11;
+    C.A[2] = h[0] * v00 + h[1] * v10;
+    C.A[3] = h[0] * v01 + h[1] * v11;
+    C.dA[0] = dh[0] * p00 + dh[1] * p10 + dh[2] * u00 + dh[3] * u10;
+    C.dA[1] = dh[0] * p01 + dh[1] * p11 + dh[2] * u01 + dh[3] * u11;
+    C.dA[2] = dh[0] * v00 + dh[1] * v10;
+    C.dA[3] = dh[0] * v01 + dh[1] * v11;
+    return C;
+  }
+  // radius of the surface along the ray from the axis at angle (cos a, sin a), height z: Newton-Raphson in v
+  double ray(double ca, double sa, double angle, double z, int* its = nullptr) const {
+    const double dphi = 2 * kPi / e.m;
+    double t = (z - e.zLo) / dz;
+    int i = std::clamp(int(std::floor(t)), 0, e.n - 1);
+    const double u = std::clamp(t - i, 0.0, 1.0);
+    double a = angle / dphi;
+    int j = int(std::floor(a));
+    double v = a - j;
+    j = wrap(j);
+    const Eigen::Vector2d d(ca, sa);
+    Column C = column(i, j, u);
+    int k = 0, switches = 0;
+    Eigen::Vector2d S;
+    for (; k < 30; ++k) {
+      double h[4], dh[4];
+      hermite(v, h, dh);
+      S = h[0] * C.A[0] + h[1] * C.A[1] + h[2] * C.A[2] + h[3] * C.A[3];
+      const Eigen::Vector2d Sv = dh[0] * C.A[0] + dh[1] * C.A[1] + dh[2] * C.A[2] + dh[3] * C.A[3];
+      const double f = cross2(d, S - e.axis), fp = cross2(d, Sv);
+      if (std::abs(fp) < 1e-300) break;
+      const double dv = f / fp;
+      v -= dv;
+      if ((v < -1e-9 || v > 1 + 1e-9) && switches < 4) {
+        ++switches;
+        if (v < 0) j = wrap(j - 1), v += 1;
+        else j = wrap(j + 1), v -= 1;
+        C = column(i, j, u);
+        continue;
+      }
+      if (std::abs(dv) < 1e-12) {
+        hermite(v, h, nullptr);
+        S = h[0] * C.A[0] + h[1] * C.A[1] + h[2] * C.A[2] + h[3] * C.A[3];
+        break;
+      }
+    }
+    if (its) *its = k;
+    return d.dot(S - e.axis);
+  }
+};
+
+const double kGx[5] = {-0.9061798459386640, -0.5384693101056831, 0.0, 0.5384693101056831, 0.9061798459386640};
+const double kGw[5] = {0.2369268850561891, 0.4786286704993665, 0.5688888888888889, 0.4786286704993665, 0.2369268850561891};
+}  // namespace
+
+Eigen::Vector3d Envelope::key(int i, int j) const {
+  const double L0 = L[std::size_t(i) * m + j];
+  return {axis.x() + L0 * std::cos(phi[j]), axis.y() + L0 * std::sin(phi[j]), zLo + i * (zHi - zLo) / n};
+}
+
+Eigen::Vector3d Envelope::eval(int i, int j, double u, double v, Eigen::Vector3d* Su, Eigen::Vector3d* Sv) const {
+  Surf sf(*this);
+  const Column C = sf.column(i, j, u);
+  double h[4], dh[4];
+  hermite(v, h, dh);
+  Eigen::Vector2d S(0, 0), SU(0, 0), SV(0, 0);
+  for (int b = 0; b < 4; ++b) S += h[b] * C.A[b], SU += h[b] * C.dA[b], SV += dh[b] * C.A[b];
+  const double dz = (zHi - zLo) / n;
+  if (Su) *Su = {SU.x(), SU.y(), dz};
+  if (Sv) *Sv = {SV.x(), SV.y(), 0.0};
+  return {S.x(), S.y(), zLo + (i + u) * dz};
+}
+
+double Envelope::rayRadius(double angle, double z, int* iterations) const {
+  Surf sf(*this);
+  double a = std::fmod(angle, 2 * kPi);
+  if (a < 0) a += 2 * kPi;
+  return sf.ray(std::cos(a), std::sin(a), a, z, iterations);
+}
+
+double Envelope::volume() const {
+  // eq. 6-3 with the origin on the axis at zLo: V = 1/3 [ lateral integral of r.(Sv x Su) + top cap ]
+  // (the bottom cap lies in the plane through the origin and contributes 0)
+  Surf sf(*this);
+  const Eigen::Vector3d O(axis.x(), axis.y(), zLo);
+  double lateral = 0;
+  for (int i = 0; i < n; ++i)
+    for (int j = 0; j < m; ++j)
+      for (int a = 0; a < 5; ++a) {
+        const double u = 0.5 * (kGx[a] + 1);
+        const Column C = sf.column(i, j, u);
+        for (int b = 0; b < 5; ++b) {
+          const double v = 0.5 * (kGx[b] + 1);
+          double h[4], dh[4];
+          hermite(v, h, dh);
+          Eigen::Vector2d S(0, 0), SU(0, 0), SV(0, 0);
+          for (int k = 0; k < 4; ++k) S += h[k] * C.A[k], SU += h[k] * C.dA[k], SV += dh[k] * C.A[k];
+          const double dz = (zHi - zLo) / n;
+          const Eigen::Vector3d r(S.x() - O.x(), S.y() - O.y(), (i + u) * dz);
+          const Eigen::Vector3d su(SU.x(), SU.y(), dz), sv(SV.x(), SV.y(), 0);
+          lateral += 0.25 * kGw[a] * kGw[b] * r.dot(sv.cross(su));
+        }
+      }
+  // top cap area by Green's theorem along the top boundary curve (u = 1 of the last patch row)
+  double area = 0;
+  for (int j = 0; j < m; ++j) {
+    const Column C = sf.column(n - 1, j, 1.0);
+    for (int b = 0; b < 5; ++b) {
+      const double v = 0.5 * (kGx[b] + 1);
+      double h[4], dh[4];
+      hermite(v, h, dh);
+      Eigen::Vector2d S(0, 0), SV(0, 0);
+      for (int k = 0; k < 4; ++k) S += h[k] * C.A[k], SV += dh[k] * C.A[k];
+      area += 0.5 * kGw[b] * 0.5 * cross2(S - axis, SV);
+    }
+  }
+  return (lateral + (zHi - zLo) * area) / 3.0;
+}
+
+Soup Envelope::tessellate(int t) const {
+  t = std::max(1, t);
+  Soup s;
+  const int rows = n * t + 1, cols = m * t;
+  s.V.reserve(std::size_t(rows) * cols + 2);
+  for (int I = 0; I < rows; ++I) {
+    const int i = std::min(I / t, n - 1);
+    const double u = double(I - i * t) / t;
+    for (int J = 0; J < cols; ++J) s.V.push_back(eval(i, J / t, u, double(J % t) / t));
+  }
+  const int bot = int(s.V.size());
+  s.V.push_back({axis.x(), axis.y(), zLo});
+  s.V.push_back({axis.x(), axis.y(), zHi});
+  const int top = bot + 1;
+  auto id = [&](int I, int J) { return I * cols + ((J % cols) + cols) % cols; };
+  for (int I = 0; I + 1 < rows; ++I)
+    for (int J = 0; J < cols; ++J) {
+      s.F.push_back({id(I, J), id(I, J + 1), id(I + 1, J + 1)});
+      s.F.push_back({id(I, J), id(I + 1, J + 1), id(I + 1, J)});
+    }
+  for (int J = 0; J < cols; ++J) {
+    s.F.push_back({bot, id(0, J + 1), id(0, J)});
+    s.F.push_back({top, id(rows - 1, J), id(rows - 1, J + 1)});
+  }
+  return s;
+}
+
+namespace {
+struct Sample {
+  double z, angle, r, c, s;
+};
+}  // namespace
+
+EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const EnvelopeParams& p, const Progress& progress) {
+  requireRange(range, "of the envelope");
+  if (p.nLong < 1 || p.mAround < 3) throw InputError("the envelope needs at least 1 x 3 patches");
+  if (!(p.minStep > 0)) throw InputError("the envelope's minimum step must be positive");
+  const int n = p.nLong, m = p.mAround, B = std::max(1, p.binsPerPatch);
+  const double dz = (range.zHi - range.zLo) / n, dphi = 2 * kPi / m;
+
+  // the axis: centre of the bounding box (x, y) of the geometry in the range
+  Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
+  std::vector<char> inRange(soup.V.size(), 0);
+  for (const auto& f : soup.F)
+    for (int k = 0; k < 3; ++k) {
+      const auto& v = soup.V[f[k]];
+      if (v.z() >= range.zLo && v.z() <= range.zHi) inRange[f[k]] = 1, lo = lo.cwiseMin(v.head<2>()), hi = hi.cwiseMax(v.head<2>());
+    }
+  if (!(hi.x() >= lo.x())) {
+    std::ostringstream o;
+    o << "no geometry in the measured range: the layer has no vertex between z = " << range.zLo << " and z = "
+      << range.zHi << " mm, the envelope cannot touch anything (check the range or the landmarks)";
+    throw InputError(o.str());
+  }
+  if (std::max(hi.x() - lo.x(), hi.y() - lo.y()) < 1e-6)
+    throw InputError("degenerate axis: the geometry in the measured range has no extent across the long axis (z)");
+  Envelope env;
+  env.n = n, env.m = m, env.zLo = range.zLo, env.zHi = range.zHi;
+  env.axis = 0.5 * (lo + hi);
+  env.phi.resize(m);
+  for (int j = 0; j < m; ++j) env.phi[j] = j * dphi;
+
+  // samples: the vertices in range plus points inside large faces (so that sparse meshes bound the surface)
+  std::vector<Sample> raw;
+  auto addSample = [&](const Eigen::Vector3d& q) {
+    if (q.z() < range.zLo || q.z() > range.zHi) return;
+    const Eigen::Vector2d d = q.head<2>() - env.axis;
+    const double r = d.norm();
+    if (r < 1e-9) return;
+    double a = std::atan2(d.y(), d.x());
+    if (a < 0) a += 2 * kPi;
+    raw.push_back({q.z(), a, r, d.x() / r, d.y() / r});
+  };
+  for (std::size_t i = 0; i < soup.V.size(); ++i)
+    if (inRange[i]) addSample(soup.V[i]);
+  const double rmaxBox = 0.5 * (hi - lo).norm();
+  const double target = std::min(dz, dphi * rmaxBox) / B;
+  for (const auto& f : soup.F) {
+    const Eigen::Vector3d &a = soup.V[f[0]], &b = soup.V[f[1]], &c = soup.V[f[2]];
+    if (std::max({a.z(), b.z(), c.z()}) < range.zLo || std::min({a.z(), b.z(), c.z()}) > range.zHi) continue;
+    const double e = std::max({(a - b).norm(), (b - c).norm(), (c - a).norm()});
+    if (e <= target) continue;
+    const int q = std::min(64, int(std::ceil(e / target)));
+    for (int x = 0; x <= q; ++x)
+      for (int y = 0; x + y <= q; ++y) {
+        if ((x == 0 && y == 0) || (x == q) || (y == q)) continue;
+        addSample(a + (double(x) / q) * (b - a) + (double(y) / q) * (c - a));
+      }
+  }
+  if (raw.empty())
+    throw InputError("no geometry in the measured range: the envelope cannot touch anything");
+  if (progress) progress(5, "envelope samples");
+
+  // reduce: the outermost sample per (patch, bin); quarter occupancy for the singular key points
+  const std::size_t P = std::size_t(n) * m;
+  std::vector<int> best(P * B * B, -1);
+  std::vector<char> quarter(P * 4, 0);
+  double rmax = 0;
+  for (std::size_t k = 0; k < raw.size(); ++k) {
+    const auto& sm = raw[k];
+    const double t = (sm.z - range.zLo) / dz;
+    const int i = std::clamp(int(std::floor(t)), 0, n - 1);
+    const double u = std::clamp(t - i, 0.0, 1.0);
+    const double a = sm.angle / dphi;
+    const int j = std::clamp(int(std::floor(a)), 0, m - 1);
+    const double v = std::clamp(a - j, 0.0, 1.0);
+    const std::size_t pid = std::size_t(i) * m + j;
+    quarter[pid * 4 + (u >= 0.5 ? 2 : 0) + (v >= 0.5 ? 1 : 0)] = 1;
+    const int bu = std::min(B - 1, int(u * B)), bv = std::min(B - 1, int(v * B));
+    int& slot = best[(pid * B + bu) * B + bv];
+    if (slot < 0 || raw[slot].r < sm.r) slot = int(k);
+    rmax = std::max(rmax, sm.r);
+  }
+  std::vector<std::vector<Sample>> perPatch(P);
+  int nSamples = 0;
+  for (std::size_t pid = 0; pid < P; ++pid) {
+    for (int b = 0; b < B * B; ++b)
+      if (best[pid * B * B + b] >= 0) perPatch[pid].push_back(raw[best[pid * B * B + b]]), ++nSamples;
+    std::sort(perPatch[pid].begin(), perPatch[pid].end(), [](const Sample& x, const Sample& y) { return x.r > y.r; });
+  }
+
+  // singular key points (Fig. 6-10): no sample in the four patch quarters around them
+  const int K = (n + 1) * m;
+  auto kid = [m](int i, int j) { return i * m + ((j % m) + m) % m; };
+  std::vector<char> singular(K, 0);
+  int nSingular = 0;
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j < m; ++j) {
+      bool any = false;
+      for (int di = -1; di <= 0; ++di)
+        for (int dj = -1; dj <= 0; ++dj) {
+          const int pi = i + di;
+          if (pi < 0 || pi >= n) continue;
+          const int pj = ((j + dj) % m + m) % m;
+          const int qu = di == -1 ? 1 : 0, qv = dj == -1 ? 1 : 0;
+          any = any || quarter[(std::size_t(pi) * m + pj) * 4 + qu * 2 + qv];
+        }
+      if (!any) singular[kid(i, j)] = 1, ++nSingular;
+    }
+  if (nSingular == K) throw InputError("the envelope cannot touch anything: no key point has a sample around it");
+  // tie every singular key point to its closest non-singular key point along the circle (I-1 first),
+  // a fully singular ring to the nearest ring's key point in the same column
+  std::vector<int> root(K);
+  for (int i = 0; i <= n; ++i)
+    for (int j = 0; j < m; ++j) {
+      const int k = kid(i, j);
+      root[k] = k;
+      if (!singular[k]) continue;
+      int found = -1;
+      for (int d = 1; d <= m / 2 && found < 0; ++d) {
+        if (!singular[kid(i, j - d)]) found = kid(i, j - d);
+        else if (!singular[kid(i, j + d)]) found = kid(i, j + d);
+      }
+      for (int d = 1; d <= n && found < 0; ++d)
+        for (int ii : {i - d, i + d}) {
+          if (found >= 0 || ii < 0 || ii > n) continue;
+          for (int dd = 0; dd <= m / 2 && found < 0; ++dd) {
+            if (!singular[kid(ii, j - dd)]) found = kid(ii, j - dd);
+            else if (!singular[kid(ii, j + dd)]) found = kid(ii, j + dd);
+          }
+        }
+      root[k] = found;
+    }
+  std::vector<std::vector<int>> members(K);
+  for (int k = 0; k < K; ++k) members[root[k]].push_back(k);
+  std::vector<int> roots;
+  for (int k = 0; k < K; ++k)
+    if (root[k] == k) roots.push_back(k);
+  // patches influenced by each group (rows i-2..i+1, columns j-2..j+1 of every member)
+  std::vector<std::vector<int>> affected(K);
+  std::vector<int> stamp(P, -1);
+  for (int g : roots) {
+    for (int k : members[g]) {
+      const int i = k / m, j = k % m;
+      for (int pi = i - 2; pi <= i + 1; ++pi) {
+        if (pi < 0 || pi >= n) continue;
+        for (int pj = j - 2; pj <= j + 1; ++pj) {
+          const int pid = pi * m + ((pj % m) + m) % m;
+          if (stamp[pid] != g) stamp[pid] = g, affected[g].push_back(pid);
+        }
+      }
+    }
+  }
+
+  EnvelopeResult res;
+  Surf sf(env);
+  const double tol = 1e-7 * rmax;
+  auto cutIn = [&](int pid) {
+    for (const auto& sm : perPatch[pid]) {
+      ++res.cutTests;
+      if (sm.r > sf.ray(sm.c, sm.s, sm.angle, sm.z) + tol) return true;
+    }
+    return false;
+  };
+  auto cutAny = [&](const std::vector<int>& pids) {
+    for (int pid : pids)
+      if (cutIn(pid)) return true;
+    return false;
+  };
+  std::vector<int> allPatches(P);
+  std::iota(allPatches.begin(), allPatches.end(), 0);
+
+  double R0 = 1.05 * rmax;
+  env.L.assign(K, R0);
+  for (int guard = 0; cutAny(allPatches) && guard < 20; ++guard) {
+    R0 *= 1.2;
+    env.L.assign(K, R0);
+  }
+  const double minL = 0.02 * R0;
+  // smoothing exclusions: end rings, and the key points around the lower end of the sternum
+  std::vector<char> smoothable(K, 0);
+  for (int i = 1; i < n; ++i)
+    for (int j = 0; j < m; ++j) smoothable[kid(i, j)] = 1;
+  if (p.sternumEnd) {
+    const Eigen::Vector2d d = p.sternumEnd->head<2>() - env.axis;
+    double a = std::atan2(d.y(), d.x());
+    if (a < 0) a += 2 * kPi;
+    for (int i = 0; i <= n; ++i)
+      for (int j = 0; j < m; ++j) {
+        double da = std::abs(j * dphi - a);
+        da = std::min(da, 2 * kPi - da);
+        if (std::abs(range.zLo + i * dz - p.sternumEnd->z()) <= dz && da <= dphi) smoothable[kid(i, j)] = 0;
+      }
+  }
+  auto setGroup = [&](int g, double L) {
+    for (int k : members[g]) env.L[k] = L;
+  };
+
+  double step = p.initialStep > 0 ? p.initialStep : 0.25 * R0;
+  std::vector<char> held(K), touched(K);
+  int totalLevels = 0;
+  for (double s = step; s >= p.minStep; s *= 0.5) ++totalLevels;
+  for (; step >= p.minStep; step *= 0.5) {
+    ++res.levels;
+    std::fill(held.begin(), held.end(), 0);
+    std::fill(touched.begin(), touched.end(), 0);
+    int active = int(roots.size());
+    for (int sweep = 0; active > 0 && sweep < 100000; ++sweep) {
+      const std::vector<double> before = env.L;
+      for (int g : roots) {
+        if (held[g]) continue;
+        const double L0 = env.L[g], L1 = L0 - step;
+        if (L1 < minL) {
+          held[g] = 1;
+          continue;
+        }
+        setGroup(g, L1);
+        if (cutAny(affected[g])) {
+          setGroup(g, L0);
+          held[g] = 1, touched[g] = 1;
+        } else {
+          ++res.moves;
+        }
+      }
+      if (p.smoothing) {
+        // eq. 6-1: L' = mean of the three key points along z, taken only when it is larger
+        const std::vector<double> cur = env.L;
+        std::vector<int> raised;
+        for (int g : roots) {
+          if (!smoothable[g]) continue;
+          const int i = g / m, j = g % m;
+          const double Ls = (cur[kid(i - 1, j)] + cur[g] + cur[kid(i + 1, j)]) / 3.0;
+          if (Ls > cur[g] + 1e-12) raised.push_back(g);
+        }
+        if (!raised.empty()) {
+          for (int g : raised) {
+            const int i = g / m, j = g % m;
+            setGroup(g, (cur[kid(i - 1, j)] + cur[g] + cur[kid(i + 1, j)]) / 3.0);
+          }
+          // a raise changes the tangents of the neighbours: keep it only if nothing is cut
+          std::fill(stamp.begin(), stamp.end(), -1);
+          std::vector<int> pids;
+          for (int g : raised)
+            for (int pid : affected[g])
+              if (stamp[pid] != 0) stamp[pid] = 0, pids.push_back(pid);
+          if (cutAny(pids)) env.L = cur;
+        }
+      }
+      active = 0;
+      for (int g : roots) {
+        if (held[g]) continue;
+        if (before[g] - env.L[g] < 0.25 * step) held[g] = 1;
+        else ++active;
+      }
+    }
+    if (progress) progress(10 + 85 * res.levels / std::max(1, totalLevels), "envelope convergence");
+  }
+  for (int g : roots) res.touching += touched[g];
+  if (res.touching == 0)
+    throw InputError("the envelope cannot touch anything: every key point collapsed onto the axis (is the layer a "
+                     "rib cage around the long axis z, and the range on it?)");
+  res.samples = nSamples;
+  res.singular = nSingular;
+  res.volume = env.volume();
+  res.env = std::move(env);
+  return res;
+}
+
+}  // namespace pectus::vol

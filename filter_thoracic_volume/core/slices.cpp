@@ -1,0 +1,225 @@
+// Slice (intersection) method, thesis 6.3.1, with an automatic intrathoracic region (rule in the header).
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <sstream>
+
+#include "pectus/errors.h"
+#include "thoracic_volume.h"
+
+namespace pectus::vol {
+
+namespace {
+constexpr double kPi = 3.14159265358979323846;
+inline double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
+}  // namespace
+
+double SliceRegion::polygonArea() const {
+  double a = 0;
+  const std::size_t n = polygon.size();
+  for (std::size_t i = 0; i < n; ++i) a += cross2(polygon[i], polygon[(i + 1) % n]);
+  return 0.5 * std::abs(a);
+}
+
+std::vector<std::vector<Seg2>> cutPlanes(const Soup& s, const std::vector<double>& zs) {
+  std::vector<std::vector<Seg2>> out(zs.size());
+  std::vector<std::size_t> order(zs.size());
+  std::iota(order.begin(), order.end(), 0);
+  std::sort(order.begin(), order.end(), [&](auto a, auto b) { return zs[a] < zs[b]; });
+  std::vector<double> sorted(zs.size());
+  for (std::size_t i = 0; i < order.size(); ++i) sorted[i] = zs[order[i]];
+  for (const auto& f : s.F) {
+    const Eigen::Vector3d* p[3] = {&s.V[f[0]], &s.V[f[1]], &s.V[f[2]]};
+    const double lo = std::min({p[0]->z(), p[1]->z(), p[2]->z()}), hi = std::max({p[0]->z(), p[1]->z(), p[2]->z()});
+    auto it = std::lower_bound(sorted.begin(), sorted.end(), lo);
+    for (; it != sorted.end() && *it <= hi; ++it) {
+      const double z0 = *it;
+      double d[3];
+      for (int k = 0; k < 3; ++k) d[k] = p[k]->z() - z0;
+      Eigen::Vector2d pts[2];
+      int np = 0;
+      for (int k = 0; k < 3 && np < 2; ++k) {
+        const int l = (k + 1) % 3;
+        if ((d[k] >= 0) != (d[l] >= 0)) {
+          const double t = d[k] / (d[k] - d[l]);
+          const Eigen::Vector3d q = *p[k] + t * (*p[l] - *p[k]);
+          pts[np++] = q.head<2>();
+        }
+      }
+      if (np == 2) out[order[std::size_t(it - sorted.begin())]].push_back({pts[0], pts[1]});
+    }
+  }
+  return out;
+}
+
+namespace {
+// least-squares slope dr/dk over up to 4 consecutive hit rays starting at k0 going in direction dir
+double runSlope(const std::vector<double>& r, const std::vector<char>& hit, int k0, int dir) {
+  const int K = int(r.size());
+  double sx = 0, sy = 0, sxx = 0, sxy = 0;
+  int n = 0;
+  for (int j = 0; j < 4; ++j) {
+    const int k = ((k0 + dir * j) % K + K) % K;
+    if (!hit[k]) break;
+    const double x = -dir * j;  // position relative to k0 in ray units (increasing angle)
+    sx += x, sy += r[k], sxx += x * x, sxy += x * r[k], ++n;
+  }
+  if (n < 2) return std::nan("");
+  const double den = n * sxx - sx * sx;
+  return den > 0 ? (n * sxy - sx * sy) / den : std::nan("");
+}
+}  // namespace
+
+SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K) {
+  SliceRegion R;
+  R.z = z;
+  R.segments = std::move(segments);
+  R.radius.assign(K, 0.0);
+  R.hit.assign(K, 0);
+  double len = 0;
+  Eigen::Vector2d c(0, 0);
+  for (const auto& sg : R.segments) {
+    const double l = (sg.b - sg.a).norm();
+    len += l, c += l * 0.5 * (sg.a + sg.b);
+  }
+  if (!(len > 0)) return R;
+  c /= len;
+  R.centroid = c;
+  const double dth = 2 * kPi / K;
+  std::vector<double> best(K, 1e300);
+  for (const auto& sg : R.segments) {
+    const Eigen::Vector2d p = sg.a - c, q = sg.b - c, e = q - p;
+    double a0 = std::atan2(p.y(), p.x()), a1 = std::atan2(q.y(), q.x());
+    double da = a1 - a0;
+    while (da > kPi) da -= 2 * kPi;
+    while (da <= -kPi) da += 2 * kPi;
+    double start = da >= 0 ? a0 : a1;
+    const double span = std::abs(da);
+    const long k0 = long(std::ceil(start / dth - 1e-12)), k1 = long(std::floor((start + span) / dth + 1e-12));
+    for (long kk = k0; kk <= k1; ++kk) {
+      const int k = int(((kk % K) + K) % K);
+      const Eigen::Vector2d d(std::cos(k * dth), std::sin(k * dth));
+      const double den = cross2(d, e);
+      if (std::abs(den) < 1e-300) continue;
+      const double t = cross2(p, e) / den, s = cross2(p, d) / den;
+      if (t > 0 && s >= -1e-12 && s <= 1 + 1e-12 && t < best[k]) best[k] = t;
+    }
+  }
+  for (int k = 0; k < K; ++k)
+    if (best[k] < 1e299) R.hit[k] = 1, R.radius[k] = best[k], ++R.hits;
+  if (R.hits < 3) return R;
+  // fill the gaps: cubic Hermite in the angle between the neighbouring hit rays
+  int first = 0;
+  while (!R.hit[first]) ++first;
+  int k = first;
+  do {
+    int next = (k + 1) % K;
+    if (!R.hit[next]) {
+      int g = 1;
+      while (!R.hit[(k + g) % K]) ++g;
+      const int k1 = (k + g) % K;
+      const double r0 = R.radius[k], r1 = R.radius[k1];
+      const double secant = (r1 - r0) / g;
+      double m0 = runSlope(R.radius, R.hit, k, -1), m1 = runSlope(R.radius, R.hit, k1, +1);
+      if (!std::isfinite(m0)) m0 = secant;
+      if (!std::isfinite(m1)) m1 = secant;
+      const double floor = 0.05 * std::min(r0, r1);
+      for (int j = 1; j < g; ++j) {
+        const double t = double(j) / g, t2 = t * t, t3 = t2 * t;
+        const double h00 = 2 * t3 - 3 * t2 + 1, h01 = -2 * t3 + 3 * t2, h10 = t3 - 2 * t2 + t, h11 = t3 - t2;
+        const double r = h00 * r0 + h01 * r1 + (h10 * m0 + h11 * m1) * g;
+        R.radius[(k + j) % K] = std::max(r, floor);
+      }
+      k = k1;
+    } else {
+      k = next;
+    }
+  } while (k != first);
+  R.polygon.resize(K);
+  for (int j = 0; j < K; ++j)
+    R.polygon[j] = c + R.radius[j] * Eigen::Vector2d(std::cos(j * dth), std::sin(j * dth));
+  return R;
+}
+
+namespace {
+// pixel centres of the grid (origin o, pixel size h, cols x rows) inside the polygon (even-odd)
+long long rasterCount(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vector2d& o, double h, int cols, int rows) {
+  long long count = 0;
+  std::vector<double> xs;
+  double ylo = 1e300, yhi = -1e300;
+  for (const auto& p : poly) ylo = std::min(ylo, p.y()), yhi = std::max(yhi, p.y());
+  const int r0 = std::max(0, int(std::floor((ylo - o.y()) / h - 0.5))), r1 = std::min(rows - 1, int(std::ceil((yhi - o.y()) / h)));
+  const std::size_t n = poly.size();
+  for (int r = r0; r <= r1; ++r) {
+    const double y = o.y() + (r + 0.5) * h;
+    xs.clear();
+    for (std::size_t i = 0; i < n; ++i) {
+      const auto& p = poly[i];
+      const auto& q = poly[(i + 1) % n];
+      if ((p.y() > y) != (q.y() > y)) xs.push_back(p.x() + (y - p.y()) * (q.x() - p.x()) / (q.y() - p.y()));
+    }
+    std::sort(xs.begin(), xs.end());
+    for (std::size_t i = 0; i + 1 < xs.size(); i += 2) {
+      long a = long(std::ceil((xs[i] - o.x()) / h - 0.5)), b = long(std::ceil((xs[i + 1] - o.x()) / h - 0.5)) - 1;
+      a = std::max(a, 0L), b = std::min(b, long(cols - 1));
+      if (b >= a) count += b - a + 1;
+    }
+  }
+  return count;
+}
+}  // namespace
+
+SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p, const Progress& progress) {
+  requireRange(range, "of the slice method");
+  if (!(p.spacing > 0)) throw InputError("the slice spacing must be positive");
+  if (p.resolution < 16) throw InputError("the raster resolution must be at least 16 pixels");
+  if (p.rays < 16) throw InputError("the number of boundary rays must be at least 16");
+  SliceResult res;
+  const int N = std::max(1, int(std::ceil((range.zHi - range.zLo) / p.spacing - 1e-9)));
+  const double h = (range.zHi - range.zLo) / N;
+  res.spacingUsed = h;
+  res.slices = N;
+  res.z.resize(N);
+  for (int k = 0; k < N; ++k) res.z[k] = range.zLo + (k + 0.5) * h;
+  if (progress) progress(5, "cutting the planes");
+  auto cuts = cutPlanes(s, res.z);
+  std::vector<SliceRegion> regions(N);
+  for (int k = 0; k < N; ++k) {
+    regions[k] = regionFromSegments(res.z[k], std::move(cuts[k]), p.rays);
+    if (progress && k % std::max(1, N / 10) == 0) progress(10 + 60 * k / N, "slice regions");
+  }
+  Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
+  int nonEmpty = 0;
+  for (const auto& r : regions) {
+    if (r.empty()) continue;
+    ++nonEmpty;
+    for (const auto& q : r.polygon) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+  }
+  if (nonEmpty == 0) {
+    std::ostringstream o;
+    o << "no geometry in the measured range: none of the " << N << " planes between z = " << range.zLo << " and z = "
+      << range.zHi << " mm cuts the layer (check the range, the landmarks, or that the layer is the rib cage)";
+    throw InputError(o.str());
+  }
+  const double ext = std::max(hi.x() - lo.x(), hi.y() - lo.y());
+  res.pixel = ext / p.resolution;
+  const double px = res.pixel;
+  const int cols = int(std::ceil((hi.x() - lo.x()) / px)) + 2, rows = int(std::ceil((hi.y() - lo.y()) / px)) + 2;
+  const Eigen::Vector2d o = lo - Eigen::Vector2d(px, px);
+  res.area.assign(N, 0.0);
+  for (int k = 0; k < N; ++k) {
+    const auto& r = regions[k];
+    if (r.empty()) {
+      ++res.emptySlices;
+      continue;
+    }
+    res.minCoverage = std::min(res.minCoverage, r.coverage());
+    res.area[k] = double(rasterCount(r.polygon, o, px, cols, rows)) * px * px;
+    res.volume += res.area[k] * h;
+    res.polygonVolume += r.polygonArea() * h;
+    if (progress && k % std::max(1, N / 10) == 0) progress(70 + 30 * k / N, "rasterising");
+  }
+  return res;
+}
+
+}  // namespace pectus::vol

@@ -1,0 +1,180 @@
+// Unit tests of the thoracic volume cores on analytic cages with known volumes.
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+#include "analytic_cages.h"
+#include "pectus/errors.h"
+#include "thoracic_volume.h"
+
+using namespace pectus::vol;
+using namespace pectus::vol::testing;
+
+namespace {
+double rel(double v, double exact) { return std::abs(v - exact) / exact; }
+}  // namespace
+
+TEST(ThoracicVolumeDivergence, CubeAndEllipsoid) {
+  // unit cube, outward triangles
+  Soup cube;
+  for (int i = 0; i < 8; ++i) cube.V.push_back({double(i & 1), double((i >> 1) & 1), double((i >> 2) & 1)});
+  const int q[6][4] = {{0, 2, 3, 1}, {4, 5, 7, 6}, {0, 1, 5, 4}, {2, 6, 7, 3}, {0, 4, 6, 2}, {1, 3, 7, 5}};
+  for (auto& f : q) cube.F.push_back({f[0], f[1], f[2]}), cube.F.push_back({f[0], f[2], f[3]});
+  EXPECT_NEAR(divergenceVolume(cube), 1.0, 1e-12);
+  const auto e = closedEllipsoid(120, 90, 150, 256, 128);
+  EXPECT_LT(rel(divergenceVolume(e), 4.0 / 3.0 * kPi * 120 * 90 * 150), 1e-3);
+}
+
+TEST(ThoracicVolumeSlice, BandedEllipticCylinderWithin0p2Percent) {
+  const double a = 130, b = 90;
+  const auto cage = bandedCylinder(a, b, 8, 0, 240, 720, 240);
+  SliceParams p;  // thesis defaults: 2.6 mm, 512 x 512
+  const auto r = sliceVolume(cage, {20, 220}, p);
+  const double exact = kPi * a * b * 200;
+  EXPECT_EQ(r.emptySlices, 0);
+  EXPECT_LT(r.minCoverage, 0.95) << "the test cage must have gaps to close";
+  EXPECT_LT(rel(r.volume, exact), 2e-3) << r.volume << " vs " << exact;
+  EXPECT_LT(rel(r.polygonVolume, exact), 2e-3);
+}
+
+TEST(ThoracicVolumeSlice, BandedEllipsoidWithin0p2Percent) {
+  const double a = 120, b = 85, c = 150;
+  const auto cage = bandedEllipsoid(a, b, c, 8, 130, 720, 520);
+  const auto r = sliceVolume(cage, {-110, 110}, SliceParams{});
+  const double exact = ellipsoidSegmentVolume(a, b, c, -110, 110);
+  EXPECT_LT(rel(r.volume, exact), 2e-3) << r.volume << " vs " << exact << " min coverage " << r.minCoverage;
+}
+
+TEST(ThoracicVolumeSlice, GapRuleBeatsChords) {
+  // the Hermite gap rule must be closer to the ellipse than the chord polygon through the hits
+  const double a = 130, b = 90;
+  const auto cage = bandedCylinder(a, b, 8, 0, 240, 720, 240);
+  auto cuts = cutPlanes(cage, {101.3});
+  const auto R = regionFromSegments(101.3, cuts[0], 720);
+  ASSERT_FALSE(R.empty());
+  ASSERT_LT(R.coverage(), 0.9);
+  std::vector<Eigen::Vector2d> chord;
+  for (std::size_t k = 0; k < R.hit.size(); ++k)
+    if (R.hit[k]) chord.push_back(R.polygon[k]);
+  SliceRegion C;
+  C.polygon = chord;
+  const double exact = kPi * a * b;
+  EXPECT_LT(rel(R.polygonArea(), exact), rel(C.polygonArea(), exact));
+}
+
+TEST(ThoracicVolumeEnvelope, ClosedEllipsoidWithin1Percent) {
+  const double a = 120, b = 90, c = 150;
+  const auto e = closedEllipsoid(a, b, c, 256, 128);
+  EnvelopeParams p;
+  const auto r = fergusonEnvelope(e, {-90, 90}, p);
+  const double exact = ellipsoidSegmentVolume(a, b, c, -90, 90);
+  EXPECT_LT(rel(r.volume, exact), 1e-2) << r.volume << " vs " << exact;
+  EXPECT_GE(r.volume, exact * (1 - 2e-3)) << "an envelope lies outside the cage";
+  EXPECT_EQ(r.singular, 0);
+  // the tessellated envelope is closed and its divergence volume converges to the parametric one
+  const auto mesh = r.env.tessellate(12);
+  EXPECT_LT(rel(divergenceVolume(mesh), r.volume), 2e-3);
+}
+
+TEST(ThoracicVolumeEnvelope, BandedCylinderWithin1Percent) {
+  const double a = 130, b = 90, t = 8;
+  const auto cage = bandedCylinder(a, b, t, 0, 240, 720, 240);
+  const auto r = fergusonEnvelope(cage, {20, 220}, EnvelopeParams{});
+  const double exact = kPi * (a + t) * (b + t) * 200;
+  EXPECT_LT(rel(r.volume, exact), 1e-2) << r.volume << " vs " << exact;
+  EXPECT_GT(r.touching, 0);
+}
+
+TEST(ThoracicVolumeEnvelope, RaysHitTheSurfaceNewton) {
+  const auto e = closedEllipsoid(100, 100, 100, 128, 64);
+  const auto r = fergusonEnvelope(e, {-50, 50}, EnvelopeParams{});
+  // every ray from the axis meets the surface; the point found lies on the ray's angle
+  for (double ang = 0.05; ang < 6.28; ang += 0.37) {
+    int its = 0;
+    const double rho = r.env.rayRadius(ang, 13.0, &its);
+    EXPECT_GT(rho, 0.8 * std::sqrt(100 * 100 - 13.0 * 13.0));
+    EXPECT_LT(its, 30);
+  }
+}
+
+TEST(ThoracicVolumeEnvelope, SingularKeyPointsTiedAcrossAnOpening) {
+  // a cylinder with a large anterior opening (like the abdominal hole): the key points there are
+  // singular and tied to their neighbours, so the envelope does not fall into the opening
+  const double a = 130, b = 90;
+  Soup cage;
+  addSheet(cage, 720, 240, 0, 240,
+           [&](double th, double z) { return Eigen::Vector3d(a * std::cos(th), b * std::sin(th), z); },
+           [](double th, double z) { return !(z < 110 && std::abs(std::remainder(th - kPi / 2, 2 * kPi)) < 0.9); });
+  const auto r = fergusonEnvelope(cage, {20, 220}, EnvelopeParams{});
+  EXPECT_GT(r.singular, 0);
+  const double exact = kPi * a * b * 200;
+  EXPECT_LT(rel(r.volume, exact), 0.05) << r.volume << " vs " << exact;
+}
+
+TEST(ThoracicVolumeBadInput, NoGeometryInRange) {
+  const auto cage = bandedCylinder(130, 90, 8, 0, 240, 180, 60);
+  EXPECT_THROW(sliceVolume(cage, {300, 400}, SliceParams{}), pectus::InputError);
+  EXPECT_THROW(fergusonEnvelope(cage, {300, 400}, EnvelopeParams{}), pectus::InputError);
+}
+
+TEST(ThoracicVolumeBadInput, DegenerateAxisAndRange) {
+  const auto cage = bandedCylinder(130, 90, 8, 0, 240, 180, 60);
+  EXPECT_THROW(sliceVolume(cage, {100, 100}, SliceParams{}), pectus::InputError);
+  EXPECT_THROW(fergusonEnvelope(cage, {120, 80}, EnvelopeParams{}), pectus::InputError);
+  Soup line;  // a vertical sliver: no extent across the axis
+  line.V = {{0, 0, 0}, {0, 0, 100}, {0, 0, 50}};
+  line.F = {{0, 1, 2}};
+  EXPECT_THROW(fergusonEnvelope(line, {10, 90}, EnvelopeParams{}), pectus::InputError);
+}
+
+TEST(ThoracicVolumeBadInput, PairMismatch) {
+  const auto a = bandedCylinder(130, 90, 8, 0, 240, 180, 60);
+  const auto b = bandedCylinder(130, 90, 8, 0, 240, 180, 61);
+  EXPECT_THROW(requireComparablePair(a, b, "before", "after"), pectus::InputError);
+  auto c = a;  // same mesh in metres: another frame
+  for (auto& v : c.V) v *= 0.001;
+  EXPECT_THROW(requireComparablePair(a, c, "before", "after"), pectus::InputError);
+  auto d = a;  // a local correction: accepted
+  for (auto& v : d.V)
+    if (v.y() > 60) v.y() += 10;
+  EXPECT_NO_THROW(requireComparablePair(a, d, "before", "after"));
+}
+
+TEST(ThoracicVolumeChange, DeformedCopyGainsVolume) {
+  // the anterior wall pushed forward: both methods see a positive change
+  const auto before = bandedCylinder(130, 90, 8, 0, 240, 720, 240);
+  auto after = before;
+  for (auto& v : after.V)
+    if (v.y() > 0) v.y() *= 1.1;
+  const auto s0 = sliceVolume(before, {20, 220}, SliceParams{}), s1 = sliceVolume(after, {20, 220}, SliceParams{});
+  EXPECT_NEAR(s1.volume / s0.volume, 1.05, 2e-3);
+  const auto e0 = fergusonEnvelope(before, {20, 220}, EnvelopeParams{});
+  const auto e1 = fergusonEnvelope(after, {20, 220}, EnvelopeParams{});
+  EXPECT_GT(e1.volume, e0.volume);
+}
+
+TEST(PectusIndexTest, DentedPrism) {
+  const double a = 130, b = 90, D = 40, w = 45;
+  auto yOf = [&](double th) {
+    const double x = a * std::cos(th), y = b * std::sin(th);
+    return y > 0 ? y - D * std::exp(-x * x / (w * w)) : y;
+  };
+  Soup cage;
+  addSheet(cage, 720, 60, 0, 120, [&](double th, double z) { return Eigen::Vector3d(a * std::cos(th), yOf(th), z); }, {});
+  double ymax = -1e9;
+  for (int k = 0; k < 100000; ++k) ymax = std::max(ymax, yOf(2 * kPi * k / 100000));
+  IndexInputs in;
+  in.level = 60.3;
+  in.midlineX = 0.0;
+  const auto pi = pectusIndex(cage, in);
+  EXPECT_NEAR(pi.transverse, 2 * a, 0.5);
+  EXPECT_NEAR(pi.apMin, 2 * b - D, 0.5);
+  EXPECT_NEAR(pi.haller, 2 * a / (2 * b - D), 0.01);
+  EXPECT_NEAR(pi.correction, 100 * (ymax + b - (2 * b - D)) / (ymax + b), 0.3);
+  in.spineY = -b;
+  EXPECT_NEAR(pectusIndex(cage, in).apMin, 2 * b - D, 0.5);
+  // automatic level on a prism: any slice, same index
+  IndexInputs au;
+  au.searchRange = {10, 110};
+  EXPECT_NEAR(pectusIndex(cage, au).haller, 2 * a / (2 * b - D), 0.02);
+}
