@@ -1,0 +1,313 @@
+#include "pectus/fe/tetgen_mesher.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <map>
+#include <sstream>
+
+#include <tetgen.h>
+
+#include "pectus/errors.h"
+
+namespace pectus::fe {
+
+using Eigen::Vector3d;
+
+namespace {
+
+struct Grid {
+  Vector3d lo;
+  double h = 1;
+  int n[3] = {1, 1, 1};
+  std::vector<std::vector<int>> cells;
+
+  void build(const SurfaceMesh& s) {
+    Eigen::AlignedBox3d box;
+    for (const auto& v : s.vertices) box.extend(v);
+    const Vector3d ext = box.sizes().cwiseMax(1e-9);
+    const double vol = ext.prod();
+    h = std::cbrt(vol / std::max<size_t>(1, s.faces.size()));
+    h = std::max(h, ext.maxCoeff() / 200.0);
+    lo = box.min() - Vector3d::Constant(1e-6 * ext.maxCoeff());
+    for (int d = 0; d < 3; ++d) n[d] = std::max(1, static_cast<int>(std::ceil((ext(d) + 2e-6 * ext.maxCoeff()) / h)));
+    cells.assign(static_cast<size_t>(n[0]) * n[1] * n[2], {});
+    for (int f = 0; f < static_cast<int>(s.faces.size()); ++f) {
+      int a[3], b[3];
+      range(s, f, a, b);
+      for (int k = a[2]; k <= b[2]; ++k)
+        for (int j = a[1]; j <= b[1]; ++j)
+          for (int i = a[0]; i <= b[0]; ++i) cells[idx(i, j, k)].push_back(f);
+    }
+  }
+  int clampc(double x, int d) const { return std::clamp(static_cast<int>(std::floor((x - lo(d)) / h)), 0, n[d] - 1); }
+  size_t idx(int i, int j, int k) const { return (static_cast<size_t>(k) * n[1] + j) * n[0] + i; }
+  void range(const SurfaceMesh& s, int f, int a[3], int b[3]) const {
+    for (int d = 0; d < 3; ++d) {
+      double mn = 1e300, mx = -1e300;
+      for (int v : s.faces[f]) mn = std::min(mn, s.vertices[v](d)), mx = std::max(mx, s.vertices[v](d));
+      a[d] = clampc(mn, d);
+      b[d] = clampc(mx, d);
+    }
+  }
+};
+
+inline double orient(const Vector3d& a, const Vector3d& b, const Vector3d& c, const Vector3d& d) {
+  return (b - a).cross(c - a).dot(d - a);
+}
+
+// does segment pq cross triangle abc? (non-coplanar case, touching counts, tolerance eps on volumes)
+bool segTri(const Vector3d& p, const Vector3d& q, const Vector3d& a, const Vector3d& b, const Vector3d& c, double eps) {
+  const double op = orient(a, b, c, p), oq = orient(a, b, c, q);
+  if ((op > eps && oq > eps) || (op < -eps && oq < -eps)) return false;
+  if (std::abs(op) <= eps && std::abs(oq) <= eps) return false;  // coplanar: handled separately
+  const double s1 = orient(p, q, a, b), s2 = orient(p, q, b, c), s3 = orient(p, q, c, a);
+  return (s1 >= -eps && s2 >= -eps && s3 >= -eps) || (s1 <= eps && s2 <= eps && s3 <= eps);
+}
+
+// 2D helpers for coplanar triangles
+inline double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
+  return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+}
+bool segSeg2Proper(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c, const Eigen::Vector2d& d, double eps) {
+  const double d1 = cross2(a, b, c), d2 = cross2(a, b, d), d3 = cross2(c, d, a), d4 = cross2(c, d, b);
+  return ((d1 > eps && d2 < -eps) || (d1 < -eps && d2 > eps)) && ((d3 > eps && d4 < -eps) || (d3 < -eps && d4 > eps));
+}
+bool inTri2Strict(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c, double eps) {
+  const double s = cross2(a, b, c) > 0 ? 1 : -1;
+  return s * cross2(a, b, p) > eps && s * cross2(b, c, p) > eps && s * cross2(c, a, p) > eps;
+}
+
+bool trianglesIntersect(const SurfaceMesh& s, int f, int g, double lenEps) {
+  const auto& F = s.faces[f];
+  const auto& G = s.faces[g];
+  int shared = 0;
+  for (int a : F)
+    for (int b : G) shared += a == b;
+  const Vector3d P[3] = {s.vertices[F[0]], s.vertices[F[1]], s.vertices[F[2]]};
+  const Vector3d Q[3] = {s.vertices[G[0]], s.vertices[G[1]], s.vertices[G[2]]};
+  const Vector3d nf = (P[1] - P[0]).cross(P[2] - P[0]);
+  const double scale = std::max(nf.norm(), (Q[1] - Q[0]).cross(Q[2] - Q[0]).norm());
+  const double eps = 1e-10 * scale * std::sqrt(scale);  // volume tolerance
+  bool coplanar = true;
+  for (const auto& q : Q) coplanar = coplanar && std::abs(orient(P[0], P[1], P[2], q)) <= 1e-7 * scale * std::sqrt(scale);
+  if (coplanar && nf.norm() > 0) {
+    // project to the dominant plane
+    int ax = 0;
+    nf.cwiseAbs().maxCoeff(&ax);
+    auto pr = [ax](const Vector3d& v) { return Eigen::Vector2d(v((ax + 1) % 3), v((ax + 2) % 3)); };
+    Eigen::Vector2d p[3], q[3];
+    for (int i = 0; i < 3; ++i) p[i] = pr(P[i]), q[i] = pr(Q[i]);
+    const double e2 = 1e-9 * scale;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (segSeg2Proper(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3], e2)) return true;
+    for (int i = 0; i < 3; ++i) {
+      if (inTri2Strict(p[i], q[0], q[1], q[2], e2) || inTri2Strict(q[i], p[0], p[1], p[2], e2)) return true;
+    }
+    // centroid of one inside the other (identical triangles)
+    const Eigen::Vector2d cp = (p[0] + p[1] + p[2]) / 3;
+    return shared < 2 && inTri2Strict(cp, q[0], q[1], q[2], e2);
+  }
+  if (shared >= 2) return false;  // two non-coplanar faces sharing an edge only touch along it
+  if (shared == 1) {
+    // the intersection can only be a segment starting at the shared vertex; it leaves through the
+    // opposite edge of one of the triangles
+    int sf = -1, sg = -1;
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (F[i] == G[j]) sf = i, sg = j;
+    const Vector3d& pa = P[(sf + 1) % 3];
+    const Vector3d& pb = P[(sf + 2) % 3];
+    const Vector3d& qa = Q[(sg + 1) % 3];
+    const Vector3d& qb = Q[(sg + 2) % 3];
+    auto cross = [&](const Vector3d& a, const Vector3d& b, const Vector3d* T, const Vector3d& shared3) {
+      if (!segTri(a, b, T[0], T[1], T[2], eps)) return false;
+      // hit point away from the shared vertex
+      const Vector3d n = (T[1] - T[0]).cross(T[2] - T[0]);
+      const double da = n.dot(a - T[0]), db = n.dot(b - T[0]);
+      if (std::abs(da - db) < 1e-300) return false;
+      const Vector3d x = a + (b - a) * (da / (da - db));
+      return (x - shared3).norm() > lenEps;
+    };
+    return cross(pa, pb, Q, P[sf]) || cross(qa, qb, P, Q[sg]);
+  }
+  for (int i = 0; i < 3; ++i) {
+    if (segTri(P[i], P[(i + 1) % 3], Q[0], Q[1], Q[2], eps)) return true;
+    if (segTri(Q[i], Q[(i + 1) % 3], P[0], P[1], P[2], eps)) return true;
+  }
+  return false;
+}
+
+Vector3d closestOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d& b, const Vector3d& c) {
+  // Ericson, Real-Time Collision Detection 5.1.5
+  const Vector3d ab = b - a, ac = c - a, ap = p - a;
+  const double d1 = ab.dot(ap), d2 = ac.dot(ap);
+  if (d1 <= 0 && d2 <= 0) return a;
+  const Vector3d bp = p - b;
+  const double d3 = ab.dot(bp), d4 = ac.dot(bp);
+  if (d3 >= 0 && d4 <= d3) return b;
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0 && d1 >= 0 && d3 <= 0) return a + d1 / (d1 - d3) * ab;
+  const Vector3d cp = p - c;
+  const double d5 = ab.dot(cp), d6 = ac.dot(cp);
+  if (d6 >= 0 && d5 <= d6) return c;
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0 && d2 >= 0 && d6 <= 0) return a + d2 / (d2 - d6) * ac;
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
+  const double den = 1.0 / (va + vb + vc);
+  return a + ab * (vb * den) + ac * (vc * den);
+}
+
+}  // namespace
+
+std::optional<std::pair<int, int>> findSelfIntersection(const SurfaceMesh& s) {
+  if (s.faces.empty()) return std::nullopt;
+  Grid grid;
+  grid.build(s);
+  Eigen::AlignedBox3d box;
+  for (const auto& v : s.vertices) box.extend(v);
+  const double lenEps = 1e-9 * box.diagonal().norm();
+  std::vector<int> stamp(s.faces.size(), -1);
+  std::optional<std::pair<int, int>> best;
+  for (int f = 0; f < static_cast<int>(s.faces.size()); ++f) {
+    int a[3], b[3];
+    grid.range(s, f, a, b);
+    for (int k = a[2]; k <= b[2]; ++k)
+      for (int j = a[1]; j <= b[1]; ++j)
+        for (int i = a[0]; i <= b[0]; ++i)
+          for (int g : grid.cells[grid.idx(i, j, k)]) {
+            if (g <= f || stamp[g] == f) continue;
+            stamp[g] = f;
+            if (trianglesIntersect(s, f, g, lenEps)) return std::make_pair(f, g);
+          }
+  }
+  return best;
+}
+
+void checkSurfaceForTetgen(const SurfaceMesh& s) {
+  const int nv = static_cast<int>(s.vertices.size());
+  if (s.faces.size() < 4) throw InputError("The surface has fewer than 4 triangles: it cannot bound a volume.");
+  if (s.faceTissue.size() != s.faces.size())
+    throw InputError("The surface needs one tissue label per face (" + std::to_string(s.faceTissue.size()) + " labels for " +
+                     std::to_string(s.faces.size()) + " faces).");
+  std::map<std::pair<int, int>, int> edges;
+  for (size_t f = 0; f < s.faces.size(); ++f) {
+    const auto& F = s.faces[f];
+    for (int i = 0; i < 3; ++i) {
+      if (F[i] < 0 || F[i] >= nv) throw InputError("Face " + std::to_string(f) + " has an invalid vertex index.");
+      if (F[i] == F[(i + 1) % 3]) throw InputError("Face " + std::to_string(f) + " is degenerate (repeated vertex).");
+      if (s.faceTissue[f] <= 0) throw InputError("Face " + std::to_string(f) + " has no tissue label.");
+    }
+    for (int i = 0; i < 3; ++i) edges[std::minmax(F[i], F[(i + 1) % 3])]++;
+  }
+  for (const auto& e : edges)
+    if (e.second != 2) {
+      std::ostringstream m;
+      m << "The surface is not closed: the edge between vertices " << e.first.first << " and " << e.first.second << " (at "
+        << s.vertices[e.first.first].transpose() << ") belongs to " << e.second
+        << " face(s) instead of 2. Close the holes / remove non-manifold edges before meshing.";
+      throw InputError(m.str());
+    }
+  if (auto p = findSelfIntersection(s)) {
+    const auto& a = s.faces[p->first];
+    const Vector3d c = (s.vertices[a[0]] + s.vertices[a[1]] + s.vertices[a[2]]) / 3;
+    std::ostringstream m;
+    m << "The surface intersects itself: faces " << p->first << " and " << p->second << " cross (near " << c.transpose()
+      << " mm). Remove the self-intersection (e.g. MeshLab's 'Select Self Intersecting Faces') before meshing.";
+    throw InputError(m.str());
+  }
+}
+
+std::vector<int> nearestFaces(const SurfaceMesh& s, const std::vector<Vector3d>& pts) {
+  Grid grid;
+  grid.build(s);
+  std::vector<int> out(pts.size(), -1);
+#pragma omp parallel for schedule(dynamic, 64)
+  for (long q = 0; q < static_cast<long>(pts.size()); ++q) {
+    const Vector3d& p = pts[q];
+    int c[3];
+    for (int d = 0; d < 3; ++d) c[d] = grid.clampc(p(d), d);
+    double best = std::numeric_limits<double>::infinity();
+    int bestF = -1;
+    const int maxR = std::max({grid.n[0], grid.n[1], grid.n[2]});
+    for (int r = 0; r <= maxR; ++r) {
+      for (int k = c[2] - r; k <= c[2] + r; ++k)
+        for (int j = c[1] - r; j <= c[1] + r; ++j)
+          for (int i = c[0] - r; i <= c[0] + r; ++i) {
+            if (std::max({std::abs(i - c[0]), std::abs(j - c[1]), std::abs(k - c[2])}) != r) continue;
+            if (i < 0 || j < 0 || k < 0 || i >= grid.n[0] || j >= grid.n[1] || k >= grid.n[2]) continue;
+            for (int f : grid.cells[grid.idx(i, j, k)]) {
+              const auto& F = s.faces[f];
+              const double d = (closestOnTriangle(p, s.vertices[F[0]], s.vertices[F[1]], s.vertices[F[2]]) - p).squaredNorm();
+              if (d < best) best = d, bestF = f;
+            }
+          }
+      // every face not yet seen is at least r*h away from p (p lies inside its cell)
+      if (bestF >= 0 && std::sqrt(best) <= r * grid.h) break;
+    }
+    out[q] = bestF;
+  }
+  return out;
+}
+
+TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt) {
+  checkSurfaceForTetgen(s);
+  if (opt.order != 1 && opt.order != 2) throw InputError("Element order must be 1 (TET4) or 2 (TET10).");
+  tetgenio in, out;
+  in.firstnumber = 0;
+  in.numberofpoints = static_cast<int>(s.vertices.size());
+  in.pointlist = new REAL[3 * s.vertices.size()];
+  for (size_t i = 0; i < s.vertices.size(); ++i)
+    for (int d = 0; d < 3; ++d) in.pointlist[3 * i + d] = s.vertices[i](d);
+  in.numberoffacets = static_cast<int>(s.faces.size());
+  in.facetlist = new tetgenio::facet[s.faces.size()];
+  in.facetmarkerlist = new int[s.faces.size()];
+  for (size_t f = 0; f < s.faces.size(); ++f) {
+    tetgenio::facet& fc = in.facetlist[f];
+    tetgenio::init(&fc);
+    fc.numberofpolygons = 1;
+    fc.polygonlist = new tetgenio::polygon[1];
+    tetgenio::init(&fc.polygonlist[0]);
+    fc.polygonlist[0].numberofvertices = 3;
+    fc.polygonlist[0].vertexlist = new int[3];
+    for (int k = 0; k < 3; ++k) fc.polygonlist[0].vertexlist[k] = s.faces[f][k];
+    in.facetmarkerlist[f] = s.faceTissue[f];
+  }
+  std::ostringstream sw;
+  sw << "pzQ";
+  if (opt.preserveSurface) sw << "Y";
+  if (opt.radiusEdgeRatio > 0) sw << "q" << opt.radiusEdgeRatio;
+  if (opt.maxVolume > 0) sw << "a" << opt.maxVolume;
+  std::string sws = sw.str();
+  try {
+    ::tetrahedralize(const_cast<char*>(sws.c_str()), &in, &out);
+  } catch (int code) {
+    throw InputError("TetGen failed (error code " + std::to_string(code) +
+                     ") on the surface: check it is closed, not self-intersecting and without tiny features.");
+  } catch (...) {
+    throw InputError("TetGen failed on the surface: check it is closed, not self-intersecting and without tiny features.");
+  }
+  if (out.numberoftetrahedra <= 0) throw InputError("TetGen produced no tetrahedra (is the surface closed?).");
+  TetMesh m;
+  m.order = 1;
+  m.nodes.resize(out.numberofpoints);
+  for (int i = 0; i < out.numberofpoints; ++i)
+    m.nodes[i] = Vector3d(out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2]);
+  m.tets.resize(out.numberoftetrahedra);
+  std::vector<Vector3d> centroids(out.numberoftetrahedra);
+  for (int t = 0; t < out.numberoftetrahedra; ++t) {
+    std::array<int, 10> e{};
+    for (int k = 0; k < 4; ++k) e[k] = out.tetrahedronlist[t * out.numberofcorners + k];
+    m.tets[t] = e;
+    if (m.tetVolume(t) < 0) std::swap(m.tets[t][1], m.tets[t][2]);
+    centroids[t] = (m.nodes[e[0]] + m.nodes[e[1]] + m.nodes[e[2]] + m.nodes[e[3]]) / 4;
+  }
+  const std::vector<int> nf = nearestFaces(s, centroids);
+  m.tissue.resize(m.tets.size());
+  for (size_t t = 0; t < m.tets.size(); ++t) m.tissue[t] = s.faceTissue[nf[t]];
+  return opt.order == 2 ? toQuadratic(m) : m;
+}
+
+}  // namespace pectus::fe

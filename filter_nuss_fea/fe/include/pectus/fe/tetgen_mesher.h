@@ -1,0 +1,43 @@
+// Tetrahedralisation of a closed, labelled triangle surface with TetGen 1.5 (Debian libtet1.5-dev).
+#pragma once
+#include <array>
+#include <optional>
+#include <utility>
+#include <vector>
+
+#include "pectus/fe/tet_mesh.h"
+
+namespace pectus::fe {
+
+struct SurfaceMesh {
+  std::vector<Eigen::Vector3d> vertices;     ///< mm
+  std::vector<std::array<int, 3>> faces;     ///< oriented or not; must form closed 2-manifold shells
+  std::vector<int> faceTissue;               ///< per face tissue label (pectus::Tissue)
+};
+
+struct TetgenOptions {
+  double radiusEdgeRatio = 1.6;  ///< TetGen -q: max radius-edge ratio (quality); <= 0: no quality refinement
+  double maxVolume = 0;          ///< TetGen -a: max tet volume in mm^3; <= 0: no limit
+  int order = 1;                 ///< 1: TET4, 2: TET10 (straight mid-edge nodes added by toQuadratic)
+  bool preserveSurface = false;  ///< TetGen -Y: no Steiner points on the surface
+};
+
+/// The first pair of faces (a < b) of the surface that intersect each other (touching through a shared
+/// vertex or edge is not an intersection), found with a uniform grid; nullopt if none.
+std::optional<std::pair<int, int>> findSelfIntersection(const SurfaceMesh& s);
+
+/// Checks the surface is closed (every edge in exactly two faces), has valid indices, one label per
+/// face and no self-intersection; throws pectus::InputError naming the faulty edge or face pair.
+void checkSurfaceForTetgen(const SurfaceMesh& s);
+
+/// Tetrahedralises the volume bounded by the surface (checkSurfaceForTetgen first; TetGen would crash on
+/// self-intersecting input). Each tet is labelled with the tissue of the surface face nearest to its
+/// centroid (region points are not needed, so a single closed surface whose faces carry the labels —
+/// as the rib cage generator writes it — works; for thin parts the nearest face is the part's own
+/// surface). Input vertices keep their indices: surface vertex i is mesh node i.
+TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt = {});
+
+/// Index of the face of s nearest to each query point (uniform grid search).
+std::vector<int> nearestFaces(const SurfaceMesh& s, const std::vector<Eigen::Vector3d>& points);
+
+}  // namespace pectus::fe

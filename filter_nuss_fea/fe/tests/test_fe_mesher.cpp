@@ -1,0 +1,149 @@
+// TetGen tetrahedralisation, tissue labelling, surface checks (closedness, self-intersection).
+#include <gtest/gtest.h>
+
+#include <map>
+
+#include "pectus/errors.h"
+#include "pectus/fe/solver.h"
+#include "pectus/fe/tetgen_mesher.h"
+
+using namespace pectus::fe;
+using Eigen::Vector3d;
+
+namespace {
+
+// closed triangulated box surface [o, o+size], faces with centroid z < zSplit labelled 1, else 2
+SurfaceMesh boxSurface(const Vector3d& o, const Vector3d& size, int nx, int ny, int nz, double zSplit) {
+  const TetMesh m = structuredBox(size.x(), size.y(), size.z(), nx, ny, nz, 1);
+  SurfaceMesh s;
+  std::map<int, int> remap;
+  for (const auto& f : boundaryFaces(m)) {
+    std::array<int, 3> F;
+    Vector3d c = Vector3d::Zero();
+    for (int k = 0; k < 3; ++k) {
+      auto it = remap.find(f.n[k]);
+      if (it == remap.end()) {
+        it = remap.emplace(f.n[k], static_cast<int>(s.vertices.size())).first;
+        s.vertices.push_back(o + m.nodes[f.n[k]]);
+      }
+      F[k] = it->second;
+      c += s.vertices[F[k]] / 3;
+    }
+    s.faces.push_back(F);
+    s.faceTissue.push_back(c.z() < zSplit ? 1 : 2);
+  }
+  return s;
+}
+
+SurfaceMesh merge(const SurfaceMesh& a, const SurfaceMesh& b) {
+  SurfaceMesh s = a;
+  const int off = static_cast<int>(a.vertices.size());
+  s.vertices.insert(s.vertices.end(), b.vertices.begin(), b.vertices.end());
+  for (auto f : b.faces) s.faces.push_back({f[0] + off, f[1] + off, f[2] + off});
+  s.faceTissue.insert(s.faceTissue.end(), b.faceTissue.begin(), b.faceTissue.end());
+  return s;
+}
+
+}  // namespace
+
+TEST(FeMesher, BoxHasNoSelfIntersection) {
+  const SurfaceMesh s = boxSurface({0, 0, 0}, {10, 10, 40}, 2, 2, 8, 20);
+  EXPECT_FALSE(findSelfIntersection(s).has_value());
+  EXPECT_NO_THROW(checkSurfaceForTetgen(s));
+}
+
+TEST(FeMesher, OverlappingShellsAreReportedWithAFacePair) {
+  const SurfaceMesh a = boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 100);
+  const SurfaceMesh b = boxSurface({5, 5, 5}, {10, 10, 10}, 2, 2, 2, 100);
+  const SurfaceMesh s = merge(a, b);
+  auto p = findSelfIntersection(s);
+  ASSERT_TRUE(p.has_value());
+  const int na = static_cast<int>(a.faces.size());
+  EXPECT_TRUE((p->first < na) != (p->second < na)) << p->first << " " << p->second;
+  try {
+    checkSurfaceForTetgen(s);
+    FAIL() << "no exception";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("faces " + std::to_string(p->first) + " and " + std::to_string(p->second)),
+              std::string::npos) << e.what();
+  }
+  EXPECT_THROW(tetrahedralize(s), pectus::InputError);  // before TetGen can crash
+  // disjoint shells are fine
+  const SurfaceMesh c = merge(a, boxSurface({20, 0, 0}, {10, 10, 10}, 2, 2, 2, 100));
+  EXPECT_FALSE(findSelfIntersection(c).has_value());
+}
+
+TEST(FeMesher, FoldedVertexIsASelfIntersection) {
+  SurfaceMesh s = boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 100);
+  // push the centre vertex of the top face (z = 10) through the bottom face
+  int top = -1;
+  for (size_t i = 0; i < s.vertices.size(); ++i)
+    if ((s.vertices[i] - Vector3d(5, 5, 10)).norm() < 1e-9) top = static_cast<int>(i);
+  ASSERT_GE(top, 0);
+  EXPECT_FALSE(findSelfIntersection(s).has_value());
+  s.vertices[top].z() = -3;
+  EXPECT_TRUE(findSelfIntersection(s).has_value());
+}
+
+TEST(FeMesher, OpenSurfaceIsAnError) {
+  SurfaceMesh s = boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 100);
+  s.faces.pop_back();
+  s.faceTissue.pop_back();
+  try {
+    tetrahedralize(s);
+    FAIL() << "no exception";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("not closed"), std::string::npos) << e.what();
+  }
+}
+
+TEST(FeMesher, TetgenBoxLabelsVolumeAndSeriesBar) {
+  const SurfaceMesh s = boxSurface({0, 0, 0}, {10, 10, 40}, 2, 2, 8, 20);
+  TetgenOptions o;
+  o.radiusEdgeRatio = 1.5;
+  o.maxVolume = 4.0;
+  const TetMesh m = tetrahedralize(s, o);
+  ASSERT_GT(m.numTets(), 1000);
+  double vol = 0;
+  int wrong = 0;
+  for (int t = 0; t < m.numTets(); ++t) {
+    ASSERT_GT(m.tetVolume(t), 0);
+    EXPECT_LE(m.tetVolume(t), 4.0 + 1e-9);
+    vol += m.tetVolume(t);
+    const double z = (m.nodes[m.tets[t][0]] + m.nodes[m.tets[t][1]] + m.nodes[m.tets[t][2]] + m.nodes[m.tets[t][3]]).z() / 4;
+    if (std::abs(z - 20) > 4 && m.tissue[t] != (z < 20 ? 1 : 2)) ++wrong;
+  }
+  EXPECT_NEAR(vol, 4000.0, 1e-6);
+  EXPECT_EQ(wrong, 0);
+  for (size_t i = 0; i < s.vertices.size(); ++i) EXPECT_EQ((m.nodes[i] - s.vertices[i]).norm(), 0.0);
+
+  // bar in tension: bone half and a 10x softer half in series, rollers at z = 0
+  o.order = 2;
+  const TetMesh q = tetrahedralize(s, o);
+  EXPECT_EQ(q.order, 2);
+  EXPECT_EQ(q.numTets(), m.numTets());
+  Problem p;
+  p.mesh = &q;
+  p.materials = {{1, {1000.0, 0.3}}, {2, {100.0, 0.3}}};
+  std::vector<BoundaryFace> top;
+  for (int i = 0; i < q.numNodes(); ++i) {
+    const Vector3d& x = q.nodes[i];
+    if (x.z() > 1e-9) continue;
+    p.fixed.push_back({i, 2, 0.0});
+    if (x.norm() < 1e-9) p.fixed.push_back({i, 0, 0.0}), p.fixed.push_back({i, 1, 0.0});
+    if ((x - Vector3d(10, 0, 0)).norm() < 1e-9) p.fixed.push_back({i, 1, 0.0});
+  }
+  for (const auto& f : boundaryFaces(q))
+    if (q.nodes[f.n[0]].z() > 40 - 1e-9 && q.nodes[f.n[1]].z() > 40 - 1e-9 && q.nodes[f.n[2]].z() > 40 - 1e-9) top.push_back(f);
+  const double P = 100;
+  p.force = tractionLoads(q, top, Vector3d(0, 0, P / 100));
+  const Result r = solveLinear(p);
+  double uz = 0;
+  int n = 0;
+  for (int i = 0; i < q.numNodes(); ++i)
+    if (q.nodes[i].z() > 40 - 1e-9) uz += r.displacement(i).z(), ++n;
+  uz /= n;
+  const double exact = P / 100 * (20 / 1000.0 + 20 / 100.0);
+  std::printf("[series bar] %d TET10, u_z %.5f mm, exact %.5f mm\n", q.numTets(), uz, exact);
+  EXPECT_NEAR(uz / exact, 1.0, 0.03);  // the tissue interface inside is jagged (nearest-face labels)
+}
