@@ -1,0 +1,687 @@
+// Goodman-Said C1 surface: topology checks, vertex gradients (thesis eqs. 3-1..3-5 or a quadratic fit),
+// control nets (eqs. 3-9..3-15, b111 re-derived below), evaluation with the rational blend (eq. 3-16).
+#include "pectus/c1_surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <sstream>
+
+#include "c1_internal.h"
+#include "pectus/errors.h"
+
+namespace pectus::c1 {
+
+namespace {
+
+// value and first partials with respect to (s, t): forward-mode automatic differentiation
+struct J {
+  double v = 0, s = 0, t = 0;
+  J() = default;
+  J(double v_, double s_ = 0, double t_ = 0) : v(v_), s(s_), t(t_) {}
+};
+inline J operator+(J a, J b) { return {a.v + b.v, a.s + b.s, a.t + b.t}; }
+inline J operator-(J a, J b) { return {a.v - b.v, a.s - b.s, a.t - b.t}; }
+inline J operator*(J a, J b) { return {a.v * b.v, a.s * b.v + a.v * b.s, a.t * b.v + a.v * b.t}; }
+inline J operator*(double k, J a) { return {k * a.v, k * a.s, k * a.t}; }
+inline J operator/(J a, J b) {
+  const double iv = 1.0 / b.v;
+  return {a.v * iv, (a.s * b.v - a.v * b.s) * iv * iv, (a.t * b.v - a.v * b.t) * iv * iv};
+}
+
+std::pair<Vec3, Vec3> completeFrame(const Vec3& f) {
+  const Vec3 a = std::abs(f.x()) < 0.6 ? Vec3(1, 0, 0) : (std::abs(f.y()) < 0.6 ? Vec3(0, 1, 0) : Vec3(0, 0, 1));
+  const Vec3 e1 = (a - a.dot(f) * f).normalized();
+  return {e1, f.cross(e1)};
+}
+
+}  // namespace
+
+Vec3 PatchJet::normal() const {
+  const Vec3 n = Ps.cross(Pt);
+  const double l = n.norm();
+  return l > 0 && std::isfinite(l) ? Vec3(n / l) : Vec3(0, 0, 0);
+}
+
+// ------------------------------------------------------------------------------------------------
+// topology
+
+Topology::Topology(const TriMesh& m) {
+  const int nv = int(m.V.size()), nf = int(m.F.size());
+  for (int f = 0; f < nf; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int i = m.F[f][k];
+      if (i < 0 || i >= nv) {
+        std::ostringstream s;
+        s << "face " << f << " uses vertex index " << i << ", but the mesh has " << nv << " vertices";
+        throw InputError(s.str());
+      }
+    }
+  for (int i = 0; i < nv; ++i)
+    if (!m.V[i].allFinite()) {
+      std::ostringstream s;
+      s << "vertex " << i << " has a NaN/Inf coordinate; remove it (Cleaning: Remove Unreferenced / fix the source)";
+      throw InputError(s.str());
+    }
+  // vertex -> faces (CSR)
+  vfStart.assign(nv + 1, 0);
+  for (const auto& f : m.F)
+    for (int k = 0; k < 3; ++k) ++vfStart[f[k] + 1];
+  for (int i = 0; i < nv; ++i) vfStart[i + 1] += vfStart[i];
+  vf.resize(vfStart[nv]);
+  {
+    std::vector<int> fill(vfStart.begin(), vfStart.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) vf[fill[m.F[f][k]]++] = f;
+  }
+  // edges by sorting (min, max, face*3+local)
+  std::vector<std::pair<std::uint64_t, int>> keys;
+  keys.reserve(3 * std::size_t(nf));
+  for (int f = 0; f < nf; ++f)
+    for (int l = 0; l < 3; ++l) {
+      int a = m.F[f][(l + 1) % 3], b = m.F[f][(l + 2) % 3];
+      if (a == b) continue;  // repeated vertex: the face is degenerate, the "edge" is a point
+      if (a > b) std::swap(a, b);
+      keys.push_back({(std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b), f * 3 + l});
+    }
+  std::sort(keys.begin(), keys.end());
+  faceEdge.assign(nf, {-1, -1, -1});
+  for (std::size_t i = 0; i < keys.size();) {
+    std::size_t j = i;
+    while (j < keys.size() && keys[j].first == keys[i].first) ++j;
+    if (j - i > 2) {
+      std::ostringstream s;
+      s << "edge (" << (keys[i].first >> 32) << ", " << (keys[i].first & 0xffffffffu) << ") is shared by "
+        << (j - i) << " faces (non-manifold edge); repair the mesh first (Cleaning: Repair non Manifold Edges)";
+      throw InputError(s.str());
+    }
+    Edge e;
+    e.a = int(keys[i].first >> 32);
+    e.b = int(keys[i].first & 0xffffffffu);
+    e.f0 = keys[i].second;
+    e.f1 = j - i == 2 ? keys[i + 1].second : -1;
+    const int id = int(edges.size());
+    for (std::size_t q = i; q < j; ++q) faceEdge[keys[q].second / 3][keys[q].second % 3] = id;
+    edges.push_back(e);
+    i = j;
+  }
+  // boundary and manifold vertices: a manifold fan is one cycle (edges = faces) or one chain
+  // (edges = faces + 1, two boundary edges)
+  boundary.assign(nv, 0);
+  std::vector<int> vEdges(nv, 0), vBnd(nv, 0);
+  for (const auto& e : edges) {
+    ++vEdges[e.a];
+    ++vEdges[e.b];
+    if (e.f1 < 0) { ++vBnd[e.a]; ++vBnd[e.b]; }
+  }
+  for (int i = 0; i < nv; ++i) {
+    const int nfv = vfStart[i + 1] - vfStart[i];
+    if (nfv == 0) continue;
+    bool repeated = false;
+    for (int q = vfStart[i]; q < vfStart[i + 1]; ++q) {
+      const auto& F = m.F[vf[q]];
+      if (F[0] == F[1] || F[1] == F[2] || F[0] == F[2]) repeated = true;
+    }
+    if (repeated) { boundary[i] = vBnd[i] > 0; continue; }  // counted as degenerate, not judged here
+    const bool ok = (vBnd[i] == 0 && vEdges[i] == nfv) || (vBnd[i] == 2 && vEdges[i] == nfv + 1);
+    if (!ok) {
+      std::ostringstream s;
+      s << "vertex " << i << " is non-manifold (its " << nfv << " faces form more than one fan); repair the "
+        << "mesh first (Cleaning: Repair non Manifold Vertices by splitting)";
+      throw InputError(s.str());
+    }
+    boundary[i] = vBnd[i] > 0;
+  }
+}
+
+// ------------------------------------------------------------------------------------------------
+
+C1Surface::~C1Surface() = default;
+C1Surface::C1Surface(C1Surface&&) noexcept = default;
+C1Surface& C1Surface::operator=(C1Surface&&) noexcept = default;
+
+C1Surface::C1Surface(TriMesh mesh, const Options& opt) : mesh_(std::move(mesh)), opt_(opt) { build(nullptr); }
+
+C1Surface::C1Surface(TriMesh mesh, std::vector<Vec3> normals, const Options& opt)
+    : mesh_(std::move(mesh)), opt_(opt) {
+  if (normals.size() != mesh_.V.size()) throw InputError("C1Surface: one normal per vertex is needed");
+  build(&normals);
+}
+
+std::pair<Vec3, Vec3> C1Surface::frameAxes() const { return completeFrame(opt_.axis); }
+
+namespace {
+
+// gradient of the facet plane in the frame (e1, e2, f): eqs. 3-3..3-5 with the frame coordinates
+bool facetGradient(const Vec3& p1, const Vec3& p2, const Vec3& p3, const Vec3& e1, const Vec3& e2, const Vec3& f,
+                   Vec2& g, double& projArea) {
+  const Vec3 n = (p2 - p1).cross(p3 - p2);  // (alpha, beta, gamma) of eq. 3-4 in world coordinates
+  const double a = n.dot(e1), b = n.dot(e2), c = n.dot(f);
+  projArea = 0.5 * std::abs(c);
+  if (!(std::abs(c) > 1e-12 * n.norm()) || !(std::abs(c) > 0)) return false;
+  g = Vec2(-a / c, -b / c);
+  return std::isfinite(g.x()) && std::isfinite(g.y());
+}
+
+}  // namespace
+
+void C1Surface::build(std::vector<Vec3>* given) {
+  topo_ = std::make_shared<const Topology>(mesh_);
+  const Topology& topo = *topo_;
+  const int nv = int(mesh_.V.size()), nf = int(mesh_.F.size());
+  const bool hf = opt_.frame == Frame::HeightField;
+  if (hf) {
+    if (!(opt_.axis.norm() > 0) || !opt_.axis.allFinite()) throw InputError("height-field axis must be a non-zero vector");
+    opt_.axis.normalize();
+  }
+  stats_ = Stats();
+  stats_.faces = std::size_t(nf);
+  stats_.vertices = std::size_t(nv);
+
+  // face normals (area weighted) and degeneracy
+  std::vector<Vec3> fn(nf);
+  std::vector<char> degen(nf, 0);
+  double scale2 = 0;
+  for (int f = 0; f < nf; ++f) {
+    const auto& F = mesh_.F[f];
+    const Vec3 &a = mesh_.V[F[0]], &b = mesh_.V[F[1]], &c = mesh_.V[F[2]];
+    fn[f] = (b - a).cross(c - a);
+    const double l2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
+    scale2 = std::max(scale2, l2);
+    if (!(fn[f].norm() > 1e-12 * l2) || F[0] == F[1] || F[1] == F[2] || F[0] == F[2]) {
+      degen[f] = 1;
+      ++stats_.degenerateFaces;
+    }
+  }
+  if (hf) {
+    int pos = 0, neg = 0;
+    for (int f = 0; f < nf; ++f)
+      if (!degen[f]) (fn[f].dot(opt_.axis) > 1e-12 * fn[f].norm() ? pos : neg) += 1;
+    if (pos && neg)
+      throw InputError("the mesh is not a height field over the chosen axis: " + std::to_string(std::min(pos, neg)) +
+                       " of its faces are flipped or vertical when seen along the axis; use the 3D "
+                       "(vertex normal) frame");
+  }
+
+  normals_.assign(nv, hf ? opt_.axis : Vec3(0, 0, 1));
+  flat_.assign(nv, 0);
+  const auto [he1, he2] = completeFrame(hf ? opt_.axis : Vec3(0, 0, 1));
+
+  std::size_t flatCount = 0, linCount = 0, isolated = 0, bnd = 0;
+#pragma omp parallel for schedule(dynamic, 256) reduction(+ : flatCount, linCount, isolated, bnd)
+  for (int v = 0; v < nv; ++v) {
+    const int b0 = topo.vfStart[v], b1 = topo.vfStart[v + 1];
+    if (b0 == b1) { ++isolated; continue; }
+    if (topo.boundary[v]) ++bnd;
+    // frame
+    Vec3 f, e1, e2;
+    if (hf) {
+      f = opt_.axis; e1 = he1; e2 = he2;
+    } else {
+      Vec3 s(0, 0, 0), su(0, 0, 0);
+      for (int q = b0; q < b1; ++q)
+        if (!degen[topo.vf[q]]) { s += fn[topo.vf[q]]; su += fn[topo.vf[q]].normalized(); }
+      if (s.norm() > 1e-9 * su.norm() && s.norm() > 0) f = s.normalized();
+      else if (su.norm() > 1e-6) f = su.normalized();
+      else { flat_[v] = 1; ++flatCount; normals_[v] = Vec3(0, 0, 0); continue; }
+      std::tie(e1, e2) = completeFrame(f);
+    }
+    if (given) {
+      Vec3 n = (*given)[v];
+      if (!(n.norm() > 0) || !n.allFinite()) { flat_[v] = 1; ++flatCount; continue; }
+      n.normalize();
+      normals_[v] = n;
+      continue;
+    }
+    const Vec3& p = mesh_.V[v];
+    Vec2 g(0, 0);
+    bool ok = false;
+    if (opt_.gradient == GradientMethod::QuadraticFit) {
+      // 2-ring neighbourhood
+      std::vector<int> nb;
+      nb.reserve(48);
+      for (int q = b0; q < b1; ++q)
+        for (int k = 0; k < 3; ++k) {
+          const int w = mesh_.F[topo.vf[q]][k];
+          if (w == v) continue;
+          for (int r = topo.vfStart[w]; r < topo.vfStart[w + 1]; ++r)
+            for (int kk = 0; kk < 3; ++kk) nb.push_back(mesh_.F[topo.vf[r]][kk]);
+        }
+      std::sort(nb.begin(), nb.end());
+      nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
+      nb.erase(std::remove(nb.begin(), nb.end(), v), nb.end());
+      // 1-ring mean distance as the length scale
+      double r1 = 0;
+      int c1 = 0;
+      for (int q = b0; q < b1; ++q)
+        for (int k = 0; k < 3; ++k)
+          if (mesh_.F[topo.vf[q]][k] != v) { r1 += (mesh_.V[mesh_.F[topo.vf[q]][k]] - p).norm(); ++c1; }
+      r1 = c1 ? r1 / c1 : 1.0;
+      if (r1 > 0 && nb.size() >= 2) {
+        const int n = int(nb.size());
+        Eigen::MatrixXd A(n, 5);
+        Eigen::VectorXd z(n);
+        for (int i = 0; i < n; ++i) {
+          const Vec3 d = mesh_.V[nb[i]] - p;
+          const double x = d.dot(e1) / r1, y = d.dot(e2) / r1, h = d.dot(f) / r1;
+          const double w = 1.0 / (0.25 + x * x + y * y);  // nearer points count more
+          A.row(i) << w * x, w * y, w * x * x, w * x * y, w * y * y;
+          z(i) = w * h;
+        }
+        if (n >= 6) {
+          Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+          qr.setThreshold(1e-8);
+          if (qr.rank() == 5) {
+            const Eigen::VectorXd c = qr.solve(z);
+            g = Vec2(c(0), c(1));
+            ok = g.allFinite();
+          }
+        }
+        if (!ok) {
+          Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A.leftCols(2));
+          qr.setThreshold(1e-8);
+          if (qr.rank() == 2) {
+            const Eigen::VectorXd c = qr.solve(z);
+            g = Vec2(c(0), c(1));
+            ok = g.allFinite();
+            if (ok) ++linCount;
+          }
+        }
+      }
+    }
+    if (!ok) {
+      // thesis eqs. 3-1 (interior) and 3-2 (boundary); also the fallback of the quadratic fit
+      Vec2 num(0, 0);
+      double den = 0;
+      for (int q = b0; q < b1; ++q) {
+        const int t = topo.vf[q];
+        if (degen[t]) continue;
+        const auto& F = mesh_.F[t];
+        Vec2 gi;
+        double Ai;
+        if (!facetGradient(mesh_.V[F[0]], mesh_.V[F[1]], mesh_.V[F[2]], e1, e2, f, gi, Ai) || !(Ai > 0)) continue;
+        const double li = 1.0 / Ai;
+        Vec2 term = gi;
+        if (topo.boundary[v]) {
+          // t'_i: the face across the edge of t_i opposite to v
+          const int l = F[0] == v ? 0 : (F[1] == v ? 1 : 2);
+          const auto& E = topo.edges[topo.faceEdge[t][l]];
+          const int tp = E.f1 < 0 ? -1 : (E.f0 / 3 == t ? E.f1 / 3 : E.f0 / 3);
+          Vec2 gp;
+          double Ap;
+          if (tp >= 0 && !degen[tp]) {
+            const auto& G = mesh_.F[tp];
+            if (facetGradient(mesh_.V[G[0]], mesh_.V[G[1]], mesh_.V[G[2]], e1, e2, f, gp, Ap) && Ap > 0)
+              term = ((2 * Ai + Ap) * gi - Ai * gp) / (Ai + Ap);
+          }
+        }
+        num += li * term;
+        den += li;
+      }
+      if (den > 0) { g = num / den; ok = g.allFinite(); }
+    }
+    if (!ok) g = Vec2(0, 0);  // no usable facet: the frame plane itself
+    Vec3 n = f - g.x() * e1 - g.y() * e2;
+    normals_[v] = n.normalized();
+  }
+  stats_.flatVertices = flatCount;
+  stats_.linearFitVertices = linCount;
+  stats_.isolatedVertices = isolated;
+  stats_.boundaryVertices = bnd;
+
+  if (hf)
+    for (int v = 0; v < nv; ++v)
+      if (!flat_[v] && topo.vfStart[v] != topo.vfStart[v + 1] && !(normals_[v].dot(opt_.axis) > 1e-6)) {
+        if (normals_[v].dot(opt_.axis) < -1e-6) { normals_[v] = -normals_[v]; continue; }
+        throw InputError("vertex " + std::to_string(v) +
+                         " has a normal orthogonal to the height-field axis; use the 3D (vertex normal) frame");
+      }
+
+  // control nets
+  net_.resize(nf);
+  const Vec3 ax = opt_.axis;
+  auto T = [&](int v, const Vec3& d) -> Vec3 {
+    if (flat_[v]) return d;
+    const Vec3& n = normals_[v];
+    if (hf) return d - (n.dot(d) / n.dot(ax)) * ax;
+    return d - n.dot(d) * n;
+  };
+#pragma omp parallel for schedule(static)
+  for (int t = 0; t < nf; ++t) {
+    const auto& F = mesh_.F[t];
+    Vec3 Vv[3], Vp[3];
+    for (int k = 0; k < 3; ++k) {
+      Vv[k] = mesh_.V[F[k]];
+      Vp[k] = hf ? Vec3(Vv[k] - Vv[k].dot(ax) * ax) : Vv[k];
+    }
+    // e[i][j]: edge control point next to vertex i towards vertex j (eq. 3-10 per coordinate)
+    Vec3 e[3][3];
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j)
+        if (i != j) e[i][j] = Vv[i] + T(F[i], Vv[j] - Vv[i]) / 3.0;
+    auto& N = net_[t];
+    N[0] = e[0][1]; N[1] = e[0][2]; N[2] = e[1][0]; N[3] = e[1][2]; N[4] = e[2][0]; N[5] = e[2][1];
+    // b111^a for the edge opposite vertex a (from b to c): the cross-boundary derivative along the
+    // direction n_a = V_a - V_b - h_a (V_c - V_b) (orthogonal to the edge, eqs. 3-11/3-12) is
+    //   D = 3 [ (1-t)^2 A + 2 t(1-t) M + t^2 C ],
+    //   A = e[b][a] - V_b - h (e[b][c] - V_b), M = b111 - e[b][c] - h (e[c][b] - e[b][c]),
+    //   C = e[c][a] - e[c][b] - h (V_c - e[c][b])        (eq. 3-13);
+    // it is linear in t iff M = (A + C)/2 (eq. 3-14), hence b111^a below (eq. 3-15, re-derived).
+    for (int a = 0; a < 3; ++a) {
+      const int b = (a + 1) % 3, c = (a + 2) % 3;
+      const Vec3 ec = Vp[c] - Vp[b];
+      const double l2 = ec.squaredNorm();
+      double h = 0.5;
+      if (l2 > 1e-24 * std::max(1.0, Vp[a].squaredNorm())) h = (Vp[a] - Vp[b]).dot(ec) / l2;
+      if (!std::isfinite(h)) h = 0.5;
+      const Vec3 A = e[b][a] - Vv[b] - h * (e[b][c] - Vv[b]);
+      const Vec3 C = e[c][a] - e[c][b] - h * (Vv[c] - e[c][b]);
+      N[6 + a] = e[b][c] + h * (e[c][b] - e[b][c]) + 0.5 * (A + C);
+    }
+    if (opt_.blend == Blend::PlainCubic) {
+      const Vec3 m = (N[6] + N[7] + N[8]) / 3.0;
+      N[6] = N[7] = N[8] = m;
+    }
+  }
+}
+
+std::vector<Vec2> C1Surface::heightGradients() const {
+  std::vector<Vec2> g(normals_.size(), Vec2(0, 0));
+  const auto [e1, e2] = frameAxes();
+  for (std::size_t i = 0; i < normals_.size(); ++i) {
+    const Vec3& n = normals_[i];
+    const double c = n.dot(opt_.axis);
+    if (std::abs(c) > 0) g[i] = Vec2(-n.dot(e1) / c, -n.dot(e2) / c);
+  }
+  return g;
+}
+
+std::array<Vec3, 12> C1Surface::controlNet(int face) const {
+  const auto& F = mesh_.F[face];
+  const auto& N = net_[face];
+  return {mesh_.V[F[0]], N[0], N[1], N[2], N[4], mesh_.V[F[1]], N[3], N[5], mesh_.V[F[2]], N[6], N[7], N[8]};
+}
+
+template <class TT>
+void C1Surface::evalImpl(int face, const TT& s, const TT& t, Vec3& P, Vec3& Ps, Vec3& Pt) const {
+  const auto& F = mesh_.F[face];
+  const auto& N = net_[face];
+  const J u = J(1.0) - s - t, v = s, w = t;
+  const J uu = u * u, vv = v * v, ww = w * w;
+  J B[13];
+  B[0] = uu * u;            // V0
+  B[1] = 3.0 * (uu * v);    // e01
+  B[2] = 3.0 * (uu * w);    // e02
+  B[3] = 3.0 * (u * vv);    // e10
+  B[4] = 3.0 * (vv * w);    // e12
+  B[5] = 3.0 * (u * ww);    // e20
+  B[6] = 3.0 * (v * ww);    // e21
+  B[7] = vv * v;            // V1
+  B[8] = ww * w;            // V2
+  const J uvw6 = 6.0 * (u * v * w);
+  const J w0 = vv * ww, w1 = ww * uu, w2 = uu * vv;  // eq. 3-16 weights of b111^0, ^1, ^2
+  const J den = w0 + w1 + w2;
+  if (den.v > 1e-300) {
+    B[9] = uvw6 * (w0 / den);
+    B[10] = uvw6 * (w1 / den);
+    B[11] = uvw6 * (w2 / den);
+  } else {  // at a corner: 6uvw and its gradient vanish
+    B[9] = B[10] = B[11] = J(0.0);
+  }
+  const Vec3* cp[12] = {&mesh_.V[F[0]], &N[0], &N[1], &N[2], &N[3], &N[4], &N[5],
+                        &mesh_.V[F[1]], &mesh_.V[F[2]], &N[6], &N[7], &N[8]};
+  P.setZero(); Ps.setZero(); Pt.setZero();
+  for (int k = 0; k < 12; ++k) {
+    P += B[k].v * *cp[k];
+    Ps += B[k].s * *cp[k];
+    Pt += B[k].t * *cp[k];
+  }
+}
+
+PatchJet C1Surface::jet(int face, const Vec3& bary) const {
+  const double sum = bary.sum();
+  const Vec3 b = std::abs(sum) > 0 ? Vec3(bary / sum) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
+  PatchJet j;
+  evalImpl(face, J(b.y(), 1, 0), J(b.z(), 0, 1), j.P, j.Ps, j.Pt);
+  return j;
+}
+
+Vec3 C1Surface::eval(int face, const Vec3& bary) const { return jet(face, bary).P; }
+
+SurfacePoint C1Surface::at(int face, const Vec3& bary) const {
+  const double sum = bary.sum();
+  SurfacePoint sp;
+  sp.face = face;
+  sp.bary = std::abs(sum) > 0 ? Vec3(bary / sum) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
+  const PatchJet j = jet(face, sp.bary);
+  sp.point = j.P;
+  sp.normal = j.normal();
+  if (sp.normal.squaredNorm() == 0) {  // degenerate parametrization there: use the flat face normal
+    const auto& F = mesh_.F[face];
+    const Vec3 n = (mesh_.V[F[1]] - mesh_.V[F[0]]).cross(mesh_.V[F[2]] - mesh_.V[F[0]]);
+    sp.normal = n.norm() > 0 ? Vec3(n.normalized()) : Vec3(0, 0, 0);
+  }
+  return sp;
+}
+
+// ------------------------------------------------------------------------------------------------
+// refinement
+
+TriMesh C1Surface::refine(int k, std::vector<Vec3>* outNormals) const {
+  if (k < 1) throw InputError("refinement: k must be at least 1");
+  const Topology& topo = *topo_;
+  const int nv = int(mesh_.V.size()), nf = int(mesh_.F.size()), ne = int(topo.edges.size());
+  TriMesh out;
+  // referenced vertices keep their order
+  std::vector<int> vmap(nv, -1);
+  int n = 0;
+  for (int v = 0; v < nv; ++v)
+    if (topo.vfStart[v] != topo.vfStart[v + 1]) vmap[v] = n++;
+  const int edgeBase = n;
+  const int perEdge = k - 1, perFace = (k - 1) * (k - 2) / 2;
+  const int faceBase = edgeBase + ne * perEdge;
+  const int total = faceBase + nf * perFace;
+  out.V.resize(total);
+  std::vector<Vec3> nrm(outNormals ? total : 0);
+  for (int v = 0; v < nv; ++v)
+    if (vmap[v] >= 0) out.V[vmap[v]] = mesh_.V[v];
+  if (outNormals) {
+    // vertex normal: the patch normal at the corner of its first face
+    for (int v = 0; v < nv; ++v) {
+      if (vmap[v] < 0) continue;
+      const int f = topo.vf[topo.vfStart[v]];
+      Vec3 b(0, 0, 0);
+      b[mesh_.F[f][0] == v ? 0 : (mesh_.F[f][1] == v ? 1 : 2)] = 1;
+      Vec3 acc(0, 0, 0);
+      for (int q = topo.vfStart[v]; q < topo.vfStart[v + 1]; ++q) {
+        const int g = topo.vf[q];
+        Vec3 bb(0, 0, 0);
+        bb[mesh_.F[g][0] == v ? 0 : (mesh_.F[g][1] == v ? 1 : 2)] = 1;
+        acc += at(g, bb).normal;
+      }
+      nrm[vmap[v]] = acc.norm() > 0 ? Vec3(acc.normalized()) : at(f, b).normal;
+    }
+  }
+  const double ik = 1.0 / k;
+  // edge vertices, from the edge's first face (a point of the shared edge curve)
+#pragma omp parallel for schedule(static)
+  for (int e = 0; e < ne; ++e) {
+    const auto& E = topo.edges[e];
+    const int f = E.f0 / 3;
+    const auto& F = mesh_.F[f];
+    const int ia = F[0] == E.a ? 0 : (F[1] == E.a ? 1 : 2);
+    const int ib = F[0] == E.b ? 0 : (F[1] == E.b ? 1 : 2);
+    for (int m = 1; m < k; ++m) {
+      Vec3 b(0, 0, 0);
+      b[ia] = 1.0 - m * ik;
+      b[ib] = m * ik;
+      const int id = edgeBase + e * perEdge + (m - 1);
+      if (outNormals) {
+        SurfacePoint sp = at(f, b);
+        out.V[id] = sp.point;
+        Vec3 nn = sp.normal;
+        if (E.f1 >= 0) {
+          const int g = E.f1 / 3;
+          const auto& G = mesh_.F[g];
+          Vec3 bg(0, 0, 0);
+          bg[G[0] == E.a ? 0 : (G[1] == E.a ? 1 : 2)] = 1.0 - m * ik;
+          bg[G[0] == E.b ? 0 : (G[1] == E.b ? 1 : 2)] = m * ik;
+          nn += at(g, bg).normal;
+        }
+        nrm[id] = nn.norm() > 0 ? Vec3(nn.normalized()) : sp.normal;
+      } else {
+        out.V[id] = eval(f, b);
+      }
+    }
+  }
+  out.F.resize(std::size_t(nf) * k * k);
+#pragma omp parallel for schedule(static)
+  for (int f = 0; f < nf; ++f) {
+    const auto& F = mesh_.F[f];
+    // grid point (i, j), i + j <= k: bary (k-i-j, i, j)/k
+    auto edgePoint = [&](int la, int lb, int m) -> int {  // m steps from local corner la to lb
+      const int l = 3 - la - lb;                             // local edge opposite l
+      const int e = topo.faceEdge[f][l];
+      if (e < 0) return vmap[F[la]];                         // repeated vertex: collapsed edge
+      const auto& E = topo.edges[e];
+      const int mm = E.a == F[la] ? m : k - m;
+      return edgeBase + e * perEdge + (mm - 1);
+    };
+    auto id = [&](int i, int j) -> int {
+      const int c = k - i - j;
+      if (i == 0 && j == 0) return vmap[F[0]];
+      if (i == k) return vmap[F[1]];
+      if (j == k) return vmap[F[2]];
+      if (j == 0) return edgePoint(0, 1, i);
+      if (i == 0) return edgePoint(0, 2, j);
+      if (c == 0) return edgePoint(1, 2, j);
+      // interior: row-major over j = 1..k-2, i = 1..k-1-j
+      int idx = 0;
+      for (int jj = 1; jj < j; ++jj) idx += k - 1 - jj;
+      idx += i - 1;
+      return faceBase + f * perFace + idx;
+    };
+    for (int j = 1; j < k - 1; ++j)
+      for (int i = 1; i < k - j; ++i) {
+        const int vid = id(i, j);
+        const Vec3 b((k - i - j) * ik, i * ik, j * ik);
+        if (outNormals) {
+          const SurfacePoint sp = at(f, b);
+          out.V[vid] = sp.point;
+          nrm[vid] = sp.normal;
+        } else {
+          out.V[vid] = eval(f, b);
+        }
+      }
+    std::size_t o = std::size_t(f) * k * k;
+    for (int j = 0; j < k; ++j)
+      for (int i = 0; i < k - j; ++i) {
+        out.F[o++] = {id(i, j), id(i + 1, j), id(i, j + 1)};
+        if (i + j < k - 1) out.F[o++] = {id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)};
+      }
+  }
+  if (outNormals) *outNormals = std::move(nrm);
+  return out;
+}
+
+double enclosedVolume(const TriMesh& m) {
+  double v = 0;
+  for (const auto& f : m.F) v += m.V[f[0]].dot(m.V[f[1]].cross(m.V[f[2]]));
+  return v / 6.0;
+}
+
+// ------------------------------------------------------------------------------------------------
+// planar scalar fields
+
+namespace {
+TriMesh planarMesh(const std::vector<Vec2>& xy, const std::vector<double>& f, const std::vector<std::array<int, 3>>& tris) {
+  if (xy.size() != f.size()) throw InputError("one value per point is needed");
+  TriMesh m;
+  m.V.resize(xy.size());
+  for (std::size_t i = 0; i < xy.size(); ++i) m.V[i] = Vec3(xy[i].x(), xy[i].y(), f[i]);
+  m.F = tris;
+  for (auto& t : m.F) {  // counter-clockwise in the plane
+    for (int k = 0; k < 3; ++k)
+      if (t[k] < 0 || t[k] >= int(xy.size())) throw InputError("triangle uses a point index out of range");
+    const Vec2 a = xy[t[0]], b = xy[t[1]], c = xy[t[2]];
+    if ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x() < 0) std::swap(t[1], t[2]);
+  }
+  return m;
+}
+Options hfOptions(GradientMethod g, Blend b) {
+  Options o;
+  o.gradient = g;
+  o.frame = Frame::HeightField;
+  o.axis = Vec3(0, 0, 1);
+  o.blend = b;
+  return o;
+}
+}  // namespace
+
+std::vector<Vec2> estimateGradients2D(const std::vector<Vec2>& xy, const std::vector<double>& f,
+                                      const std::vector<std::array<int, 3>>& tris, GradientMethod method) {
+  const C1Surface s(planarMesh(xy, f, tris), hfOptions(method, Blend::GoodmanSaid));
+  auto g = s.heightGradients();
+  const auto [e1, e2] = s.frameAxes();
+  // back to (x, y): the frame of the z axis is (e1, e2) = rotation of (x, y)
+  std::vector<Vec2> out(g.size());
+  for (std::size_t i = 0; i < g.size(); ++i) {
+    const Vec3 G = g[i].x() * e1 + g[i].y() * e2;
+    out[i] = Vec2(G.x(), G.y());
+  }
+  return out;
+}
+
+namespace {
+C1Surface makeHeight(const std::vector<Vec2>& xy, const std::vector<double>& f, const std::vector<std::array<int, 3>>& tris,
+                     GradientMethod method, const std::vector<Vec2>& grads, Blend blend) {
+  TriMesh m = planarMesh(xy, f, tris);
+  const Options o = hfOptions(method, blend);
+  if (grads.empty()) return C1Surface(std::move(m), o);
+  if (grads.size() != xy.size()) throw InputError("one gradient per point is needed");
+  std::vector<Vec3> n(grads.size());
+  for (std::size_t i = 0; i < grads.size(); ++i) n[i] = Vec3(-grads[i].x(), -grads[i].y(), 1.0).normalized();
+  return C1Surface(std::move(m), std::move(n), o);
+}
+}  // namespace
+
+HeightInterpolant::HeightInterpolant(const std::vector<Vec2>& xy, const std::vector<double>& f,
+                                     const std::vector<std::array<int, 3>>& tris, GradientMethod method,
+                                     std::vector<Vec2> gradients, Blend blend)
+    : xy_(xy), surf_(makeHeight(xy, f, tris, method, gradients, blend)) {
+  if (gradients.empty()) {
+    grads_.resize(xy.size());
+    const auto g = surf_.heightGradients();
+    const auto [e1, e2] = surf_.frameAxes();
+    for (std::size_t i = 0; i < g.size(); ++i) {
+      const Vec3 G = g[i].x() * e1 + g[i].y() * e2;
+      grads_[i] = Vec2(G.x(), G.y());
+    }
+  } else {
+    grads_ = std::move(gradients);
+  }
+}
+
+double HeightInterpolant::value(int tri, const Vec2& p) const { return value(tri, p, nullptr); }
+
+double HeightInterpolant::value(int tri, const Vec2& p, Vec2* grad) const {
+  const auto& F = surf_.mesh().F[tri];  // reoriented CCW, same vertex set
+  const Vec2 a = xy_[F[0]], b = xy_[F[1]], c = xy_[F[2]];
+  const double det = (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
+  const Vec2 d = p - a;
+  const double s = (d.x() * (c - a).y() - d.y() * (c - a).x()) / det;
+  const double t = ((b - a).x() * d.y() - (b - a).y() * d.x()) / det;
+  const PatchJet j = surf_.jet(tri, Vec3(1 - s - t, s, t));
+  if (grad) {
+    // P(s,t) = (x, y, z): dz/dx, dz/dy from the 2x2 Jacobian of (x, y) wrt (s, t)
+    Eigen::Matrix2d Jm;
+    Jm << j.Ps.x(), j.Pt.x(), j.Ps.y(), j.Pt.y();
+    const Eigen::RowVector2d dz(j.Ps.z(), j.Pt.z());
+    const Eigen::RowVector2d gz = dz * Jm.inverse();
+    *grad = Vec2(gz(0), gz(1));
+  }
+  return j.P.z();
+}
+
+}  // namespace pectus::c1
