@@ -1,0 +1,32 @@
+// Force calibration (thesis 6.4.1): the force whose displacement matches a target (e.g. the sternal
+// elevation seen on the post-operative X-ray, 34-45 mm) by a safeguarded secant search.
+#pragma once
+#include <functional>
+#include <utility>
+#include <vector>
+
+namespace pectus::fe {
+
+struct CalibrationOptions {
+  double tolerance = 0.1;       ///< |displacement - target| <= tolerance (mm)
+  double initialForce = 20.0;   ///< first trial force (N); use target / linear compliance when known
+  double maxForce = 2000.0;     ///< never try more; the target is unreachable if d(maxForce) < target
+  int maxEvaluations = 20;
+};
+
+struct CalibrationResult {
+  double force = 0;
+  double displacement = 0;
+  int evaluations = 0;
+  std::vector<std::pair<double, double>> history;  ///< (force, displacement) of every evaluation
+};
+
+/// displacement(F) must be increasing in F with displacement(0) = 0 (it is not evaluated at 0).
+/// Secant steps through the origin and the last points, kept inside the bracket once the target is
+/// bracketed (Illinois-style fallback to bisection). Throws pectus::InputError when the target is not
+/// reached up to maxForce, the displacement has the wrong sign, or maxEvaluations is exceeded;
+/// exceptions of displacement() (e.g. non-converged Newton) propagate.
+CalibrationResult calibrateForce(const std::function<double(double)>& displacement, double target,
+                                 const CalibrationOptions& opt = {});
+
+}  // namespace pectus::fe

@@ -1,0 +1,152 @@
+// VTU and CalculiX writers (parsed back), and the force calibration search.
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <fstream>
+#include <regex>
+#include <sstream>
+
+#include "pectus/errors.h"
+#include "pectus/fe/calibrate.h"
+#include "pectus/fe/io.h"
+#include "pectus/fe/solver.h"
+
+using namespace pectus::fe;
+using Eigen::Vector3d;
+
+namespace {
+std::string slurp(const std::string& p) {
+  std::ifstream f(p);
+  std::stringstream s;
+  s << f.rdbuf();
+  return s.str();
+}
+std::string tmp(const std::string& name) { return ::testing::TempDir() + name; }
+
+// two-tissue bar: lower half bone (1), upper half cartilage (2), clamped at z = 0, tip force along y
+struct Bar {
+  TetMesh m;
+  Problem p;
+  int tip = -1;
+  Bar(int order, double F) {
+    m = structuredBox(10, 10, 60, 2, 2, 12, 1);
+    for (int t = 0; t < m.numTets(); ++t)
+      if ((m.nodes[m.tets[t][0]] + m.nodes[m.tets[t][1]] + m.nodes[m.tets[t][2]] + m.nodes[m.tets[t][3]]).z() / 4 > 30) m.tissue[t] = 2;
+    if (order == 2) m = toQuadratic(m);
+    p.mesh = &m;
+    p.materials = {{1, {11500.0, 0.3}}, {2, {100.0, 0.4}}};
+    for (int i = 0; i < m.numNodes(); ++i) {
+      if (m.nodes[i].z() < 1e-9) p.fixNode(i);
+      if ((m.nodes[i] - Vector3d(5, 5, 60)).norm() < 1e-9) tip = i;
+    }
+    p.addForce(tip, Vector3d(0, F, 0));
+  }
+};
+}  // namespace
+
+TEST(FeIo, VtuRoundTrip) {
+  for (int order : {1, 2}) {
+    Bar b(order, 1.0);
+    const Result r = solveLinear(b.p);
+    const std::string path = tmp("fe_bar.vtu");
+    writeVtu(path, b.m, &r);
+    const std::string s = slurp(path);
+    std::smatch mt;
+    ASSERT_TRUE(std::regex_search(s, mt, std::regex("NumberOfPoints=\"(\\d+)\" NumberOfCells=\"(\\d+)\"")));
+    EXPECT_EQ(std::stoi(mt[1]), b.m.numNodes());
+    EXPECT_EQ(std::stoi(mt[2]), b.m.numTets());
+    for (const char* name : {"\"tissue\"", "\"displacement\"", "\"von_mises\"", "\"equivalent_strain\"", "\"connectivity\""})
+      EXPECT_NE(s.find(name), std::string::npos) << name;
+    // parse the displacement array back and compare the tip node
+    const size_t at = s.find("Name=\"displacement\"");
+    std::istringstream in(s.substr(s.find('\n', at) + 1));
+    Vector3d u;
+    for (int i = 0; i <= b.tip; ++i) in >> u.x() >> u.y() >> u.z();
+    EXPECT_NEAR((u - r.displacement(b.tip)).norm(), 0.0, 1e-9 * r.displacement(b.tip).norm());
+    // cell types
+    const size_t ty = s.find("Name=\"types\"");
+    std::istringstream ti(s.substr(s.find('\n', ty) + 1));
+    int type = 0;
+    ti >> type;
+    EXPECT_EQ(type, order == 2 ? 24 : 10);
+  }
+  EXPECT_THROW(writeVtu("/nonexistent-dir/x.vtu", structuredBox(1, 1, 1, 1, 1, 1)), pectus::InputError);
+}
+
+TEST(FeIo, CalculixDeck) {
+  Bar b(2, 3.0);
+  InpOptions o;
+  o.nlgeom = true;
+  o.increments = 8;
+  o.printNodes = {b.tip};
+  const std::string path = tmp("fe_bar.inp");
+  writeCalculixInp(path, b.p, o);
+  const std::string s = slurp(path);
+  auto count = [&](const std::string& what) {
+    size_t c = 0;
+    for (size_t pos = s.find(what); pos != std::string::npos; pos = s.find(what, pos + 1)) ++c;
+    return c;
+  };
+  EXPECT_EQ(count("*ELEMENT, TYPE=C3D10"), 2u);
+  EXPECT_EQ(count("*MATERIAL, NAME="), 2u);
+  EXPECT_NE(s.find("*MATERIAL, NAME=CARTILAGE\n*ELASTIC\n100, 0.4"), std::string::npos);
+  EXPECT_NE(s.find("*STEP, NLGEOM"), std::string::npos);
+  EXPECT_NE(s.find("*STATIC, DIRECT\n0.125, 1.0"), std::string::npos);
+  EXPECT_NE(s.find("*CLOAD\n" + std::to_string(b.tip + 1) + ", 2, 3\n"), std::string::npos);
+  // one line per element, 11 entries each
+  const size_t e0 = s.find("*ELEMENT");
+  std::istringstream in(s.substr(s.find('\n', e0) + 1));
+  std::string line;
+  std::getline(in, line);
+  EXPECT_EQ(std::count(line.begin(), line.end(), ','), 10);
+  // every fixed dof is in *BOUNDARY
+  const size_t bStart = s.find("*BOUNDARY\n") + 10, bEnd = s.find("*STEP");
+  EXPECT_EQ(static_cast<size_t>(std::count(s.begin() + bStart, s.begin() + bEnd, '\n')), b.p.fixed.size());
+  o.nlgeom = false;
+  writeCalculixInp(path, b.p, o);
+  EXPECT_EQ(slurp(path).find("NLGEOM"), std::string::npos);
+}
+
+TEST(FeCalibrate, AnalyticSofteningCurve) {
+  auto d = [](double F) { return 60.0 * (1.0 - std::exp(-F / 90.0)); };
+  CalibrationOptions o;
+  o.initialForce = 20;
+  for (double target : {34.0, 40.0, 44.7}) {
+    const CalibrationResult r = calibrateForce(d, target, o);
+    EXPECT_LE(std::abs(d(r.force) - target), 0.1) << target;
+    EXPECT_LE(r.evaluations, 8) << target;
+    EXPECT_NEAR(r.force, -90.0 * std::log(1 - target / 60.0), 0.1 / (60.0 / 90.0 * std::exp(-r.force / 90)) * 1.01);
+  }
+  o.maxForce = 1000;
+  try {
+    calibrateForce(d, 70.0, o);
+    FAIL() << "unreachable target accepted";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("No force up to"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(calibrateForce([](double F) { return -F; }, 10.0, o), pectus::InputError);
+}
+
+TEST(FeCalibrate, NonlinearBarTipElevation) {
+  // find the tip force lifting the two-tissue bar's tip by 20 mm (nonlinear, TET4), start from the linear compliance
+  Bar b(1, 1.0);
+  Solver s(b.p);
+  const double compliance = s.solveLinear().displacement(b.tip).y();
+  ASSERT_GT(compliance, 0);
+  NewtonOptions no;
+  no.loadSteps = 4;
+  int solves = 0;
+  auto d = [&](double F) {
+    ++solves;
+    return s.solveNonlinear(no, F).displacement(b.tip).y();
+  };
+  const double target = 20.0;
+  CalibrationOptions o;
+  o.initialForce = target / compliance;
+  const CalibrationResult r = calibrateForce(d, target, o);
+  std::printf("[calibrate] force %.4f N -> %.4f mm in %d nonlinear solves (linear guess %.4f N)\n", r.force, r.displacement,
+              r.evaluations, o.initialForce);
+  EXPECT_LE(std::abs(s.solveNonlinear(no, r.force).displacement(b.tip).y() - target), 0.1);
+  EXPECT_LE(r.evaluations, 4);
+  EXPECT_EQ(solves, r.evaluations);
+}
