@@ -265,7 +265,9 @@ void C1Surface::build(std::vector<Vec3>* given) {
         for (int i = 0; i < n; ++i) {
           const Vec3 d = mesh_.V[nb[i]] - p;
           const double x = d.dot(e1) / r1, y = d.dot(e2) / r1, h = d.dot(f) / r1;
-          const double w = 1.0 / (0.25 + x * x + y * y);  // nearer points count more
+          // nearer points count much more (inverse 4th power of the distance, tuned on Franke's sets)
+          const double q = 0.01 + x * x + y * y;
+          const double w = 1.0 / (q * q);
           A.row(i) << w * x, w * y, w * x * x, w * x * y, w * y * y;
           z(i) = w * h;
         }
