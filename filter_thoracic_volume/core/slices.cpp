@@ -61,7 +61,7 @@ double runSlope(const std::vector<double>& r, const std::vector<char>& hit, int 
   for (int j = 0; j < 4; ++j) {
     const int k = ((k0 + dir * j) % K + K) % K;
     if (!hit[k]) break;
-    const double x = -dir * j;  // position relative to k0 in ray units (increasing angle)
+    const double x = dir * j;  // position relative to k0 in ray units (increasing angle)
     sx += x, sy += r[k], sxx += x * x, sxy += x * r[k], ++n;
   }
   if (n < 2) return std::nan("");
@@ -108,6 +108,79 @@ SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K) {
   for (int k = 0; k < K; ++k)
     if (best[k] < 1e299) R.hit[k] = 1, R.radius[k] = best[k], ++R.hits;
   if (R.hits < 3) return R;
+  // rays at the end of a section that see its end face or an outer wall through the gap jump
+  // outward: drop them from the run's ends while they exceed the run's linear extrapolation by 1 %
+  auto at = [&](int k) { return ((k % K) + K) % K; };
+  // short runs of hits (under 3 degrees) that lie outward of the chord between the neighbouring runs
+  // are outer walls seen through a gap (parallax): dropped
+  for (int pass = 0; pass < 5 && R.hits >= 3 && R.hits < K; ++pass) {
+    bool changed = false;
+    int s0 = 0;
+    while (R.hit[s0] || !R.hit[at(s0 + 1)]) ++s0;  // s0: a miss followed by a hit
+    std::vector<std::pair<int, int>> runs;          // (first, length)
+    for (int k = at(s0 + 1), n = 0; n < K;) {
+      if (!R.hit[k]) { k = at(k + 1), ++n; continue; }
+      int len = 0;
+      while (R.hit[at(k + len)] && n + len < K) ++len;
+      runs.push_back({k, len});
+      k = at(k + len), n += len;
+    }
+    if (runs.size() < 3) break;
+    const int maxLen = std::max(3, K / 120);
+    for (std::size_t q = 0; q < runs.size(); ++q) {
+      const auto [f, len] = runs[q];
+      if (len > maxLen) continue;
+      const auto& pr = runs[(q + runs.size() - 1) % runs.size()];
+      const auto& nx = runs[(q + 1) % runs.size()];
+      const int kp = at(pr.first + pr.second - 1), kn = nx.first;
+      const int span = at(kn - kp);
+      double excess = 0;
+      for (int j = 0; j < len; ++j) {
+        const double t = double(at(f + j - kp)) / span;
+        const double chord = (1 - t) * R.radius[kp] + t * R.radius[kn];
+        excess += (R.radius[at(f + j)] - chord) / chord;
+      }
+      if (excess / len > 0.01) {
+        for (int j = 0; j < len; ++j) R.hit[at(f + j)] = 0, --R.hits;
+        changed = true;
+      }
+    }
+    if (!changed) break;
+  }
+  if (R.hits < 3) return R;
+  if (R.hits < K) {
+    // ends of the runs: walking from inside the run towards its end, the first ray that jumps
+    // outward of the linear extrapolation by more than 1 % starts the dropped tail
+    std::vector<std::pair<int, int>> runs;
+    int s0 = 0;
+    while (R.hit[s0] || !R.hit[at(s0 + 1)]) ++s0;
+    for (int k = at(s0 + 1), n = 0; n < K;) {
+      if (!R.hit[k]) { k = at(k + 1), ++n; continue; }
+      int len = 0;
+      while (R.hit[at(k + len)] && n + len < K) ++len;
+      runs.push_back({k, len});
+      k = at(k + len), n += len;
+    }
+    for (const auto& [f, len] : runs) {
+      if (len < 6) continue;
+      const int depth = std::min(len - 3, std::max(4, K / 60));
+      for (int dir : {-1, +1}) {
+        const int edge = dir > 0 ? at(f + len - 1) : f;
+        for (int j = depth; j >= 0; --j) {
+          const int e = at(edge - dir * j), i1 = at(e - dir), i2 = at(e - 2 * dir);
+          if (!R.hit[e] || !R.hit[i1] || !R.hit[i2]) break;
+          if (R.radius[e] - (2 * R.radius[i1] - R.radius[i2]) > 0.01 * R.radius[i1]) {
+            for (int q = j; q >= 0; --q) {
+              const int d = at(edge - dir * q);
+              if (R.hit[d]) R.hit[d] = 0, --R.hits;
+            }
+            break;
+          }
+        }
+      }
+    }
+    if (R.hits < 3) return R;
+  }
   // fill the gaps: cubic Hermite in the angle between the neighbouring hit rays
   int first = 0;
   while (!R.hit[first]) ++first;

@@ -1,0 +1,376 @@
+#include "filter_thoracic_volume.h"
+
+#include <vcg/complex/algorithms/update/bounding.h>
+#include <vcg/complex/algorithms/update/normal.h>
+
+#include <chrono>
+
+#include "pectus/errors.h"
+#include "pectus/labels.h"
+#include "thoracic_volume.h"
+
+using pectus::InputError;
+using pectus::ml::FilterContext;
+using pectus::ml::fmt;
+namespace vol = pectus::vol;
+
+namespace {
+
+const char* kRangeHelp =
+    "<br><b>Range</b> (along the body's long axis z, frame of labels.h: mm, +z superior): from the landmark layer "
+    "(vertex quality = landmark code: 700 dome of the diaphragm or 500 lower end of the sternum, up to 701 lung "
+    "apex), or between two given heights. A before layer is measured over the same range.";
+const char* kCompareHelp =
+    "<br><b>Before/after</b>: with 'Compare with a before layer', the before layer (e.g. the cage before the FE "
+    "correction; the current layer is the after state) is measured the same way and the change is logged in cm&sup3; "
+    "and % of the before value. Both must be the same mesh (same vertex count) in the same frame.";
+
+QStringList rangeSources() { return QStringList() << "Landmarks" << "Given heights"; }
+QStringList lowerLimits() {
+  return QStringList() << "700 dome of the diaphragm" << "500 lower end of the sternum";
+}
+
+MeshModel* defaultLandmarkLayer(MeshDocument& md) {
+  for (MeshModel* m : md.meshList) {
+    QString l = m->label().toLower();
+    const int dot = l.lastIndexOf('.');
+    if (dot > 0) l = l.left(dot);
+    if (l.endsWith("landmarks")) return m;
+  }
+  return md.mm();
+}
+
+void addCommon(MeshDocument& md, RichParameterList& par, int lowerDefault) {
+  par.addParam(RichBool("compare", false, "Compare with a before layer",
+                        "Also measure the 'Before layer' and log the change (current minus before) in cm3 and % of "
+                        "the before value. The current layer is the after state (e.g. the FE-corrected cage)."));
+  par.addParam(RichMesh("beforeLayer", md.mm(), &md, "Before layer",
+                        "The layer measured as the before state when 'Compare with a before layer' is on; the same "
+                        "mesh as the current layer (same vertex count, same frame). Ignored otherwise."));
+  par.addParam(RichEnum("rangeSource", 0, rangeSources(), "Range from",
+                        "Landmarks: the lower and upper heights come from the landmark layer (codes 700/500 and "
+                        "701 of labels.h). Given heights: 'Lower height' and 'Upper height' below."));
+  par.addParam(RichMesh("landmarkLayer", defaultLandmarkLayer(md), &md, "Landmark layer",
+                        "Point layer of landmarks (vertex quality = landmark code, labels.h), as written by the rib "
+                        "cage generator; by default the layer whose label ends in 'landmarks'. Used when the range "
+                        "comes from landmarks."));
+  par.addParam(RichEnum("lowerLimit", lowerDefault, lowerLimits(), "Lower limit landmark",
+                        "Lower end of the range when it comes from landmarks: 700 the dome of the diaphragm (thesis "
+                        "6.3.1, slice method) or 500 the lower end of the sternum (thesis 6.3.2, envelope)."));
+  par.addParam(RichFloat("zLow", 0.0f, "Lower height (mm)",
+                         "Lower end of the range in mm along z, used with 'Range from' = Given heights."));
+  par.addParam(RichFloat("zHigh", 200.0f, "Upper height (mm)",
+                         "Upper end of the range in mm along z, used with 'Range from' = Given heights."));
+}
+
+struct Common {
+  MeshModel* measured = nullptr;
+  MeshModel* before = nullptr;
+  vol::Soup soup, beforeSoup;
+  vol::Range range;
+  std::vector<pectus::Landmark> landmarks;
+};
+
+std::string lab(const MeshModel& m) { return m.label().toStdString(); }
+
+std::vector<pectus::Landmark> landmarksOf(FilterContext& ctx) {
+  MeshModel& lm = ctx.mesh("landmarkLayer");
+  return pectus::readLandmarks(lm.cm);
+}
+
+double needLandmark(const std::vector<pectus::Landmark>& lms, int code, const std::string& layer, const char* what) {
+  auto p = pectus::findLandmark(lms, code);
+  if (!p)
+    throw InputError("landmark " + std::to_string(code) + " (" + what + ") is not in the landmark layer '" + layer +
+                     "': choose the landmark layer (vertex quality = landmark code) or set 'Range from' to Given "
+                     "heights");
+  return p->z();
+}
+
+Common readCommon(FilterContext& ctx, bool needRange = true) {
+  Common c;
+  c.measured = &ctx.current();
+  c.soup = vol::soupFromMesh(c.measured->cm, lab(*c.measured));
+  if (c.soup.F.empty())
+    throw InputError("layer '" + lab(*c.measured) + "' has no faces: the measured layer must be the rib cage surface");
+  if (ctx.boolean("compare")) {
+    c.before = &ctx.mesh("beforeLayer");
+    if (c.before == c.measured)
+      throw InputError("'Before layer' is the current layer itself: pick the before state, or turn 'Compare' off");
+    c.beforeSoup = vol::soupFromMesh(c.before->cm, lab(*c.before));
+    vol::requireComparablePair(c.beforeSoup, c.soup, lab(*c.before), lab(*c.measured));
+  }
+  const int src = ctx.enumIn("rangeSource", 2);
+  const int lower = ctx.enumIn("lowerLimit", 2);
+  if (src == 0 || !needRange) {
+    MeshModel& lm = ctx.mesh("landmarkLayer");
+    c.landmarks = pectus::readLandmarks(lm.cm);
+    if (src == 0) {
+      c.range.zLo = lower == 0 ? needLandmark(c.landmarks, pectus::kDiaphragmDome, lab(lm), "dome of the diaphragm")
+                               : needLandmark(c.landmarks, pectus::kSternumLowerEnd, lab(lm), "lower end of the sternum");
+      c.range.zHi = needLandmark(c.landmarks, pectus::kLungApex, lab(lm), "lung apex");
+    }
+  }
+  if (src == 1) {
+    c.range.zLo = ctx.floatIn("zLow", -1e6, 1e6);
+    c.range.zHi = ctx.floatIn("zHigh", -1e6, 1e6);
+  }
+  if (needRange) vol::requireRange(c.range, "z = " + fmt(c.range.zLo, 2) + " .. " + fmt(c.range.zHi, 2) + " mm");
+  return c;
+}
+
+std::string cm3(double mm3) { return fmt(mm3 / 1000.0, 3) + " cm3"; }
+
+void logChange(FilterContext& ctx, const std::string& what, double before, double after) {
+  const double d = after - before;
+  ctx.log(what + " change: " + (d >= 0 ? "+" : "") + cm3(d) + " (" + (d >= 0 ? "+" : "") + fmt(100.0 * d / before, 2) +
+          " %), before " + cm3(before) + ", after " + cm3(after));
+}
+
+double seconds(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+void addSoupLayer(FilterContext& ctx, const QString& label, const vol::Soup& s) {
+  MeshModel& mm = ctx.addLayer(label);
+  CMeshO& m = ctx.modify(mm);
+  auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, s.V.size());
+  for (const auto& p : s.V) (vi++)->P() = pectus::toPoint(p);
+  auto fi = vcg::tri::Allocator<CMeshO>::AddFaces(m, s.F.size());
+  for (const auto& f : s.F) {
+    for (int k = 0; k < 3; ++k) fi->V(k) = &m.vert[f[k]];
+    ++fi;
+  }
+  mm.UpdateBoxAndNormals();
+}
+
+}  // namespace
+
+FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
+  pectus::ml::FilterSpec s;
+  s.id = FP_SLICE_VOLUME;
+  s.name = "Thoracic Volume (Slice Method)";
+  s.info = QString(
+      "Intrathoracic volume of the rib cage in the current layer by the intersection method of thesis 6.3.1: parallel "
+      "planes across the long axis z every 'Spacing' mm (adjusted so that equal layers fill the range, planes at the "
+      "layers' middles), each plane's cut of the cage rasterised on a 'Resolution' pixel grid, summed as area x "
+      "spacing.<br><b>Intrathoracic region</b> (automatic; the thesis segmented by hand): seen from the centroid of "
+      "the cut, along 'Rays' equally spaced rays the region ends at the nearest rib/cartilage/sternum/vertebra "
+      "section (its inner side); rays through the gaps between sections get their radius by a cubic Hermite "
+      "interpolation in the angle between the neighbouring hit rays (slopes fitted on up to four hit rays each "
+      "side), so gaps are bridged by the curve continuing the walls. The pixels whose centres lie in that closed "
+      "boundary are counted.") + kRangeHelp + kCompareHelp;
+  s.cls = MeshFilterInterface::Measure;
+  addFilter(this, s);
+
+  s.id = FP_ENVELOPE_VOLUME;
+  s.name = "Thoracic Volume (Ferguson Envelope)";
+  s.info = QString(
+      "Thoracic volume by the surface approximation method of thesis 6.3.2: a cylinder of n x m C1 Ferguson bicubic "
+      "patches around the long axis z (through the centre of the cage's bounding box in the range) is shrunk onto "
+      "the rib cage: key points move radially inward in halving steps; a move that makes the surface cut a sample "
+      "of the cage (ray-patch intersection by Newton-Raphson) is undone and the key point held. Key points with no "
+      "sample in the four patch quarters around them are tied to their closest free neighbour on the circle (Fig. "
+      "6-10). Between moves the radii are smoothed along z by eq. 6-1 (never inward; not the end rings nor the key "
+      "points around landmark 500). The volume is integrated over the patches by the divergence theorem (eqs. 6-2, "
+      "6-3) with planar caps at the range ends. The envelope is added as a new layer (closed, tessellated); its "
+      "triangle-mesh volume is logged too (compare with 'Compute Geometric Measures').") +
+      kRangeHelp + kCompareHelp;
+  s.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Measure | MeshFilterInterface::MeshCreation);
+  addFilter(this, s);
+
+  s.id = FP_PECTUS_INDEX;
+  s.name = "Pectus Index";
+  s.info = QString(
+      "Haller index (inner transverse diameter / smallest sternum-to-vertebra distance) and correction index "
+      "((max - min) anterior-posterior distance / max x 100 %) measured on the slice of the model at the deepest "
+      "level: the height of landmark 501 (deepest point of the funnel; its x is the midline) with landmark 503 (the "
+      "vertebra's anterior surface), or automatically the slice with the largest correction index between the given "
+      "heights (midline at the slice centroid, vertebra measured on the slice). The inner boundary of the slice is "
+      "the automatic intrathoracic region of the slice method. Logged, and compared with a before layer.") +
+      kCompareHelp;
+  s.cls = MeshFilterInterface::Measure;
+  addFilter(this, s);
+}
+
+void FilterThoracicVolumePlugin::initParameters(int id, MeshDocument& md, RichParameterList& par) {
+  if (id == FP_SLICE_VOLUME) {
+    addCommon(md, par, 0);
+    par.addParam(RichFloat("spacing", 2.6f, "Spacing (mm)",
+                           "Distance between the cutting planes along z (thesis: about 2.6 mm); adjusted down so that "
+                           "a whole number of layers fills the range."));
+    par.addParam(RichInt("resolution", 512, "Resolution (pixels)",
+                         "Pixels along the longer side of the slices' common raster (thesis: 512 x 512)."));
+    par.addParam(RichInt("rays", 720, "Rays",
+                         "Rays from the slice centroid that find the inner boundary of the sections; more rays follow "
+                         "the wall more closely."));
+  } else if (id == FP_ENVELOPE_VOLUME) {
+    addCommon(md, par, 1);
+    par.addParam(RichInt("patchesLong", 16, "Patches along z (n)",
+                         "Number of Ferguson patches along the long axis (thesis 16). Denser patches fall into the "
+                         "intercostal gaps (thesis Fig. 6-11)."));
+    par.addParam(RichInt("patchesAround", 16, "Patches around (m)", "Number of Ferguson patches around the axis (thesis 16)."));
+    par.addParam(RichFloat("initialStep", 0.0f, "Initial step (mm)",
+                           "First radial step of the key points; 0 = a quarter of the start radius. Halved after "
+                           "every key point is held."));
+    par.addParam(RichFloat("minStep", 0.05f, "Final step (mm)",
+                           "The convergence stops once the halved step falls below this value: the envelope's "
+                           "accuracy in mm."));
+    par.addParam(RichBool("smoothing", true, "Smoothing (eq. 6-1)",
+                          "Raise each key point to the mean radius of its neighbours along z when that is larger, "
+                          "so that the envelope does not fall into the intercostal gaps."));
+    par.addParam(RichInt("tessellation", 8, "Output samples per patch",
+                         "Samples per patch side of the envelope layer (the volume is integrated on the patches "
+                         "themselves)."));
+  } else if (id == FP_PECTUS_INDEX) {
+    par.addParam(RichBool("compare", false, "Compare with a before layer",
+                          "Also measure the 'Before layer' and log both indices side by side."));
+    par.addParam(RichMesh("beforeLayer", md.mm(), &md, "Before layer",
+                          "The before state (same mesh, same frame) when 'Compare with a before layer' is on."));
+    par.addParam(RichEnum("levelSource", 0, QStringList() << "Landmarks 501/503" << "Automatic (deepest slice)",
+                          "Level from",
+                          "Landmarks: the slice at the height of landmark 501 (deepest funnel point; its x is the "
+                          "midline), vertebra at landmark 503. Automatic: the slice between the given heights with the "
+                          "largest correction index."));
+    par.addParam(RichMesh("landmarkLayer", defaultLandmarkLayer(md), &md, "Landmark layer",
+                          "Point layer of landmarks (vertex quality = code); by default the layer whose label ends in "
+                          "'landmarks'."));
+    par.addParam(RichFloat("zLow", 0.0f, "Lower height (mm)", "Automatic level: lower end of the search along z."));
+    par.addParam(RichFloat("zHigh", 200.0f, "Upper height (mm)", "Automatic level: upper end of the search along z."));
+    par.addParam(RichInt("rays", 720, "Rays", "Rays from the slice centroid that find the inner boundary."));
+  }
+}
+
+void FilterThoracicVolumePlugin::run(int id, FilterContext& ctx) {
+  switch (id) {
+    case FP_SLICE_VOLUME: runSlice(ctx); break;
+    case FP_ENVELOPE_VOLUME: runEnvelope(ctx); break;
+    case FP_PECTUS_INDEX: runIndex(ctx); break;
+    default: throw std::logic_error("unknown filter id");
+  }
+}
+
+void FilterThoracicVolumePlugin::runSlice(FilterContext& ctx) {
+  vol::SliceParams p;
+  p.spacing = ctx.floatIn("spacing", 0.01, 1000);
+  p.resolution = ctx.intIn("resolution", 16, 20000);
+  p.rays = ctx.intIn("rays", 16, 100000);
+  Common c = readCommon(ctx);
+  auto measure = [&](const vol::Soup& s, MeshModel& mm, int p0, int p1) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto r = vol::sliceVolume(s, c.range, p, [&](int pc, const char* w) { ctx.progress(p0 + (p1 - p0) * pc / 100, w); });
+    ctx.log("Slice method, layer '" + lab(mm) + "': intrathoracic volume " + cm3(r.volume) + " (" +
+            std::to_string(r.slices) + " slices of " + fmt(r.spacingUsed, 3) + " mm from z = " + fmt(c.range.zLo, 2) +
+            " to " + fmt(c.range.zHi, 2) + " mm, pixel " + fmt(r.pixel, 3) + " mm, polygon volume " +
+            cm3(r.polygonVolume) + ", empty slices " + std::to_string(r.emptySlices) + ", min ray coverage " +
+            fmt(100 * r.minCoverage, 1) + " %, " + fmt(seconds(t0), 3) + " s)");
+    return r.volume;
+  };
+  if (c.before) {
+    const double vb = measure(c.beforeSoup, *c.before, 0, 50), va = measure(c.soup, *c.measured, 50, 100);
+    logChange(ctx, "Slice method intrathoracic volume", vb, va);
+  } else {
+    measure(c.soup, *c.measured, 0, 100);
+  }
+}
+
+void FilterThoracicVolumePlugin::runEnvelope(FilterContext& ctx) {
+  vol::EnvelopeParams p;
+  p.nLong = ctx.intIn("patchesLong", 1, 200);
+  p.mAround = ctx.intIn("patchesAround", 3, 200);
+  p.initialStep = ctx.floatIn("initialStep", 0, 1e5);
+  p.minStep = ctx.floatIn("minStep", 1e-4, 1e4);
+  p.smoothing = ctx.boolean("smoothing");
+  p.tessellation = ctx.intIn("tessellation", 1, 64);
+  Common c = readCommon(ctx);
+  if (auto e = pectus::findLandmark(c.landmarks, pectus::kSternumLowerEnd)) p.sternumEnd = *e;
+  struct Out {
+    vol::Soup mesh;
+    QString label;
+  };
+  std::vector<Out> outs;
+  auto measure = [&](const vol::Soup& s, MeshModel& mm, int p0, int p1) {
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto r = vol::fergusonEnvelope(s, c.range, p, [&](int pc, const char* w) { ctx.progress(p0 + (p1 - p0) * pc / 100, w); });
+    const double dt = seconds(t0);
+    Out o{r.env.tessellate(p.tessellation), QString::fromStdString(lab(mm) + " envelope")};
+    const double meshVol = vol::divergenceVolume(o.mesh);
+    ctx.log("Ferguson envelope, layer '" + lab(mm) + "': thoracic volume " + cm3(r.volume) + " (" +
+            std::to_string(p.nLong) + " x " + std::to_string(p.mAround) + " patches, z = " + fmt(c.range.zLo, 2) +
+            " to " + fmt(c.range.zHi, 2) + " mm, " + std::to_string(r.touching) + " key points touching, " +
+            std::to_string(r.singular) + " singular, " + std::to_string(r.levels) + " step levels, " +
+            std::to_string(r.samples) + " samples, " + fmt(dt, 3) + " s)");
+    ctx.log("Envelope layer '" + o.label.toStdString() + "' (" + std::to_string(o.mesh.F.size()) +
+            " triangles, closed): mesh volume " + fmt(meshVol, 6) + " mm3");
+    outs.push_back(std::move(o));
+    return r.volume;
+  };
+  if (c.before) {
+    const double vb = measure(c.beforeSoup, *c.before, 0, 50), va = measure(c.soup, *c.measured, 50, 100);
+    logChange(ctx, "Ferguson envelope thoracic volume", vb, va);
+  } else {
+    measure(c.soup, *c.measured, 0, 100);
+  }
+  // a closed measured layer: its own divergence volume (compare with Compute Geometric Measures)
+  for (MeshModel* mm : {c.before, c.measured}) {
+    if (!mm) continue;
+    const auto& s = mm == c.measured ? c.soup : c.beforeSoup;
+    std::map<std::pair<int, int>, int> edges;
+    for (const auto& f : s.F)
+      for (int k = 0; k < 3; ++k) edges[{std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])}]++;
+    bool closed = true;
+    for (const auto& e : edges) closed = closed && e.second == 2;
+    if (closed)
+      ctx.log("Layer '" + lab(*mm) + "' is closed: divergence volume " + fmt(vol::divergenceVolume(s), 6) + " mm3");
+  }
+  for (const auto& o : outs) addSoupLayer(ctx, o.label, o.mesh);
+}
+
+void FilterThoracicVolumePlugin::runIndex(FilterContext& ctx) {
+  MeshModel& cur = ctx.current();
+  vol::Soup soup = vol::soupFromMesh(cur.cm, lab(cur));
+  if (soup.F.empty()) throw InputError("layer '" + lab(cur) + "' has no faces: the measured layer must be the rib cage");
+  MeshModel* before = nullptr;
+  vol::Soup beforeSoup;
+  if (ctx.boolean("compare")) {
+    before = &ctx.mesh("beforeLayer");
+    if (before == &cur) throw InputError("'Before layer' is the current layer itself: pick the before state, or turn 'Compare' off");
+    beforeSoup = vol::soupFromMesh(before->cm, lab(*before));
+    vol::requireComparablePair(beforeSoup, soup, lab(*before), lab(cur));
+  }
+  vol::IndexInputs in;
+  in.rays = ctx.intIn("rays", 16, 100000);
+  const int src = ctx.enumIn("levelSource", 2);
+  if (src == 0) {
+    MeshModel& lm = ctx.mesh("landmarkLayer");
+    const auto lms = pectus::readLandmarks(lm.cm);
+    auto deep = pectus::findLandmark(lms, pectus::kFunnelDeepest);
+    if (!deep)
+      throw InputError("landmark 501 (deepest point of the funnel) is not in the landmark layer '" + lab(lm) +
+                       "': choose the landmark layer or set 'Level from' to Automatic");
+    in.level = deep->z();
+    in.midlineX = deep->x();
+    if (auto v = pectus::findLandmark(lms, pectus::kVertebraAtDeepest)) in.spineY = v->y();
+  } else {
+    in.searchRange = {ctx.floatIn("zLow", -1e6, 1e6), ctx.floatIn("zHigh", -1e6, 1e6)};
+  }
+  auto measure = [&](const vol::Soup& s, MeshModel& mm) {
+    const auto r = vol::pectusIndex(s, in);
+    ctx.log("Pectus index, layer '" + lab(mm) + "' at z = " + fmt(r.z, 2) + " mm: Haller index " + fmt(r.haller, 3) +
+            ", correction index " + fmt(r.correction, 2) + " % (inner transverse diameter " + fmt(r.transverse, 2) +
+            " mm, sternum-vertebra " + fmt(r.apMin, 2) + " mm, chest wall-vertebra " + fmt(r.apMax, 2) + " mm)");
+    return r;
+  };
+  ctx.progress(10, "pectus index");
+  if (before) {
+    const auto b = measure(beforeSoup, *before);
+    ctx.progress(50, "pectus index");
+    const auto a = measure(soup, cur);
+    ctx.log("Pectus index change: Haller " + fmt(b.haller, 3) + " -> " + fmt(a.haller, 3) + ", correction index " +
+            fmt(b.correction, 2) + " % -> " + fmt(a.correction, 2) + " %");
+  } else {
+    measure(soup, cur);
+  }
+}
+
+MESHLAB_PLUGIN_NAME_EXPORTER(FilterThoracicVolumePlugin)
