@@ -238,19 +238,25 @@ void C1Surface::build(std::vector<Vec3>* given) {
     Vec2 g(0, 0);
     bool ok = false;
     if (opt_.gradient == GradientMethod::QuadraticFit) {
-      // 2-ring neighbourhood
-      std::vector<int> nb;
-      nb.reserve(48);
-      for (int q = b0; q < b1; ++q)
-        for (int k = 0; k < 3; ++k) {
-          const int w = mesh_.F[topo.vf[q]][k];
-          if (w == v) continue;
+      // 2-ring neighbourhood, grown to the 3-ring where it has fewer than 8 points (corners, boundaries)
+      std::vector<int> nb{v};
+      std::size_t ringStart = 0;
+      for (int ring = 0; ring < 3; ++ring) {
+        if (ring == 2 && nb.size() >= 9) break;
+        const std::size_t ringEnd = nb.size();
+        std::vector<int> add;
+        for (std::size_t q0 = ringStart; q0 < ringEnd; ++q0) {
+          const int w = nb[q0];
           for (int r = topo.vfStart[w]; r < topo.vfStart[w + 1]; ++r)
-            for (int kk = 0; kk < 3; ++kk) nb.push_back(mesh_.F[topo.vf[r]][kk]);
+            for (int kk = 0; kk < 3; ++kk) add.push_back(mesh_.F[topo.vf[r]][kk]);
         }
-      std::sort(nb.begin(), nb.end());
-      nb.erase(std::unique(nb.begin(), nb.end()), nb.end());
-      nb.erase(std::remove(nb.begin(), nb.end(), v), nb.end());
+        std::sort(add.begin(), add.end());
+        add.erase(std::unique(add.begin(), add.end()), add.end());
+        for (int a : add)
+          if (std::find(nb.begin(), nb.end(), a) == nb.end()) nb.push_back(a);
+        ringStart = ringEnd;
+      }
+      nb.erase(nb.begin());
       // 1-ring mean distance as the length scale
       double r1 = 0;
       int c1 = 0;
