@@ -15,7 +15,7 @@
 //    continuous at the vertices, and the normal jump across an edge shrinks with the mesh size (it is not
 //    exactly G1 away from the vertices). h_i from the 3D triangle itself.
 // Vertex normals (gradients) come from GradientMethod::QuadraticFit (default: weighted least-squares fit
-// of a quadratic height over the 2-ring, in the vertex frame) or GradientMethod::InverseArea (thesis
+// of a quadratic height over the 2-ring (3-ring at corners), weights 1/(0.01+r^2)^2 with r in 1-ring units, in the vertex frame) or GradientMethod::InverseArea (thesis
 // eqs. 3-1/3-2: inverse-area weighted facet gradients, boundary extrapolation 3-2), or are given.
 //
 // Bad input (pectus::InputError): faces with invalid indices, non-finite coordinates, edges with 3+ faces,
@@ -115,8 +115,9 @@ class C1Surface {
   /// the three b111^i (i = edge opposite vertex i)
   std::array<Vec3, 12> controlNet(int face) const;
 
-  /// Closest point of the C1 surface to p (spatial grid on the patches' bounding boxes + projected
-  /// Gauss-Newton per candidate patch). Thread-safe after the first call (or after buildIndex()).
+  /// Closest point of the C1 surface to p (spatial grid on the patches' bounding boxes, branch and
+  /// bound, projected Newton per candidate patch). Call buildIndex() once before calling it from
+  /// several threads; after that it is thread-safe.
   SurfacePoint closestPoint(const Vec3& p) const;
   void buildIndex() const;
 
