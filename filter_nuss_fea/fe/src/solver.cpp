@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <sstream>
 
 #include <Eigen/CholmodSupport>
@@ -106,7 +108,14 @@ struct Solver::Impl {
   bool analysed = false;
 
   int nFree = 0;
-  Impl() { chol.cholmod().print = 0; }  // errors are reported by exceptions, not on stderr
+  Impl() {
+    chol.cholmod().print = 0;  // errors are reported by exceptions, not on stderr
+    if (const char* o = std::getenv("PECTUS_FE_ORDERING")) {  // experiments: amd | metis | nesdis
+      chol.cholmod().nmethods = 1;
+      const std::string s(o);
+      chol.cholmod().method[0].ordering = s == "metis" ? CHOLMOD_METIS : s == "nesdis" ? CHOLMOD_NESDIS : CHOLMOD_AMD;
+    }
+  }
 
   // position of K(row, col) (row >= col) in K.valuePtr()
   int pos(int row, int col) const {
@@ -219,6 +228,10 @@ struct Solver::Impl {
     }
     chol.factorize(K);
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (std::getenv("PECTUS_FE_VERBOSE"))
+      std::fprintf(stderr, "[pectus_fe] n=%d nnz(A)=%ld nnz(L)=%.0f flops=%.3g ordering=%d factor %.3f s\n", nFree,
+                   static_cast<long>(K.nonZeros()), chol.cholmod().lnz, chol.cholmod().fl, chol.cholmod().selected >= 0 ?
+                   chol.cholmod().method[chol.cholmod().selected].ordering : -1, seconds);
     if (chol.info() != Eigen::Success)
       throw InputError(
           "The stiffness matrix is singular or not positive definite: the model is not held enough (fix more "

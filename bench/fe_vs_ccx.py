@@ -1,0 +1,113 @@
+#!/usr/bin/env python3
+"""pectus_fe vs CalculiX (ccx) on the same tetrahedral mesh: the 10 x 10 x 100 mm cantilever
+(clamped at z = 0, tip shear load along y), TET4/TET10 (C3D4/C3D10), linear and NLGEOM.
+
+  bench/fe_vs_ccx.py --tool build-fe/filter_nuss_fea/fe/pectus_fe_cantilever [--cases small|bench|all] [--check]
+
+small: accuracy on small meshes (tip-centre displacement within 0.5%, --check makes it an exit code);
+bench: wall time and peak memory (/usr/bin/time -v) of both on a ~300k-tet TET4 mesh (linear) and a
+       TET10 mesh of similar DOF count; both solvers get the same number of threads (--threads).
+"""
+import argparse
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+
+
+def parse_kv(line):
+    return {k: v for k, v in (t.split("=", 1) for t in line.split() if "=" in t)}
+
+
+def timed(cmd, cwd, env):
+    """runs cmd under /usr/bin/time -v; returns (stdout, wall seconds, peak RSS MB)"""
+    p = subprocess.run(["/usr/bin/time", "-v"] + cmd, cwd=cwd, env=env, capture_output=True, text=True)
+    if p.returncode != 0:
+        raise RuntimeError("%s failed (rc %d):\n%s\n%s" % (cmd[0], p.returncode, p.stdout[-3000:], p.stderr[-3000:]))
+    wall = re.search(r"Elapsed \(wall clock\) time \(h:mm:ss or m:ss\): (\S+)", p.stderr).group(1)
+    secs = 0.0
+    for part in wall.split(":"):
+        secs = secs * 60 + float(part)
+    rss = int(re.search(r"Maximum resident set size \(kbytes\): (\d+)", p.stderr).group(1)) / 1024.0
+    return p.stdout, secs, rss
+
+
+def ccx_tip(dat_path, node):
+    """last 'displacements ... for set OUT' block of the .dat file: (ux, uy, uz) of node"""
+    txt = open(dat_path).read()
+    blocks = re.split(r"\n\s*displacements \(vx,vy,vz\) for set OUT and time\s+\S+\s*\n", txt)
+    if len(blocks) < 2:
+        raise RuntimeError("no displacement block in " + dat_path)
+    for line in blocks[-1].splitlines():
+        f = line.split()
+        if len(f) == 4 and f[0] == str(node):
+            return tuple(float(x) for x in f[1:])
+    raise RuntimeError("node %s not in %s" % (node, dat_path))
+
+
+def run_case(a, work, name, n, order, load, nlgeom, steps, env, bench):
+    inp = os.path.join(work, name + ".inp")
+    base = [a.tool, "--n"] + [str(x) for x in n] + ["--order", str(order), "--load", str(load), "--steps", str(steps)]
+    if nlgeom:
+        base.append("--nlgeom")
+    # the deck from our mesh (not timed), then our solve (timed), then ccx on the deck (timed)
+    subprocess.run(base + ["--no-solve", "--inp", inp], check=True, capture_output=True, text=True, env=env)
+    out, t_ours, m_ours = timed(base, work, env)
+    ours = parse_kv(out.strip().splitlines()[-1])
+    _, t_ccx, m_ccx = timed([a.ccx, "-i", name], work, env)
+    ux, uy, uz = ccx_tip(os.path.join(work, name + ".dat"), ours["tip_node"])
+    u_ours = float(ours["tip_uy"])
+    rel = abs(u_ours - uy) / abs(uy)
+    return dict(name=name, tets=int(ours["tets"]), dofs=int(ours["dofs"]), ours=u_ours, ccx=uy, rel=rel,
+                t_ours=t_ours, t_ccx=t_ccx, m_ours=m_ours, m_ccx=m_ccx, solve_s=float(ours["solve_s"]),
+                factor_s=float(ours["last_factor_s"]), it=int(ours["newton_it"]))
+
+
+def main():
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--tool", required=True)
+    ap.add_argument("--ccx", default=shutil.which("ccx") or "ccx")
+    ap.add_argument("--cases", default="small", choices=["small", "bench", "all"])
+    ap.add_argument("--check", action="store_true", help="exit 1 if a tip displacement differs by more than 0.5%%")
+    ap.add_argument("--threads", type=int, default=2)
+    ap.add_argument("--keep", help="keep the decks and results in this folder")
+    a = ap.parse_args()
+    env = dict(os.environ, OMP_NUM_THREADS=str(a.threads), OPENBLAS_NUM_THREADS=str(a.threads),
+               CCX_NPROC_EQUATION_SOLVER=str(a.threads), CCX_NPROC_STIFFNESS=str(a.threads))
+    work = a.keep or tempfile.mkdtemp(prefix="fe_vs_ccx_")
+    os.makedirs(work, exist_ok=True)
+    cases = []
+    if a.cases in ("small", "all"):
+        for order in (1, 2):
+            cases.append(("lin_tet%d" % (4 if order == 1 else 10), (2, 2, 20), order, 20.0, False, 1, False))
+            cases.append(("nlgeom_tet%d" % (4 if order == 1 else 10), (2, 2, 20), order, 700.0, True, 10, False))
+    if a.cases in ("bench", "all"):
+        cases.append(("bench_lin_tet4_300k", (20, 20, 125), 1, 20.0, False, 1, True))
+        cases.append(("bench_lin_tet10", (10, 10, 50), 2, 20.0, False, 1, True))
+    rows, failed = [], False
+    for c in cases:
+        r = run_case(a, work, *c[:6], env=env, bench=c[6])
+        rows.append(r)
+        ok = r["rel"] <= 0.005
+        failed |= not ok
+    print("%-22s %8s %8s %12s %12s %9s %9s %9s %9s %9s %8s %8s" % (
+        "case", "tets", "dofs", "tip_uy_ours", "tip_uy_ccx", "rel_diff", "ours_s", "ccx_s", "ratio", "solve_s",
+        "ours_MB", "ccx_MB"))
+    for r in rows:
+        print("%-22s %8d %8d %12.6f %12.6f %9.2e %9.2f %9.2f %9.3f %9.2f %8.0f %8.0f" % (
+            r["name"], r["tets"], r["dofs"], r["ours"], r["ccx"], r["rel"], r["t_ours"], r["t_ccx"],
+            r["t_ours"] / r["t_ccx"], r["solve_s"], r["m_ours"], r["m_ccx"]))
+    print("(ours_s/ccx_s: wall time of the whole process incl. meshing/assembly/IO; solve_s: our setup + solve; "
+          "threads=%d; files in %s)" % (a.threads, work))
+    if not a.keep:
+        shutil.rmtree(work, ignore_errors=True)
+    if a.check and failed:
+        print("FAIL: tip displacement differs from CalculiX by more than 0.5%")
+        return 1
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
