@@ -32,7 +32,9 @@ struct Surf {
   const Envelope& e;
   double dz;
   std::vector<double> c, s;
-  explicit Surf(const Envelope& env) : e(env), dz((env.zHi - env.zLo) / env.n), c(env.m), s(env.m) {
+  double arc;
+  explicit Surf(const Envelope& env)
+      : e(env), dz((env.zHi - env.zLo) / env.n), c(env.m), s(env.m), arc(4 * std::tan(kPi / (2 * env.m))) {
     for (int j = 0; j < e.m; ++j) c[j] = std::cos(e.phi[j]), s[j] = std::sin(e.phi[j]);
   }
   int wrap(int j) const { return ((j % e.m) + e.m) % e.m; }
@@ -46,7 +48,16 @@ struct Surf {
     if (i == e.n) return P(e.n, j) - P(e.n - 1, j);
     return 0.5 * (P(i + 1, j) - P(i - 1, j));
   }
-  Eigen::Vector2d Pv(int i, int j) const { return 0.5 * (P(i, j + 1) - P(i, j - 1)); }
+  // tangent around the axis, per unit v: the radius' derivative (fourth-order central difference) along e_r plus the circular
+  // arc's Hermite tangent 4 tan(dphi/4) L along e_phi (exact midpoint for a circle; C1 as it is shared)
+  Eigen::Vector2d Pv(int i, int j) const {
+    j = wrap(j);
+    const double L = e.L[std::size_t(i) * e.m + j];
+    const double* row = &e.L[std::size_t(i) * e.m];
+    const double dL = e.m >= 5 ? (8 * (row[wrap(j + 1)] - row[wrap(j - 1)]) - (row[wrap(j + 2)] - row[wrap(j - 2)])) / 12.0
+                               : 0.5 * (row[wrap(j + 1)] - row[wrap(j - 1)]);
+    return dL * Eigen::Vector2d(c[j], s[j]) + arc * L * Eigen::Vector2d(-s[j], c[j]);
+  }
   Column column(int i, int j, double u) const {
     double h[4], dh[4];
     hermite(u, h, dh);
@@ -138,9 +149,10 @@ double Envelope::volume() const {
   // eq. 6-3 with the origin on the axis at zLo: V = 1/3 [ lateral integral of r.(Sv x Su) + top cap ]
   // (the bottom cap lies in the plane through the origin and contributes 0)
   Surf sf(*this);
-  const Eigen::Vector3d O(axis.x(), axis.y(), zLo);
+  const double dzr = (zHi - zLo) / n;
+  const Eigen::Vector3d O(axis.x(), axis.y(), zLo + row0 * dzr);
   double lateral = 0;
-  for (int i = 0; i < n; ++i)
+  for (int i = row0; i < row1; ++i)
     for (int j = 0; j < m; ++j)
       for (int a = 0; a < 5; ++a) {
         const double u = 0.5 * (kGx[a] + 1);
@@ -152,7 +164,7 @@ double Envelope::volume() const {
           Eigen::Vector2d S(0, 0), SU(0, 0), SV(0, 0);
           for (int k = 0; k < 4; ++k) S += h[k] * C.A[k], SU += h[k] * C.dA[k], SV += dh[k] * C.A[k];
           const double dz = (zHi - zLo) / n;
-          const Eigen::Vector3d r(S.x() - O.x(), S.y() - O.y(), (i + u) * dz);
+          const Eigen::Vector3d r(S.x() - O.x(), S.y() - O.y(), (i - row0 + u) * dz);
           const Eigen::Vector3d su(SU.x(), SU.y(), dz), sv(SV.x(), SV.y(), 0);
           lateral += 0.25 * kGw[a] * kGw[b] * r.dot(sv.cross(su));
         }
@@ -160,7 +172,7 @@ double Envelope::volume() const {
   // top cap area by Green's theorem along the top boundary curve (u = 1 of the last patch row)
   double area = 0;
   for (int j = 0; j < m; ++j) {
-    const Column C = sf.column(n - 1, j, 1.0);
+    const Column C = sf.column(row1 - 1, j, 1.0);
     for (int b = 0; b < 5; ++b) {
       const double v = 0.5 * (kGx[b] + 1);
       double h[4], dh[4];
@@ -170,22 +182,23 @@ double Envelope::volume() const {
       area += 0.5 * kGw[b] * 0.5 * cross2(S - axis, SV);
     }
   }
-  return (lateral + (zHi - zLo) * area) / 3.0;
+  return (lateral + (row1 - row0) * dzr * area) / 3.0;
 }
 
 Soup Envelope::tessellate(int t) const {
   t = std::max(1, t);
   Soup s;
-  const int rows = n * t + 1, cols = m * t;
+  const int nr = row1 - row0, rows = nr * t + 1, cols = m * t;
   s.V.reserve(std::size_t(rows) * cols + 2);
   for (int I = 0; I < rows; ++I) {
-    const int i = std::min(I / t, n - 1);
+    const int i = std::min(I / t, nr - 1);
     const double u = double(I - i * t) / t;
-    for (int J = 0; J < cols; ++J) s.V.push_back(eval(i, J / t, u, double(J % t) / t));
+    for (int J = 0; J < cols; ++J) s.V.push_back(eval(row0 + i, J / t, u, double(J % t) / t));
   }
   const int bot = int(s.V.size());
-  s.V.push_back({axis.x(), axis.y(), zLo});
-  s.V.push_back({axis.x(), axis.y(), zHi});
+  const double dzr = (zHi - zLo) / n;
+  s.V.push_back({axis.x(), axis.y(), zLo + row0 * dzr});
+  s.V.push_back({axis.x(), axis.y(), zLo + row1 * dzr});
   const int top = bot + 1;
   auto id = [&](int I, int J) { return I * cols + ((J % cols) + cols) % cols; };
   for (int I = 0; I + 1 < rows; ++I)
@@ -210,8 +223,12 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
   requireRange(range, "of the envelope");
   if (p.nLong < 1 || p.mAround < 3) throw InputError("the envelope needs at least 1 x 3 patches");
   if (!(p.minStep > 0)) throw InputError("the envelope's minimum step must be positive");
-  const int n = p.nLong, m = p.mAround, B = std::max(1, p.binsPerPatch);
-  const double dz = (range.zHi - range.zLo) / n, dphi = 2 * kPi / m;
+  // n measured patch rows plus one guard row beyond each end of the range (the cage goes on there:
+  // the measured end rings are not free edges that could dip into a gap); the outermost rings are
+  // tied to their inner neighbours, the volume is integrated over the measured rows only
+  const int m = p.mAround, B = std::max(1, p.binsPerPatch), n = p.nLong + 2;
+  const double dz = (range.zHi - range.zLo) / p.nLong, dphi = 2 * kPi / m;
+  const double ezLo = range.zLo - dz, ezHi = range.zHi + dz;
 
   // the axis: centre of the bounding box (x, y) of the geometry in the range
   Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
@@ -230,7 +247,7 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
   if (std::max(hi.x() - lo.x(), hi.y() - lo.y()) < 1e-6)
     throw InputError("degenerate axis: the geometry in the measured range has no extent across the long axis (z)");
   Envelope env;
-  env.n = n, env.m = m, env.zLo = range.zLo, env.zHi = range.zHi;
+  env.n = n, env.m = m, env.zLo = ezLo, env.zHi = ezHi, env.row0 = 1, env.row1 = n - 1;
   env.axis = 0.5 * (lo + hi);
   env.phi.resize(m);
   for (int j = 0; j < m; ++j) env.phi[j] = j * dphi;
@@ -238,7 +255,7 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
   // samples: the vertices in range plus points inside large faces (so that sparse meshes bound the surface)
   std::vector<Sample> raw;
   auto addSample = [&](const Eigen::Vector3d& q) {
-    if (q.z() < range.zLo || q.z() > range.zHi) return;
+    if (q.z() < ezLo || q.z() > ezHi) return;
     const Eigen::Vector2d d = q.head<2>() - env.axis;
     const double r = d.norm();
     if (r < 1e-9) return;
@@ -246,13 +263,16 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
     if (a < 0) a += 2 * kPi;
     raw.push_back({q.z(), a, r, d.x() / r, d.y() / r});
   };
+  std::vector<char> used(soup.V.size(), 0);
+  for (const auto& f : soup.F)
+    for (int k = 0; k < 3; ++k) used[f[k]] = 1;
   for (std::size_t i = 0; i < soup.V.size(); ++i)
-    if (inRange[i]) addSample(soup.V[i]);
+    if (used[i]) addSample(soup.V[i]);
   const double rmaxBox = 0.5 * (hi - lo).norm();
   const double target = std::min(dz, dphi * rmaxBox) / B;
   for (const auto& f : soup.F) {
     const Eigen::Vector3d &a = soup.V[f[0]], &b = soup.V[f[1]], &c = soup.V[f[2]];
-    if (std::max({a.z(), b.z(), c.z()}) < range.zLo || std::min({a.z(), b.z(), c.z()}) > range.zHi) continue;
+    if (std::max({a.z(), b.z(), c.z()}) < ezLo || std::min({a.z(), b.z(), c.z()}) > ezHi) continue;
     const double e = std::max({(a - b).norm(), (b - c).norm(), (c - a).norm()});
     if (e <= target) continue;
     const int q = std::min(64, int(std::ceil(e / target)));
@@ -273,7 +293,7 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
   double rmax = 0;
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const auto& sm = raw[k];
-    const double t = (sm.z - range.zLo) / dz;
+    const double t = (sm.z - ezLo) / dz;
     const int i = std::clamp(int(std::floor(t)), 0, n - 1);
     const double u = std::clamp(t - i, 0.0, 1.0);
     const double a = sm.angle / dphi;
@@ -316,7 +336,7 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
   // tie every singular key point to its closest non-singular key point along the circle (I-1 first),
   // a fully singular ring to the nearest ring's key point in the same column
   std::vector<int> root(K);
-  for (int i = 0; i <= n; ++i)
+  for (int i = 1; i < n; ++i)
     for (int j = 0; j < m; ++j) {
       const int k = kid(i, j);
       root[k] = k;
@@ -328,7 +348,7 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
       }
       for (int d = 1; d <= n && found < 0; ++d)
         for (int ii : {i - d, i + d}) {
-          if (found >= 0 || ii < 0 || ii > n) continue;
+          if (found >= 0 || ii < 1 || ii > n - 1) continue;
           for (int dd = 0; dd <= m / 2 && found < 0; ++dd) {
             if (!singular[kid(ii, j - dd)]) found = kid(ii, j - dd);
             else if (!singular[kid(ii, j + dd)]) found = kid(ii, j + dd);
@@ -336,12 +356,16 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
         }
       root[k] = found;
     }
+  for (int j = 0; j < m; ++j) {
+    root[kid(0, j)] = root[kid(1, j)];
+    root[kid(n, j)] = root[kid(n - 1, j)];
+  }
   std::vector<std::vector<int>> members(K);
   for (int k = 0; k < K; ++k) members[root[k]].push_back(k);
   std::vector<int> roots;
   for (int k = 0; k < K; ++k)
     if (root[k] == k) roots.push_back(k);
-  // patches influenced by each group (rows i-2..i+1, columns j-2..j+1 of every member)
+  // patches influenced by each group (rows i-2..i+1, columns j-3..j+2 of every member)
   std::vector<std::vector<int>> affected(K);
   std::vector<int> stamp(P, -1);
   for (int g : roots) {
@@ -349,7 +373,7 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
       const int i = k / m, j = k % m;
       for (int pi = i - 2; pi <= i + 1; ++pi) {
         if (pi < 0 || pi >= n) continue;
-        for (int pj = j - 2; pj <= j + 1; ++pj) {
+        for (int pj = j - 3; pj <= j + 2; ++pj) {
           const int pid = pi * m + ((pj % m) + m) % m;
           if (stamp[pid] != g) stamp[pid] = g, affected[g].push_back(pid);
         }
@@ -384,7 +408,7 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
   const double minL = 0.02 * R0;
   // smoothing exclusions: end rings, and the key points around the lower end of the sternum
   std::vector<char> smoothable(K, 0);
-  for (int i = 1; i < n; ++i)
+  for (int i = 2; i < n - 1; ++i)  // not the guard rings nor the measured end planes (thesis)
     for (int j = 0; j < m; ++j) smoothable[kid(i, j)] = 1;
   if (p.sternumEnd) {
     const Eigen::Vector2d d = p.sternumEnd->head<2>() - env.axis;
@@ -394,7 +418,7 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
       for (int j = 0; j < m; ++j) {
         double da = std::abs(j * dphi - a);
         da = std::min(da, 2 * kPi - da);
-        if (std::abs(range.zLo + i * dz - p.sternumEnd->z()) <= dz && da <= dphi) smoothable[kid(i, j)] = 0;
+        if (std::abs(ezLo + i * dz - p.sternumEnd->z()) <= dz && da <= dphi) smoothable[kid(i, j)] = 0;
       }
   }
   auto setGroup = [&](int g, double L) {

@@ -114,8 +114,9 @@ struct EnvelopeParams {
 };
 
 struct Envelope {
-  int n = 0, m = 0;
-  double zLo = 0, zHi = 0;
+  int n = 0, m = 0;           ///< patch rows (including the guard rows) and columns
+  double zLo = 0, zHi = 0;    ///< z of ring 0 and ring n
+  int row0 = 0, row1 = 0;     ///< the measured patch rows [row0, row1): volume and tessellation
   Eigen::Vector2d axis{0, 0};
   std::vector<double> L;     ///< (n+1) x m radii, row-major by ring
   std::vector<double> phi;   ///< m angles
@@ -125,7 +126,7 @@ struct Envelope {
                        Eigen::Vector3d* Sv = nullptr) const;
   /// radius of the surface along the radial ray at angle `angle`, height z (Newton-Raphson)
   double rayRadius(double angle, double z, int* iterations = nullptr) const;
-  /// enclosed volume with planar caps (eqs. 6-2, 6-3), Gauss-Legendre quadrature exact for the patches
+  /// volume enclosed by the measured rows and planar caps (eqs. 6-2, 6-3), Gauss-Legendre quadrature exact for the patches
   double volume() const;
   /// closed triangle mesh (lateral surface t x t per patch, fan caps), outward oriented
   Soup tessellate(int t) const;
