@@ -1,0 +1,400 @@
+#include "mga_smooth.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+#include "pectus/c1_cmesh.h"
+#include "pectus/c1_surface.h"
+#include "pectus/errors.h"
+#include "pectus/mesh_checks.h"
+
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
+namespace pectus::smooth {
+
+using c1::C1Surface;
+
+double elementQuality(const std::vector<Vec3>& P, const Element& e) {
+  if (e.nv == 3) return triangleAlpha(P[std::size_t(e.v[0])], P[std::size_t(e.v[1])], P[std::size_t(e.v[2])]);
+  return quadBeta(P[std::size_t(e.v[0])], P[std::size_t(e.v[1])], P[std::size_t(e.v[2])], P[std::size_t(e.v[3])]);
+}
+
+namespace {
+
+/// Location of a node on the original surface: patch and (s, t), bary = (1-s-t, s, t).
+struct Loc {
+  int face = -1;
+  double s = 0, t = 0;
+};
+
+/// Local projection onto the C1 surface: Gauss-Newton on one patch, walking across edges.
+class Projector {
+ public:
+  Projector(const C1Surface& S) : S_(S) {
+    const auto& F = S.mesh().F;
+    adj_.assign(F.size(), {-1, -1, -1});
+    std::map<std::pair<int, int>, std::pair<int, int>> edges;  // (a<b) -> (face, local edge)
+    for (int f = 0; f < int(F.size()); ++f)
+      for (int l = 0; l < 3; ++l) {
+        int a = F[f][(l + 1) % 3], b = F[f][(l + 2) % 3];
+        if (a > b) std::swap(a, b);
+        auto it = edges.find({a, b});
+        if (it == edges.end()) {
+          edges[{a, b}] = {f, l};
+        } else {
+          adj_[f][l] = it->second.first;
+          adj_[it->second.first][it->second.second] = f;
+        }
+      }
+  }
+
+  /// Projects q starting at `start`; returns the location, point and unit normal.
+  Loc project(const Vec3& q, Loc start, Vec3& P, Vec3& N) const {
+    const auto& F = S_.mesh().F;
+    int f = start.face, prev = -1;
+    double s = start.s, t = start.t;
+    for (int walk = 0; walk < 24; ++walk) {
+      for (int it = 0; it < 10; ++it) {
+        const c1::PatchJet j = S_.jet(f, Vec3(1 - s - t, s, t));
+        const Vec3 r = j.P - q;
+        Eigen::Matrix2d H;
+        H << j.Ps.dot(j.Ps), j.Ps.dot(j.Pt), j.Ps.dot(j.Pt), j.Pt.dot(j.Pt);
+        const Eigen::Vector2d g(j.Ps.dot(r), j.Pt.dot(r));
+        const double det = H.determinant();
+        if (!(det > 1e-30)) break;
+        const Eigen::Vector2d d = -H.inverse() * g;
+        if (!d.allFinite()) break;
+        s += d.x();
+        t += d.y();
+        if (std::abs(d.x()) + std::abs(d.y()) < 1e-12) break;
+        if (s < -0.5 || t < -0.5 || s + t > 1.5) break;  // far outside this patch: walk
+      }
+      Vec3 b(1 - s - t, s, t);
+      int l = 0;
+      b.minCoeff(&l);
+      if (b[l] >= -1e-9 || !b.allFinite()) {
+        if (!b.allFinite()) b = Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);
+        b = b.cwiseMax(0.0);
+        b /= b.sum();
+        return finish(f, b, P, N);
+      }
+      const int nb = adj_[std::size_t(f)][std::size_t(l)];
+      b[l] = 0;
+      b = b.cwiseMax(0.0);
+      if (b.sum() <= 0) b = Vec3(0, 0.5, 0.5), b[l] = 0, b /= b.sum();
+      b /= b.sum();
+      if (nb < 0 || nb == prev) return finish(f, b, P, N);  // boundary, or bouncing on the edge
+      // transfer the edge point to the neighbour patch (C0 across edges: the same point)
+      Vec3 nbBary(0, 0, 0);
+      for (int k = 0; k < 3; ++k) {
+        if (k == l) continue;
+        const int v = F[std::size_t(f)][std::size_t(k)];
+        for (int m = 0; m < 3; ++m)
+          if (F[std::size_t(nb)][std::size_t(m)] == v) nbBary[m] = b[k];
+      }
+      prev = f;
+      f = nb;
+      s = nbBary[1];
+      t = nbBary[2];
+    }
+    const c1::SurfacePoint sp = S_.closestPoint(q);
+    return finish(sp.face, sp.bary, P, N);
+  }
+
+  Loc finish(int f, const Vec3& b, Vec3& P, Vec3& N) const {
+    const c1::SurfacePoint sp = S_.at(f, b);
+    P = sp.point;
+    N = sp.normal;
+    Loc L;
+    L.face = f;
+    L.s = sp.bary[1];
+    L.t = sp.bary[2];
+    return L;
+  }
+
+ private:
+  const C1Surface& S_;
+  std::vector<std::array<int, 3>> adj_;
+};
+
+struct Mesh {
+  std::vector<Vec3> X;                  // current positions (compact indices)
+  std::vector<Element> E;               // compact vertex indices
+  std::vector<std::vector<int>> vE;     // node -> elements
+};
+
+/// fitness of node n at position x with surface normal nrm: sum of element qualities if none is
+/// folded against nrm, else below any valid value
+double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double guard, double* minQ = nullptr) {
+  double sum = 0, lo = 1e300;
+  int invalid = 0;
+  Vec3 p[4];
+  for (int ei : M.vE[std::size_t(n)]) {
+    const Element& e = M.E[std::size_t(ei)];
+    for (int k = 0; k < e.nv; ++k) p[k] = e.v[k] == n ? x : M.X[std::size_t(e.v[k])];
+    double q;
+    bool ok;
+    if (e.nv == 3) {
+      q = triangleAlpha(p[0], p[1], p[2]);
+      ok = triangleAlphaSigned(p[0], p[1], p[2], nrm) > 1e-12;
+    } else {
+      q = quadBeta(p[0], p[1], p[2], p[3]);
+      ok = q > 1e-12 && quadBetaWithNormal(p[0], p[1], p[2], p[3], nrm) > 1e-12;
+    }
+    if (!ok) ++invalid;
+    sum += q;
+    lo = std::min(lo, q);
+  }
+  if (minQ) *minQ = lo;
+  if (invalid) return -100.0 * invalid + 0.01 * sum;
+  return lo < guard ? -50.0 + 0.01 * sum : sum;
+}
+
+QualityStats stats(const Mesh& M) {
+  std::vector<double> q(M.E.size());
+  for (std::size_t i = 0; i < M.E.size(); ++i) q[i] = elementQuality(M.X, M.E[i]);
+  return summarizeQuality(q, 10);
+}
+
+}  // namespace
+
+Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& userFixed) {
+  const auto t0 = std::chrono::steady_clock::now();
+  if (opt.population < 3) throw InputError("population must be at least 3, got " + std::to_string(opt.population));
+  if (!(opt.accuracy > 0) || !(opt.accuracy < 0.5))
+    throw InputError("accuracy must be in (0, 0.5), got " + std::to_string(opt.accuracy));
+  if (opt.maxSweeps < 1) throw InputError("maximum sweeps must be at least 1");
+  if (opt.generations < 1) throw InputError("generations per element must be at least 1");
+  if (opt.restarts < 0) throw InputError("restarts must not be negative");
+  if (!(opt.tolerance >= 0)) throw InputError("tolerance must not be negative");
+  if (!(opt.featureAngleDeg > 0 && opt.featureAngleDeg <= 180))
+    throw InputError("feature angle must be in (0, 180] degrees");
+
+  MeshRequirements req;
+  req.faces = true;
+  req.finite = true;
+  req.edgeManifold = true;
+  req.vertexManifold = true;
+  requireMesh(m, req, "input");
+
+  std::vector<int> toM;
+  c1::TriMesh tm = c1::toTriMesh(m, &toM);
+  std::vector<int> toC(m.vert.size(), -1);
+  for (std::size_t i = 0; i < toM.size(); ++i) toC[std::size_t(toM[i])] = int(i);
+  const std::size_t nv = tm.V.size();
+
+  const ElementMesh em = buildElements(m, opt.kind);
+  Mesh M;
+  M.X = tm.V;
+  M.E = em.elements;
+  for (auto& e : M.E)
+    for (int k = 0; k < e.nv; ++k) e.v[k] = toC[std::size_t(e.v[k])];
+  M.vE.assign(nv, {});
+  for (int i = 0; i < int(M.E.size()); ++i)
+    for (int k = 0; k < M.E[std::size_t(i)].nv; ++k) M.vE[std::size_t(M.E[std::size_t(i)].v[k])].push_back(i);
+
+  Result res;
+  res.elements = M.E.size();
+  res.quads = em.quads();
+
+  // fixed nodes: boundary, feature, unreferenced, user
+  std::vector<char> fixed(nv, 0), boundary(nv, 0), feature(nv, 0);
+  {
+    std::map<std::pair<int, int>, std::vector<int>> edgeFaces;
+    for (int f = 0; f < int(tm.F.size()); ++f)
+      for (int l = 0; l < 3; ++l) {
+        int a = tm.F[std::size_t(f)][std::size_t(l)], b = tm.F[std::size_t(f)][std::size_t((l + 1) % 3)];
+        edgeFaces[{std::min(a, b), std::max(a, b)}].push_back(f);
+      }
+    // faux edges inside quads are not feature edges
+    std::map<std::pair<int, int>, char> fauxInside;
+    for (const auto& e : M.E)
+      if (e.nv == 4) {
+        fauxInside[{std::min(e.v[0], e.v[2]), std::max(e.v[0], e.v[2])}] = 1;
+        fauxInside[{std::min(e.v[1], e.v[3]), std::max(e.v[1], e.v[3])}] = 1;
+      }
+    auto normal = [&](int f) {
+      const auto& F = tm.F[std::size_t(f)];
+      const Vec3 n = (tm.V[std::size_t(F[1])] - tm.V[std::size_t(F[0])]).cross(tm.V[std::size_t(F[2])] - tm.V[std::size_t(F[0])]);
+      return n.norm() > 0 ? Vec3(n.normalized()) : Vec3(0, 0, 0);
+    };
+    const double cosLim = std::cos(opt.featureAngleDeg * M_PI / 180.0);
+    for (const auto& [edge, fs] : edgeFaces) {
+      if (fs.size() == 1) {
+        boundary[std::size_t(edge.first)] = boundary[std::size_t(edge.second)] = 1;
+      } else if (fs.size() == 2 && opt.featureAngleDeg < 180 && !fauxInside.count(edge)) {
+        const Vec3 a = normal(fs[0]), b = normal(fs[1]);
+        if (a.squaredNorm() > 0 && b.squaredNorm() > 0 && a.dot(b) < cosLim)
+          feature[std::size_t(edge.first)] = feature[std::size_t(edge.second)] = 1;
+      }
+    }
+  }
+  for (std::size_t i = 0; i < nv; ++i) {
+    const bool user = !userFixed.empty() && userFixed[std::size_t(toM[i])];
+    if (boundary[i]) ++res.boundaryNodes;
+    else if (feature[i]) ++res.featureNodes;
+    else if (user) ++res.userFixedNodes;
+    fixed[i] = boundary[i] || feature[i] || user || M.vE[i].empty();
+  }
+  std::vector<int> freeNodes;
+  for (std::size_t i = 0; i < nv; ++i)
+    if (!fixed[i]) freeNodes.push_back(int(i));
+  res.freeNodes = freeNodes.size();
+  if (freeNodes.empty())
+    throw InputError("no free node to smooth: all " + std::to_string(nv) + " vertices are fixed (" +
+                     std::to_string(res.boundaryNodes) + " boundary, " + std::to_string(res.featureNodes) +
+                     " on feature edges, " + std::to_string(res.userFixedNodes) +
+                     " by the selection); raise the feature angle or change the selection mode");
+
+  res.before = stats(M);
+
+  // the C1 surface of the original mesh, built once
+  C1Surface S(tm);
+  S.buildIndex();
+  Projector proj(S);
+  std::vector<Loc> loc(nv);
+  for (int f = 0; f < int(tm.F.size()); ++f)
+    for (int k = 0; k < 3; ++k) {
+      Loc& L = loc[std::size_t(tm.F[std::size_t(f)][std::size_t(k)])];
+      if (L.face >= 0) continue;
+      L.face = f;
+      L.s = k == 1 ? 1 : 0;
+      L.t = k == 2 ? 1 : 0;
+    }
+
+  // greedy colouring: nodes sharing an element get different colours
+  std::vector<int> colour(nv, -1);
+  std::vector<std::vector<int>> classes;
+  for (int n : freeNodes) {
+    std::vector<char> used(classes.size() + 1, 0);
+    for (int ei : M.vE[std::size_t(n)])
+      for (int k = 0; k < M.E[std::size_t(ei)].nv; ++k) {
+        const int c = colour[std::size_t(M.E[std::size_t(ei)].v[k])];
+        if (c >= 0) used[std::size_t(c)] = 1;
+      }
+    int c = 0;
+    while (used[std::size_t(c)]) ++c;
+    colour[std::size_t(n)] = c;
+    if (c == int(classes.size())) classes.emplace_back();
+    classes[std::size_t(c)].push_back(n);
+  }
+  res.colours = int(classes.size());
+
+  mga::Options mo;
+  mo.population = opt.population;
+  mo.accuracy = opt.accuracy;
+  mo.maxRestarts = opt.restarts;
+  mo.maxGenerations = opt.generations;
+  mo.selection = opt.selection;
+  const std::vector<mga::Range> ranges{{0.0, 1.0}, {0.0, 0.5}};
+  const std::vector<double> seedPoint{0.0, 0.0};
+
+  double mean = res.before.mean;
+  std::vector<double> projDist(nv, 0.0);
+  for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
+    const std::uint64_t sweepSeed = mga::itemSeed(opt.seed, std::uint64_t(sweep));
+    for (const auto& cls : classes) {
+#pragma omp parallel for schedule(dynamic, 8)
+      for (int ci = 0; ci < int(cls.size()); ++ci) {
+        const int n = cls[std::size_t(ci)];
+        const Vec3 x0 = M.X[std::size_t(n)];
+        const Loc l0 = loc[std::size_t(n)];
+        Vec3 n0 = S.at(l0.face, Vec3(1 - l0.s - l0.t, l0.s, l0.t)).normal;
+        double curMin = 0;
+        double bestFit = fitnessAt(M, n, x0, n0, -1.0, &curMin);
+        // the node's worst element may not drop below min(its current value, kMinQualityGuard)
+        const double guard = std::min(curMin, kMinQualityGuard);
+        if (bestFit >= 0) bestFit = fitnessAt(M, n, x0, n0, guard);
+        Vec3 bestX = x0;
+        Loc bestLoc = l0;
+        double bestDist = 0;
+        const std::uint64_t nodeSeed = mga::itemSeed(sweepSeed, std::uint64_t(toM[std::size_t(n)]));
+        int tri = 0;
+        for (int ei : M.vE[std::size_t(n)]) {
+          const Element& e = M.E[std::size_t(ei)];
+          int k = 0;
+          while (e.v[k] != n) ++k;
+          // the triangles of the element around the node: V1 = node, (V2, V3) in boundary order
+          std::array<std::pair<int, int>, 2> fan;
+          int nfan = 1;
+          if (e.nv == 3) {
+            fan[0] = {e.v[(k + 1) % 3], e.v[(k + 2) % 3]};
+          } else {
+            fan[0] = {e.v[(k + 1) % 4], e.v[(k + 2) % 4]};
+            fan[1] = {e.v[(k + 2) % 4], e.v[(k + 3) % 4]};
+            nfan = 2;
+          }
+          for (int fi = 0; fi < nfan; ++fi, ++tri) {
+            const Vec3 V2 = M.X[std::size_t(fan[std::size_t(fi)].first)];
+            const Vec3 V3 = M.X[std::size_t(fan[std::size_t(fi)].second)];
+            auto place = [&](const std::vector<double>& r, Vec3& P, Vec3& N, Loc& L) {
+              const double r1 = r[0], r2 = r[1];
+              if (r2 <= 0) {
+                P = x0;
+                N = n0;
+                L = l0;
+                return;
+              }
+              const Vec3 q = (1 - r2) * x0 + r2 * (1 - r1) * V2 + r1 * r2 * V3;
+              L = proj.project(q, l0, P, N);
+            };
+            auto fitness = [&](const std::vector<double>& r) {
+              Vec3 P, N;
+              Loc L;
+              place(r, P, N, L);
+              return fitnessAt(M, n, P, N, guard);
+            };
+            mga::Options o = mo;
+            o.seed = mga::itemSeed(nodeSeed, std::uint64_t(tri));
+            const mga::Result r = mga::optimize(ranges, fitness, o, &seedPoint);
+            if (r.fitness > bestFit) {
+              Vec3 P, N;
+              Loc L;
+              place(r.x, P, N, L);
+              bestFit = r.fitness;
+              bestX = P;
+              bestLoc = L;
+              bestDist = (P - ((1 - r.x[1]) * x0 + r.x[1] * (1 - r.x[0]) * V2 + r.x[0] * r.x[1] * V3)).norm();
+            }
+          }
+        }
+        // the node moves after its own search: neighbours of the same colour do not see it, and
+        // no node of this colour reads it (they share no element)
+        M.X[std::size_t(n)] = bestX;
+        loc[std::size_t(n)] = bestLoc;
+        projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], bestDist);
+      }
+    }
+    res.sweeps = sweep + 1;
+    const double newMean = stats(M).mean;
+    const double gain = newMean - mean;
+    mean = newMean;
+    if (opt.progress && !opt.progress(sweep + 1, mean)) break;
+    if (gain < opt.tolerance) break;
+  }
+
+  res.after = stats(M);
+  res.maxProjectionDistance = *std::max_element(projDist.begin(), projDist.end());
+  res.positions.resize(m.vert.size());
+  for (std::size_t i = 0; i < m.vert.size(); ++i)
+    res.positions[i] = Vec3(m.vert[i].cP()[0], m.vert[i].cP()[1], m.vert[i].cP()[2]);
+  for (std::size_t i = 0; i < nv; ++i) {
+    if (M.X[i] != tm.V[i]) ++res.nodesMoved;
+    res.positions[std::size_t(toM[i])] = M.X[i];
+  }
+  res.perFace.assign(m.face.size(), 0.0);
+  for (std::size_t i = 0; i < M.E.size(); ++i) {
+    const double q = elementQuality(M.X, M.E[i]);
+    for (int f : M.E[i].face)
+      if (f >= 0) res.perFace[std::size_t(f)] = q;
+  }
+  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return res;
+}
+
+}  // namespace pectus::smooth

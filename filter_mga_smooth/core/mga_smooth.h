@@ -1,0 +1,78 @@
+// Micro-GA surface mesh smoothing (thesis chapter 4.2, steps 1-9). Host-free (CMeshO + Eigen, no Qt).
+//
+// For each free node the micro-GA (mga.h) searches inside every adjacent element: a triangle element
+// itself, or for a quad the two triangles of the quad's fan around the node (p0 p1 p2 and p0 p2 p3 with
+// p0 the node), since the thesis restricts the search to a triangular area. A candidate is
+//   V = (1 - r2) V1 + r2 (1 - r1) V2 + r1 r2 V3,   r1 in [0,1], r2 in [0,0.5]      (eqs. 3-18/3-19)
+// with V1 the node; it is mapped onto the C1 surface (c1_surface.h) of the ORIGINAL mesh (built once) by a
+// local projection (Gauss-Newton on the patch the node currently lies on, walking to neighbour patches,
+// falling back to the global closestPoint). Fitness = sum of alpha (eq. 3-21) or beta (eq. 3-24) over the
+// node's elements. An element that is inverted or folded with respect to the surface normal at the
+// candidate (signed area / Knupp corner areas not positive) makes the candidate worse than any valid one,
+// and r2 = 0 (the node's current position, exactly) is the seed of every search, so a node never gets
+// worse and a valid configuration never folds. The best over the adjacent elements is kept.
+// Guard on the worst element (not in the thesis, which maximizes the plain sum): a candidate is also
+// rejected if the worst of the node's elements would drop below min(its current value,
+// kMinQualityGuard), so the sum cannot buy a better mean with one very poor element; the mesh minimum
+// therefore never drops below min(initial minimum, kMinQualityGuard).
+// Sweeps repeat until the mean quality improves by less than the tolerance or the sweep cap is reached.
+//
+// Fixed nodes: boundary nodes; feature nodes (every node on a sharp edge, i.e. an edge whose dihedral
+// angle - the angle between the two faces' normals - exceeds the feature angle; faux edges inside quads
+// are not feature edges); nodes not in any element; and the user's fixed set.
+//
+// Parallel: nodes are greedily coloured (in index order) so that nodes of one colour share no element;
+// each colour is processed in parallel with OpenMP, with per-node seeds itemSeed(itemSeed(seed, sweep),
+// vertex): the result does not depend on the number of threads.
+#pragma once
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "mga.h"
+#include "pectus/cmesh.h"
+#include "pectus/elements.h"
+#include "pectus/quality.h"
+
+namespace pectus::smooth {
+
+constexpr double kMinQualityGuard = 0.5;
+
+struct Options {
+  ElementKind kind = ElementKind::Triangles;
+  int maxSweeps = 10;
+  double tolerance = 1e-4;      ///< stop when the mean quality improves by less than this in a sweep
+  double accuracy = 1e-3;       ///< accuracy of r1, r2 (eq. 1-1)
+  int generations = 20;         ///< micro-GA generations per adjacent element
+  int restarts = 4;             ///< micro-GA restarts per adjacent element
+  int population = 5;
+  mga::Selection selection = mga::Selection::Roulette;
+  double featureAngleDeg = 60;  ///< dihedral angle above which an edge is sharp (180: no feature edges)
+  std::uint64_t seed = 1;
+  /// called after every sweep with (sweep, mean quality); return false to stop
+  std::function<bool(int, double)> progress;
+};
+
+struct Result {
+  std::vector<Vec3> positions;   ///< per m.vert index (deleted vertices: unchanged)
+  QualityStats before, after;    ///< over elements: alpha (triangles) or beta (quads; lone triangles alpha)
+  std::vector<double> perFace;   ///< element quality after, per m.face index (deleted faces: 0)
+  std::size_t elements = 0, quads = 0;
+  std::size_t freeNodes = 0, boundaryNodes = 0, featureNodes = 0, userFixedNodes = 0;
+  std::size_t nodesMoved = 0;
+  int sweeps = 0;
+  int colours = 0;
+  double maxProjectionDistance = 0;  ///< largest candidate-to-surface distance of an accepted move
+  double seconds = 0;
+};
+
+/// Nodes are the live vertices of `m`. `userFixed` (per m.vert index, empty = none): 1 = keep fixed.
+/// Throws InputError for bad parameters, a mesh without faces, NaN coordinates, non-manifold input
+/// (edge or vertex), invalid quads, or a mesh with no free node.
+Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& userFixed = {});
+
+/// Quality of one element from positions: alpha (eq. 3-20) or beta (eq. 3-23, own normal).
+double elementQuality(const std::vector<Vec3>& P, const Element& e);
+
+}  // namespace pectus::smooth
