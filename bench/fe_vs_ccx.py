@@ -74,6 +74,7 @@ def main():
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--keep", help="keep the decks and results in this folder")
     a = ap.parse_args()
+    a.tool = os.path.abspath(a.tool)
     env = dict(os.environ, OMP_NUM_THREADS=str(a.threads), OPENBLAS_NUM_THREADS=str(a.threads),
                CCX_NPROC_EQUATION_SOLVER=str(a.threads), CCX_NPROC_STIFFNESS=str(a.threads))
     work = a.keep or tempfile.mkdtemp(prefix="fe_vs_ccx_")

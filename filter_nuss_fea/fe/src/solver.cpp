@@ -139,24 +139,32 @@ struct Solver::Impl {
 
   // assemble tangent (free-free lower) and internal forces (all dofs) at displacement u
   void assemble(const Eigen::VectorXd& u, bool nonlinear, Eigen::VectorXd& fint) {
+    if (nen == 10)
+      assembleT<10>(u, nonlinear, fint);
+    else
+      assembleT<4>(u, nonlinear, fint);
+  }
+
+  template <int NEN>
+  void assembleT(const Eigen::VectorXd& u, bool nonlinear, Eigen::VectorXd& fint) {
+    constexpr int ND = 3 * NEN;
     std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
     fint.setZero(u.size());
     double* val = K.valuePtr();
     double* fi = fint.data();
     const int nt = m->numTets();
-    const int ndof = 3 * nen;
 #pragma omp parallel for schedule(dynamic, 256)
     for (int t = 0; t < nt; ++t) {
-      Eigen::Matrix<double, 30, 30> Ke;
-      Eigen::Matrix<double, 30, 1> fe;
-      Ke.topLeftCorner(ndof, ndof).setZero();
-      fe.head(ndof).setZero();
-      Eigen::Matrix<double, 10, 3> G, ue;
-      for (int a = 0; a < nen; ++a) ue.row(a) = u.segment<3>(3 * m->tets[t][a]).transpose();
+      Eigen::Matrix<double, ND, ND> Ke = Eigen::Matrix<double, ND, ND>::Zero();
+      Eigen::Matrix<double, ND, 1> fe = Eigen::Matrix<double, ND, 1>::Zero();
+      Eigen::Matrix<double, 10, 3> G10;
+      Eigen::Matrix<double, NEN, 3> ue;
+      for (int a = 0; a < NEN; ++a) ue.row(a) = u.template segment<3>(3 * m->tets[t][a]).transpose();
       const auto& Dm = D[t];
       for (const Gauss& g : rule(m->order)) {
-        const double w = gradients(t, g, G);
-        const Matrix3d H = ue.topRows(nen).transpose() * G.topRows(nen);  // du_i/dX_j
+        const double w = gradients(t, g, G10);
+        const Eigen::Matrix<double, NEN, 3> G = G10.template topRows<NEN>();
+        const Matrix3d H = ue.transpose() * G;  // du_i/dX_j
         Matrix3d F = Matrix3d::Identity();
         Matrix3d E;
         if (nonlinear) {
@@ -169,10 +177,10 @@ struct Solver::Impl {
         Matrix3d S;
         S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
         const Matrix3d P = F * S;  // first Piola (linear: sigma)
-        Eigen::Matrix<double, 6, 30> B;
-        for (int a = 0; a < nen; ++a) {
+        Eigen::Matrix<double, 6, ND> B;
+        for (int a = 0; a < NEN; ++a) {
           const Vector3d Ga = G.row(a).transpose();
-          fe.segment<3>(3 * a) += w * P * Ga;
+          fe.template segment<3>(3 * a) += w * P * Ga;
           for (int i = 0; i < 3; ++i) {
             B(0, 3 * a + i) = F(i, 0) * Ga(0);
             B(1, 3 * a + i) = F(i, 1) * Ga(1);
@@ -182,30 +190,31 @@ struct Solver::Impl {
             B(5, 3 * a + i) = F(i, 0) * Ga(2) + F(i, 2) * Ga(0);
           }
         }
-        const auto Bn = B.leftCols(ndof);
-        Ke.topLeftCorner(ndof, ndof).noalias() += w * (Bn.transpose() * Dm * Bn);
+        const Eigen::Matrix<double, 6, ND> DB = (w * Dm) * B;
+        Ke.noalias() += B.transpose() * DB;
         if (nonlinear) {
-          for (int a = 0; a < nen; ++a)
-            for (int b = 0; b < nen; ++b) {
-              const double k = w * G.row(a).dot(S * G.row(b).transpose());
-              for (int i = 0; i < 3; ++i) Ke(3 * a + i, 3 * b + i) += k;
-            }
+          const Eigen::Matrix<double, NEN, NEN> GSG = w * G * S * G.transpose();
+          for (int a = 0; a < NEN; ++a)
+            for (int b = 0; b < NEN; ++b)
+              for (int i = 0; i < 3; ++i) Ke(3 * a + i, 3 * b + i) += GSG(a, b);
         }
       }
-      int dofs[30];
-      for (int a = 0; a < nen; ++a)
-        for (int i = 0; i < 3; ++i) dofs[3 * a + i] = 3 * m->tets[t][a] + i;
-      for (int r = 0; r < ndof; ++r) {
+      int dofs[ND], fdof[ND];
+      for (int a = 0; a < NEN; ++a)
+        for (int i = 0; i < 3; ++i) dofs[3 * a + i] = 3 * m->tets[t][a] + i, fdof[3 * a + i] = freeIndex[3 * m->tets[t][a] + i];
+      for (int r = 0; r < ND; ++r) {
 #pragma omp atomic
         fi[dofs[r]] += fe(r);
       }
-      for (int c = 0; c < ndof; ++c) {
-        const int fc = freeIndex[dofs[c]];
+      for (int c = 0; c < ND; ++c) {
+        const int fc = fdof[c];
         if (fc < 0) continue;
-        for (int r = 0; r < ndof; ++r) {
-          const int fr = freeIndex[dofs[r]];
+        const int* b = K.innerIndexPtr() + K.outerIndexPtr()[fc];
+        const int* e = K.innerIndexPtr() + K.outerIndexPtr()[fc + 1];
+        for (int r = 0; r < ND; ++r) {
+          const int fr = fdof[r];
           if (fr < fc) continue;  // lower triangle only (and skips constrained: -1)
-          const int k = pos(fr, fc);
+          const int k = static_cast<int>(std::lower_bound(b, e, fr) - K.innerIndexPtr());
 #pragma omp atomic
           val[k] += Ke(r, c);
         }
