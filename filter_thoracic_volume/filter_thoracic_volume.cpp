@@ -132,7 +132,7 @@ double seconds(std::chrono::steady_clock::time_point t0) {
 }
 
 void addSoupLayer(FilterContext& ctx, const QString& label, const vol::Soup& s) {
-  MeshModel& mm = ctx.addLayer(label);
+  MeshModel& mm = ctx.addLayer(label, false);  // the measured layer stays current (chains of measurements)
   CMeshO& m = ctx.modify(mm);
   auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, s.V.size());
   for (const auto& p : s.V) (vi++)->P() = pectus::toPoint(p);
@@ -173,8 +173,9 @@ FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
       "sample in the four patch quarters around them are tied to their closest free neighbour on the circle (Fig. "
       "6-10). Between moves the radii are smoothed along z by eq. 6-1 (never inward; not the end rings nor the key "
       "points around landmark 500). The volume is integrated over the patches by the divergence theorem (eqs. 6-2, "
-      "6-3) with planar caps at the range ends. The envelope is added as a new layer (closed, tessellated); its "
-      "triangle-mesh volume is logged too (compare with 'Compute Geometric Measures').") +
+      "6-3) with planar caps at the range ends. The envelope is added as a new layer '&lt;layer&gt; envelope' (closed, "
+      "tessellated; the measured layer stays current); its triangle-mesh volume is logged too (compare with "
+      "'Compute Geometric Measures' after 'Change the current layer').") +
       kRangeHelp + kCompareHelp;
   s.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Measure | MeshFilterInterface::MeshCreation);
   addFilter(this, s);
@@ -294,6 +295,7 @@ void FilterThoracicVolumePlugin::runEnvelope(FilterContext& ctx) {
     const auto r = vol::fergusonEnvelope(s, c.range, p, [&](int pc, const char* w) { ctx.progress(p0 + (p1 - p0) * pc / 100, w); });
     const double dt = seconds(t0);
     Out o{r.env.tessellate(p.tessellation), QString::fromStdString(lab(mm) + " envelope")};
+    for (auto& v : o.mesh.V) v = pectus::toEigen(pectus::toPoint(v));  // the layer's float coordinates
     const double meshVol = vol::divergenceVolume(o.mesh);
     ctx.log("Ferguson envelope, layer '" + lab(mm) + "': thoracic volume " + cm3(r.volume) + " (" +
             std::to_string(p.nLong) + " x " + std::to_string(p.mAround) + " patches, z = " + fmt(c.range.zLo, 2) +
