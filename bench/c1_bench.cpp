@@ -1,6 +1,7 @@
 // Bench tool of the C1 surface core (driven by bench/c1_table31.py; it prints what it measures):
 //   c1_bench interp <file>   scattered-data interpolation: reads "n m q", n lines "x y f", m lines "i j k",
 //                            q lines "x y tri"; prints one line per query: C0, C1 thesis, C1 robust
+//                            (default: global minimum curvature), C1 per-vertex quadratic fit
 //   c1_bench volume          closed ellipsoid (320 faces): volume of flat, PN triangles, C1 (robust, thesis)
 //   c1_bench timing [faces]  refinement k=3 of a ~100k-face torus, wall time (OpenMP threads as set)
 #include <omp.h>
@@ -30,7 +31,8 @@ int interp(const char* path) {
   std::vector<std::array<int, 3>> tris(m);
   for (auto& t : tris) in >> t[0] >> t[1] >> t[2];
   const HeightInterpolant thesis(xy, f, tris, GradientMethod::InverseArea);
-  const HeightInterpolant robust(xy, f, tris, GradientMethod::QuadraticFit);
+  const HeightInterpolant robust(xy, f, tris, GradientMethod::MinimumCurvature);
+  const HeightInterpolant qfit(xy, f, tris, GradientMethod::QuadraticFit);
   for (int k = 0; k < q; ++k) {
     Vec2 p;
     int t;
@@ -43,7 +45,7 @@ int interp(const char* path) {
     const double s = (d.x() * (c - a).y() - d.y() * (c - a).x()) / det;
     const double tt = ((b - a).x() * d.y() - (b - a).y() * d.x()) / det;
     const double lin = (1 - s - tt) * f[T[0]] + s * f[T[1]] + tt * f[T[2]];
-    std::printf("%.17g %.17g %.17g\n", lin, thesis.value(t, p), robust.value(t, p));
+    std::printf("%.17g %.17g %.17g %.17g\n", lin, thesis.value(t, p), robust.value(t, p), qfit.value(t, p));
   }
   return 0;
 }

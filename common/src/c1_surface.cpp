@@ -1,7 +1,9 @@
-// Goodman-Said C1 surface: topology checks, vertex gradients (thesis eqs. 3-1..3-5 or a quadratic fit),
+// Goodman-Said C1 surface: topology checks, vertex gradients (thesis eqs. 3-1..3-5, a quadratic fit or
+// the global minimum-curvature estimate),
 // control nets (eqs. 3-9..3-15, b111 re-derived below), evaluation with the rational blend (eq. 3-16).
 #include "pectus/c1_surface.h"
 
+#include <Eigen/Sparse>
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -164,6 +166,54 @@ bool facetGradient(const Vec3& p1, const Vec3& p2, const Vec3& p3, const Vec3& e
   return std::isfinite(g.x()) && std::isfinite(g.y());
 }
 
+// Global minimum-curvature gradients of heights z over the plane points xy (GradientMethod::MinimumCurvature).
+// Minimizes  E(g) = sum_edges L^-1/2 * int_0^L p''(s)^2 ds,  p the cubic Hermite curve along the edge with
+// p(0) = z_a, p(L) = z_b, p'(0) = d0 = e.g_a, p'(L) = d1 = e.g_b (e the unit edge direction):
+//   int p''^2 = 4/L (d0^2 + d0 d1 + d1^2) - 12 D/L^2 (d0 + d1) + 12 D^2/L^3,   D = z_b - z_a.
+// Zero for linear data, so linear data is reproduced. The normal equations are a sparse SPD 2n x 2n system;
+// a tiny pull (1e-9 of the vertex block's trace) towards the per-vertex estimate g (in: per-vertex,
+// out: global) keeps vertices without a non-degenerate pair of edge directions solvable. False (g left
+// unchanged) if the factorization fails or the result is not finite.
+bool minimumCurvatureGradients(const std::vector<Vec2>& xy, const std::vector<double>& z,
+                               const std::vector<Topology::Edge>& edges, std::vector<Vec2>& g) {
+  const int n = int(xy.size());
+  std::vector<Eigen::Triplet<double>> trip;
+  trip.reserve(edges.size() * 16 + 2 * std::size_t(n));
+  Eigen::VectorXd rhs = Eigen::VectorXd::Zero(2 * n);
+  std::vector<double> trace(n, 0.0);
+  for (const auto& E : edges) {
+    const Vec2 d = xy[E.b] - xy[E.a];
+    const double L = d.norm();
+    if (!(L > 0) || !std::isfinite(L)) continue;
+    const Vec2 e = d / L;
+    const double w = 1.0 / std::sqrt(L), D = z[E.b] - z[E.a];
+    const Eigen::Matrix2d ee = e * e.transpose();
+    const int idx[2] = {E.a, E.b};
+    for (int r = 0; r < 2; ++r) {
+      for (int c = 0; c < 2; ++c) {
+        const Eigen::Matrix2d blk = (r == c ? 8.0 : 4.0) * w / L * ee;  // d^2E/dg_r dg_c
+        for (int i = 0; i < 2; ++i)
+          for (int j = 0; j < 2; ++j) trip.emplace_back(2 * idx[r] + i, 2 * idx[c] + j, blk(i, j));
+      }
+      rhs.segment<2>(2 * idx[r]) += 12.0 * w * D / (L * L) * e;
+      trace[idx[r]] += 8.0 * w / L;
+    }
+  }
+  for (int v = 0; v < n; ++v) {
+    const double mu = trace[v] > 0 ? 1e-9 * trace[v] : 1.0;
+    for (int i = 0; i < 2; ++i) trip.emplace_back(2 * v + i, 2 * v + i, mu);
+    rhs.segment<2>(2 * v) += mu * g[v];
+  }
+  Eigen::SparseMatrix<double> A(2 * n, 2 * n);
+  A.setFromTriplets(trip.begin(), trip.end());
+  Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(A);
+  if (ldlt.info() != Eigen::Success) return false;
+  const Eigen::VectorXd x = ldlt.solve(rhs);
+  if (ldlt.info() != Eigen::Success || !x.allFinite()) return false;
+  for (int v = 0; v < n; ++v) g[v] = x.segment<2>(2 * v);
+  return true;
+}
+
 }  // namespace
 
 void C1Surface::build(std::vector<Vec3>* given) {
@@ -237,7 +287,7 @@ void C1Surface::build(std::vector<Vec3>* given) {
     const Vec3& p = mesh_.V[v];
     Vec2 g(0, 0);
     bool ok = false;
-    if (opt_.gradient == GradientMethod::QuadraticFit) {
+    if (opt_.gradient != GradientMethod::InverseArea) {  // QuadraticFit, and MinimumCurvature's start/fallback
       // 2-ring neighbourhood, grown to the 3-ring where it has fewer than 8 points (corners, boundaries)
       std::vector<int> nb{v};
       std::size_t ringStart = 0;
@@ -332,6 +382,24 @@ void C1Surface::build(std::vector<Vec3>* given) {
     if (!ok) g = Vec2(0, 0);  // no usable facet: the frame plane itself
     Vec3 n = f - g.x() * e1 - g.y() * e2;
     normals_[v] = n.normalized();
+  }
+  if (hf && !given && opt_.gradient == GradientMethod::MinimumCurvature && nv > 0) {
+    // heights over the plane of (he1, he2); the per-vertex estimates as start and fallback
+    std::vector<Vec2> xy(nv), g(nv);
+    std::vector<double> z(nv);
+    for (int v = 0; v < nv; ++v) {
+      const Vec3& p = mesh_.V[v];
+      xy[v] = Vec2(p.dot(he1), p.dot(he2));
+      z[v] = p.dot(opt_.axis);
+      const double c = normals_[v].dot(opt_.axis);
+      g[v] = std::abs(c) > 0 ? Vec2(-normals_[v].dot(he1) / c, -normals_[v].dot(he2) / c) : Vec2(0, 0);
+    }
+    if (minimumCurvatureGradients(xy, z, topo.edges, g)) {
+      stats_.globalGradients = true;
+      for (int v = 0; v < nv; ++v)
+        if (topo.vfStart[v] != topo.vfStart[v + 1])
+          normals_[v] = (opt_.axis - g[v].x() * he1 - g[v].y() * he2).normalized();
+    }
   }
   stats_.flatVertices = flatCount;
   stats_.linearFitVertices = linCount;

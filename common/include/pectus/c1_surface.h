@@ -14,9 +14,18 @@
 //    planes, C0 across edges exactly (edge curves depend only on the edge's two vertices), tangent plane
 //    continuous at the vertices, and the normal jump across an edge shrinks with the mesh size (it is not
 //    exactly G1 away from the vertices). h_i from the 3D triangle itself.
-// Vertex normals (gradients) come from GradientMethod::QuadraticFit (default: weighted least-squares fit
-// of a quadratic height over the 2-ring (3-ring at corners), weights 1/(0.01+r^2)^2 with r in 1-ring units, in the vertex frame) or GradientMethod::InverseArea (thesis
-// eqs. 3-1/3-2: inverse-area weighted facet gradients, boundary extrapolation 3-2), or are given.
+// Vertex normals (gradients) come from
+//  - GradientMethod::MinimumCurvature (default): HeightField: one global estimate, the gradients that
+//    minimize the curvature energy of the edge network (Nielson 1983, the estimate behind scipy's
+//    Clough-Tocher): sum over edges of L^-1/2 * integral of p''(s)^2 along the edge, p the cubic Hermite
+//    curve of the end values and end directional derivatives; a sparse SPD system (Eigen LDLT), linear
+//    data reproduced exactly. The L^-1/2 edge weight (Nielson: 1) favours short edges; it was chosen on
+//    Table 3-1's sets (36-point grid, Franke 33/100) and checked on other jittered grids and functions.
+//    VertexNormal frame: the per-vertex QuadraticFit below (no global height to minimize over).
+//  - GradientMethod::QuadraticFit: weighted least-squares fit of a quadratic height over the 2-ring (3-ring
+//    at corners), weights 1/(0.01+r^2)^2 with r in 1-ring units, in the vertex frame; per vertex.
+//  - GradientMethod::InverseArea (thesis eqs. 3-1/3-2: inverse-area weighted facet gradients, boundary
+//    extrapolation 3-2), or are given.
 //
 // Bad input (pectus::InputError): faces with invalid indices, non-finite coordinates, edges with 3+ faces,
 // non-manifold vertices (two fans glued at a vertex), a HeightField mesh that folds over the axis.
@@ -45,8 +54,9 @@ struct TriMesh {
 };
 
 enum class GradientMethod {
-  QuadraticFit,  ///< robust default: weighted LSQ quadratic over the 2-ring in the vertex frame
-  InverseArea,   ///< thesis eqs. 3-1 (interior) and 3-2 (boundary): inverse-area weighted facet gradients
+  QuadraticFit,      ///< per vertex: weighted LSQ quadratic over the 2-ring in the vertex frame
+  InverseArea,       ///< thesis eqs. 3-1 (interior) and 3-2 (boundary): inverse-area weighted facet gradients
+  MinimumCurvature,  ///< default: HeightField global minimum-curvature estimate; VertexNormal: QuadraticFit
 };
 
 enum class Frame {
@@ -60,7 +70,7 @@ enum class Blend {
 };
 
 struct Options {
-  GradientMethod gradient = GradientMethod::QuadraticFit;
+  GradientMethod gradient = GradientMethod::MinimumCurvature;
   Frame frame = Frame::VertexNormal;
   Vec3 axis{0, 0, 1};  ///< the height axis of Frame::HeightField
   Blend blend = Blend::GoodmanSaid;
@@ -70,6 +80,7 @@ struct Stats {
   std::size_t faces = 0, vertices = 0, isolatedVertices = 0, degenerateFaces = 0;
   std::size_t boundaryVertices = 0, flatVertices = 0;  ///< flat: frame fallback (identity map)
   std::size_t linearFitVertices = 0;  ///< QuadraticFit fell back to a plane fit (too few neighbours)
+  bool globalGradients = false;       ///< MinimumCurvature: the global solve was used (else per vertex)
 };
 
 /// A point on the surface: patch (face) and barycentric coordinates (u, v, w) of its vertices 0,1,2.
@@ -143,7 +154,8 @@ class C1Surface {
 /// Volume enclosed by a closed, consistently oriented triangle mesh (divergence theorem).
 double enclosedVolume(const TriMesh& m);
 
-/// Vertex gradients of a scalar field over a planar triangulation (thesis eqs. 3-1..3-5 or the robust fit).
+/// Vertex gradients of a scalar field over a planar triangulation (thesis eqs. 3-1..3-5, the quadratic fit or
+/// the global minimum-curvature estimate).
 std::vector<Vec2> estimateGradients2D(const std::vector<Vec2>& xy, const std::vector<double>& f,
                                       const std::vector<std::array<int, 3>>& tris, GradientMethod method);
 
