@@ -5,6 +5,10 @@
 #include "pectus/element_quality.h"
 #include "pectus/errors.h"
 #include "pectus/mesh_checks.h"
+#include "mga_smooth.h"
+
+#include <vcg/complex/algorithms/update/bounding.h>
+#include <vcg/complex/algorithms/update/normal.h>
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
@@ -28,6 +32,33 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
   q.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Quality | MeshFilterInterface::Measure);
   q.postCondition = MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
   addFilter(this, q);
+
+  pectus::ml::FilterSpec s;
+  s.id = FP_MGA_SMOOTH;
+  s.name = "MGA Surface Mesh Smoothing";
+  s.info =
+      "Improves the shape of the elements of a triangle or quad surface mesh without changing its "
+      "connectivity, by moving every free node on the surface (thesis chapter 4.2).<br>"
+      "For each free node a micro-genetic algorithm (population 5, elitism, crossover with probability one, "
+      "restarts) searches inside every adjacent element: a triangle, or for a quad the two triangles of the "
+      "quad around the node; a candidate V = (1-r2) V1 + r2 (1-r1) V2 + r1 r2 V3 (eq. 3-19, V1 the node, "
+      "r1 in [0,1], r2 in [0,0.5]) is mapped onto the C1 (Goodman-Said) surface of the input mesh, so the "
+      "nodes stay on the original surface. Fitness: the sum of alpha (triangles, eq. 3-21) or Knupp's beta "
+      "(quads, eq. 3-24) over the node's elements. A move never inverts or folds an element, never lowers "
+      "the node's sum, and never lets the node's worst element drop below min(its value, 0.5). "
+      "The best position over the adjacent elements is kept; sweeps repeat until the mean quality improves "
+      "by less than the tolerance.<br>"
+      "<b>Fixed nodes</b>: boundary nodes; every node on a sharp edge (dihedral angle between the two faces' "
+      "normals above the feature angle; faux edges inside quads do not count); and the vertex selection as "
+      "chosen. Nodes of one colour of a greedy colouring share no element and are smoothed in parallel, with "
+      "per-node random seeds: the result does not depend on the number of threads.<br>"
+      "Afterwards the element quality is written to per-face quality and colours (red = 0, blue = 1), and the "
+      "Log gives worst/mean quality before and after, nodes moved, sweeps and time. Non-manifold meshes, NaN "
+      "coordinates, a mesh with no free node, and quads asked of a triangle mesh are refused with a message.";
+  s.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Smoothing | MeshFilterInterface::Quality);
+  s.postCondition = MeshModel::MM_VERTCOORD | MeshModel::MM_VERTNORMAL | MeshModel::MM_FACENORMAL |
+                    MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
+  addFilter(this, s);
 }
 
 void FilterMgaSmoothPlugin::initParameters(int id, MeshDocument&, RichParameterList& par) {
@@ -42,11 +73,49 @@ void FilterMgaSmoothPlugin::initParameters(int id, MeshDocument&, RichParameterL
                           "Colour the faces with MeshLab's red-to-blue quality ramp on the fixed range [0, 1], "
                           "so colours compare across layers and before/after smoothing."));
   }
+  if (id == FP_MGA_SMOOTH) {
+    par.addParam(RichEnum("elementType", 0, QStringList() << "Auto" << "Triangles (alpha)" << "Quads (beta)",
+                          "Element type",
+                          "Auto: quads (fitness beta) when the layer has faux edges (a quad or quad-dominant "
+                          "mesh), else triangles (alpha). Triangles: every face is an element, faux edges "
+                          "ignored. Quads: faux-edge pairs are quads (beta), lone triangles use alpha; refused if "
+                          "the layer has no faux edge."));
+    par.addParam(RichInt("maxSweeps", 10, "Maximum sweeps",
+                         "Upper bound on the number of passes over all free nodes (thesis step 9)."));
+    par.addParam(RichFloat("tolerance", 1e-4f, "Convergence tolerance",
+                           "Stop when one sweep raises the mean element quality by less than this (>= 0)."));
+    par.addParam(RichFloat("accuracy", 1e-3f, "Accuracy of r1, r2",
+                           "Wanted accuracy of the design parameters r1, r2; sets the bits per parameter "
+                           "(eq. 1-1: 2^(nl-1) < interval/accuracy <= 2^nl). In (0, 0.5)."));
+    par.addParam(RichInt("generations", 20, "Generations per element",
+                         "Micro-GA generations per adjacent element (restarts included). More: slower, better."));
+    par.addParam(RichInt("restarts", 4, "Restarts per element",
+                         "Maximum micro-GA restarts (a new population around the kept best after nominal "
+                         "convergence) per adjacent element."));
+    par.addParam(RichInt("population", 5, "Population size",
+                         "Micro-GA population (the thesis uses 5, after Krishnakumar). At least 3."));
+    par.addParam(RichEnum("selection", 0, QStringList() << "Roulette wheel" << "Tournament", "Selection",
+                          "Parent selection: roulette wheel (as in the thesis) or binary tournament."));
+    par.addParam(RichFloat("featureAngle", 60.0f, "Feature angle (degrees)",
+                           "An edge whose dihedral angle (angle between the normals of its two faces) exceeds "
+                           "this is sharp, and every node on a sharp edge stays fixed so creases are kept. "
+                           "In (0, 180]; 180 disables feature detection."));
+    par.addParam(RichEnum("selectionMode", 0,
+                          QStringList() << "None" << "Smooth only selected vertices" << "Keep selected vertices fixed",
+                          "Vertex selection",
+                          "None: the selection is ignored. Smooth only selected: unselected vertices stay "
+                          "fixed. Keep selected fixed: selected vertices stay fixed. Boundary and feature nodes "
+                          "are fixed in every mode."));
+    par.addParam(RichInt("seed", 1, "Random seed",
+                         "Seed of the micro-GA; per-node seeds are derived from it, the vertex index and the "
+                         "sweep, so the same seed gives the same result with any number of threads."));
+  }
 }
 
 void FilterMgaSmoothPlugin::run(int id, FilterContext& ctx) {
   switch (id) {
     case FP_ELEMENT_QUALITY: runElementQuality(ctx); break;
+    case FP_MGA_SMOOTH: runMgaSmooth(ctx); break;
     default: throw std::logic_error("unknown filter id");
   }
 }
@@ -80,6 +149,80 @@ void FilterMgaSmoothPlugin::runElementQuality(FilterContext& ctx) {
   ctx.log(head + "; min " + fmt(q.stats.min) + " mean " + fmt(q.stats.mean) + " max " + fmt(q.stats.max) +
           "; invalid (not positive): " + std::to_string(q.stats.invalid));
   ctx.log("Element quality histogram, 10 bins on [0,1]: " + pectus::ml::formatHistogram(q.stats.histogram));
+}
+
+void FilterMgaSmoothPlugin::runMgaSmooth(FilterContext& ctx) {
+  MeshModel& mm = ctx.current();
+  const std::string layer = mm.label().toStdString();
+  pectus::smooth::Options o;
+  const int type = ctx.enumIn("elementType", 3);
+  o.maxSweeps = ctx.intIn("maxSweeps", 1, 100000);
+  o.tolerance = ctx.floatIn("tolerance", 0, 1);
+  o.accuracy = ctx.floatIn("accuracy", 0, 0.5, true, true);
+  o.generations = ctx.intIn("generations", 1, 100000);
+  o.restarts = ctx.intIn("restarts", 0, 100000);
+  o.population = ctx.intIn("population", 3, 1000);
+  o.selection = ctx.enumIn("selection", 2) == 1 ? pectus::mga::Selection::Tournament : pectus::mga::Selection::Roulette;
+  o.featureAngleDeg = ctx.floatIn("featureAngle", 0, 180, true, false);
+  const int selMode = ctx.enumIn("selectionMode", 3);
+  o.seed = std::uint64_t(std::uint32_t(ctx.intIn("seed", 0, 2147483647)));
+
+  pectus::MeshRequirements req;
+  req.edgeManifold = true;
+  req.vertexManifold = true;
+  pectus::requireMesh(mm.cm, req, layer);
+  const bool faux = pectus::hasFauxEdges(mm.cm);
+  if (type == 2 && !faux)
+    throw pectus::InputError("quad smoothing was asked for, but layer '" + layer +
+                             "' holds only triangles (no faux edges); convert it to quads first or choose "
+                             "'Triangles (alpha)' or 'Auto'");
+  o.kind = (type == 2 || (type == 0 && faux)) ? pectus::ElementKind::Quads : pectus::ElementKind::Triangles;
+
+  std::vector<char> userFixed;
+  if (selMode != 0) {
+    const CMeshO& cm = mm.cm;
+    userFixed.assign(cm.vert.size(), 0);
+    std::size_t selected = 0;
+    for (std::size_t i = 0; i < cm.vert.size(); ++i) {
+      const bool s = !cm.vert[i].IsD() && cm.vert[i].IsS();
+      selected += s;
+      userFixed[i] = selMode == 1 ? !s : s;
+    }
+    if (selMode == 1 && selected == 0)
+      throw pectus::InputError("'Smooth only selected vertices' was chosen, but layer '" + layer +
+                               "' has no selected vertex; select vertices or choose 'None'");
+  }
+
+  o.progress = [&ctx, &o](int sweep, double mean) {
+    ctx.progress(5 + int(90.0 * sweep / o.maxSweeps), ("sweep " + std::to_string(sweep) + ", mean quality " +
+                                                       pectus::ml::fmt(mean)).c_str());
+    return true;
+  };
+  ctx.progress(2, "building the C1 surface");
+  const auto r = pectus::smooth::smoothMesh(mm.cm, o, userFixed);
+
+  CMeshO& m = ctx.modify(mm);
+  mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  for (std::size_t i = 0; i < m.vert.size(); ++i)
+    if (!m.vert[i].IsD())
+      m.vert[i].P() = CMeshO::CoordType(CMeshO::ScalarType(r.positions[i].x()), CMeshO::ScalarType(r.positions[i].y()),
+                                        CMeshO::ScalarType(r.positions[i].z()));
+  for (std::size_t i = 0; i < m.face.size(); ++i)
+    if (!m.face[i].IsD()) m.face[i].Q() = CMeshO::ScalarType(r.perFace[i]);
+  vcg::tri::UpdateColor<CMeshO>::PerFaceQualityRamp(m, 0.0f, 1.0f);
+  vcg::tri::UpdateBounding<CMeshO>::Box(m);
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFace(m);
+
+  const bool quads = o.kind == pectus::ElementKind::Quads;
+  const std::string q = quads ? "beta" : "alpha";
+  ctx.log("MGA smoothing (" + std::string(quads ? "quads, beta" : "triangles, alpha") + "): " +
+          std::to_string(r.elements) + " elements; worst " + q + " " + fmt(r.before.min) + " -> " + fmt(r.after.min) +
+          ", mean " + q + " " + fmt(r.before.mean) + " -> " + fmt(r.after.mean) + "; nodes moved " +
+          std::to_string(r.nodesMoved) + " of " + std::to_string(r.freeNodes) + " free; sweeps " +
+          std::to_string(r.sweeps) + "; time " + fmt(r.seconds, 2) + " s");
+  ctx.log("MGA smoothing: fixed nodes: " + std::to_string(r.boundaryNodes) + " boundary, " +
+          std::to_string(r.featureNodes) + " feature, " + std::to_string(r.userFixedNodes) + " by the selection; " +
+          std::to_string(r.colours) + " colours");
 }
 
 MESHLAB_PLUGIN_NAME_EXPORTER(FilterMgaSmoothPlugin)

@@ -9,7 +9,7 @@ class FilterMgaSmoothPlugin : public QObject, public pectus::ml::FilterPluginBas
   Q_INTERFACES(MeshFilterInterface)
 
  public:
-  enum { FP_ELEMENT_QUALITY };
+  enum { FP_ELEMENT_QUALITY, FP_MGA_SMOOTH };
   FilterMgaSmoothPlugin();
   QString pluginName() const override { return "FilterPectusMgaSmooth"; }
 
@@ -19,4 +19,5 @@ class FilterMgaSmoothPlugin : public QObject, public pectus::ml::FilterPluginBas
 
  private:
   void runElementQuality(pectus::ml::FilterContext& ctx);
+  void runMgaSmooth(pectus::ml::FilterContext& ctx);
 };
