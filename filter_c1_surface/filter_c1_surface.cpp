@@ -13,12 +13,16 @@ namespace c1 = pectus::c1;
 
 namespace {
 
-const QStringList kGradient = QStringList() << "Robust (weighted quadratic fit)" << "Thesis (inverse-area, eqs. 3-1/3-2)";
+const QStringList kGradient = QStringList() << "Robust (minimum curvature / quadratic fit)" << "Thesis (inverse-area, eqs. 3-1/3-2)"
+                                            << "Local quadratic fit (exact for quadratics)";
 const QStringList kFrame = QStringList() << "3D surface (vertex normals)" << "Height field along Z";
 
 const char* kGradientHelp =
-    "How vertex normals (gradients) are estimated. Robust (default): weighted least-squares fit of a "
-    "quadratic height over the 2-ring of each vertex, in the frame of its averaged normal. Thesis: the "
+    "How vertex normals (gradients) are estimated. Robust (default): for a height field, all gradients at "
+    "once by minimising the bending of the edge curves (Nielson's minimum-curvature estimate, as behind "
+    "Clough-Tocher); for a 3D surface, a weighted least-squares fit of a quadratic height over the 2-ring of "
+    "each vertex, in the frame of its averaged normal. Local quadratic fit: that per-vertex fit for height "
+    "fields too (exact for quadratic heights; the global estimate is exact for linear ones only). Thesis: the "
     "inverse-area weighted mean of the adjacent facet gradients (eq. 3-1), extrapolated at boundary "
     "vertices (eq. 3-2); faithful to the thesis but unstable next to sliver triangles.";
 const char* kFrameHelp =
@@ -30,7 +34,9 @@ const char* kFrameHelp =
 
 c1::Options options(FilterContext& ctx) {
   c1::Options o;
-  o.gradient = ctx.enumIn("gradientMethod", 2) == 1 ? c1::GradientMethod::InverseArea : c1::GradientMethod::QuadraticFit;
+  const int g = ctx.enumIn("gradientMethod", 3);
+  o.gradient = g == 1 ? c1::GradientMethod::InverseArea
+                      : g == 2 ? c1::GradientMethod::QuadraticFit : c1::GradientMethod::MinimumCurvature;
   o.frame = ctx.enumIn("frame", 2) == 1 ? c1::Frame::HeightField : c1::Frame::VertexNormal;
   return o;
 }

@@ -4,7 +4,8 @@
 # plugins only from <binary>/../lib/x86_64-linux-gnu/meshlab/plugins), libmeshlab-common and the
 # system plugins linked, this project's plugins linked from the build tree.
 set -euo pipefail
-PREFIX="$1"; BUILT="$2"; shift 2
+mkdir -p "$1"
+PREFIX="$(cd "$1" && pwd)"; BUILT="$(cd "$2" && pwd)"; shift 2
 SYSLIB=/usr/lib/x86_64-linux-gnu/meshlab
 mkdir -p "$PREFIX/bin" "$PREFIX/lib/x86_64-linux-gnu/meshlab/plugins"
 for b in meshlab meshlabserver; do

@@ -106,13 +106,13 @@ if os.path.exists(out2):
 else:
     h.check(False, "projected mesh saved")
 
-# 3. height field: a quadratic z(x, y) on a jittered grid is reproduced (robust fit is exact for quadratics)
+# 3. height field: a quadratic z(x, y) on a jittered grid is reproduced (the local quadratic fit is exact for quadratics)
 GV, GF = h.grid(6, quads=False, jitter=0.3, seed=4)
 GV = GV / 6.0
 GV[:, 2] = 0.3 + 0.5 * GV[:, 0] - GV[:, 1] + 0.8 * GV[:, 0] ** 2 - 0.6 * GV[:, 0] * GV[:, 1] + 0.4 * GV[:, 1] ** 2
 hf = h.write_ply(os.path.join(W, "height.ply"), GV, GF)
 out4 = os.path.join(W, "height_refined.ply")
-r = h.run([hf], script("c1_refine.mlx", subdivisions=4, frame=1, newLayer="false"), outputs=[(out4, "", 0)])
+r = h.run([hf], script("c1_refine.mlx", subdivisions=4, frame=1, newLayer="false", gradientMethod=2), outputs=[(out4, "", 0)])
 h.check(r.rc == 0, "height-field refine exits 0", r.stdout[-2000:])
 if os.path.exists(out4):
     R = h.read_ply(out4)["V"]
