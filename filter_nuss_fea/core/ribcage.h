@@ -1,0 +1,61 @@
+// Parametric pectus excavatum rib cage (issue 3): one watertight, manifold, self-intersection-free
+// triangle surface of ribs, costal cartilages and sternum, with per-face tissue labels and landmarks
+// (conventions in common/include/pectus/labels.h). Host-free: vcglib CMeshO + Eigen, no Qt.
+//
+// Method: the cage is an implicit function (smooth union of elliptic-section tubes along the rib,
+// cartilage and sternum centre curves), extracted on a sparse grid by marching tetrahedra (the zero
+// set of a piecewise-linear function on a consistent Kuhn tetrahedralisation: closed, manifold,
+// embedded), then decimated by quadric edge collapse to the target edge length. Each face gets the
+// label of the primitive nearest to its centroid.
+#pragma once
+#include <functional>
+#include <string>
+#include <vector>
+
+#include "pectus/cmesh.h"
+#include "pectus/labels.h"
+
+namespace pectus::ribcage {
+
+struct RibCageParams {
+  bool fromAge = true;      ///< size from age, else from the three explicit dimensions below
+  double age = 7.0;         ///< years, [5, 17]
+  double chestWidth = 0;    ///< explicit: widest inner transverse diameter of the cage (mm)
+  double chestDepth = 0;    ///< explicit: sternum-to-vertebra distance without funnel (mm), at the jugular notch
+  double spineHeight = 0;   ///< explicit: thoracic spine height T1-T12 (mm)
+  int ribPairs = 12;        ///< [10, 12]; ribs 11 and 12 are floating (separate components)
+  double hallerIndex = 4.0; ///< requested pectus index (inner transverse diameter / min sternum-vertebra distance)
+  double funnelCenterX = 0;   ///< funnel centre, mm lateral (+ = patient's left)
+  double funnelCenterZ = 0.8; ///< funnel centre along the sternum: 0 jugular notch, 1 xiphisternal junction
+  double funnelWidth = 80;    ///< transverse extent of the depression (mm), <= chest width
+  double funnelHeight = 70;   ///< vertical extent of the depression (mm)
+  double edgeLength = 2.0;    ///< target edge length (mm), [0.3, 15]
+};
+
+/// Derived dimensions (mm) used by the generator.
+struct Dimensions {
+  double chestWidth, chestDepth, spineHeight;  ///< inner transverse diameter, rest AP distance, T1-T12
+  double ribHeight, ribThickness, sternumWidth, sternumThickness, sternumLength;
+};
+
+struct RibCageStats {
+  Dimensions dims{};
+  double hallerRequested = 0;
+  double hallerRest = 0;        ///< index of the same chest without funnel (lower bound of the valid range)
+  double hallerModel = 0;       ///< measured on the implicit surface after calibration
+  double funnelDepth = 0;       ///< sternal displacement at the funnel centre (mm)
+  double transverseInner = 0, apMin = 0, zDeepest = 0;
+  double gridSpacing = 0;
+  std::size_t rawFaces = 0;     ///< faces before decimation
+  double secondsField = 0, secondsExtract = 0, secondsDecimate = 0, secondsLabel = 0;
+};
+
+/// Validates params (throws pectus::InputError naming the parameter and its valid range).
+Dimensions validate(const RibCageParams& p);
+
+/// Builds the cage into `out` (cleared first) with face labels written by pectus::writeFaceLabels,
+/// and returns the landmarks. progress(percent, what) may be empty.
+std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCageStats* stats = nullptr,
+                                      const std::function<void(int, const char*)>& progress = {});
+
+}  // namespace pectus::ribcage

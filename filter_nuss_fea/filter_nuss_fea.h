@@ -1,0 +1,23 @@
+// MeshLab adapter of the Nuss FE analysis plugin: maps parameters, layers, progress and errors to the
+// host-free cores (core/: the parametric rib cage; fe/: the finite element analysis). No algorithm here.
+#pragma once
+#include "filter_plugin.h"
+
+class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase {
+  Q_OBJECT
+  MESHLAB_PLUGIN_IID_EXPORTER(MESH_FILTER_INTERFACE_IID)
+  Q_INTERFACES(MeshFilterInterface)
+
+ public:
+  enum { FP_CREATE_RIBCAGE };
+  FilterNussFeaPlugin();
+  QString pluginName() const override { return "FilterPectusNussFea"; }
+
+ protected:
+  void initParameters(int id, MeshDocument& md, RichParameterList& par) override;
+  void run(int id, pectus::ml::FilterContext& ctx) override;
+
+ private:
+  void initCreateRibCage(RichParameterList& par);
+  void runCreateRibCage(pectus::ml::FilterContext& ctx);
+};

@@ -1,0 +1,238 @@
+#include <gtest/gtest.h>
+
+#include <map>
+#include <set>
+
+#include <vcg/complex/algorithms/clean.h>
+#include <vcg/complex/algorithms/update/topology.h>
+
+#include "haller.h"
+#include "marching_tets.h"
+#include "pectus/errors.h"
+#include "pectus/labels.h"
+#include "ribcage.h"
+
+using namespace pectus;
+using namespace pectus::ribcage;
+
+namespace {
+struct Topo { int boundary = 0, nonManifoldEdges = 0, nonManifoldVerts = 0, components = 0, selfIntersections = 0; double volume = 0; };
+
+Topo topology(CMeshO& m) {
+  Topo t;
+  m.face.EnableFFAdjacency();
+  m.face.EnableMark();
+  vcg::tri::UpdateTopology<CMeshO>::FaceFace(m);
+  for (auto& f : m.face)
+    for (int k = 0; k < 3; ++k)
+      if (vcg::face::IsBorder(f, k)) ++t.boundary;
+  t.nonManifoldEdges = vcg::tri::Clean<CMeshO>::CountNonManifoldEdgeFF(m);
+  t.nonManifoldVerts = vcg::tri::Clean<CMeshO>::CountNonManifoldVertexFF(m, false);
+  t.components = vcg::tri::Clean<CMeshO>::CountConnectedComponents(m);
+  std::vector<CFaceO*> si;
+  vcg::tri::Clean<CMeshO>::SelfIntersections(m, si);
+  t.selfIntersections = int(si.size());
+  for (const auto& f : m.face) {
+    const Eigen::Vector3d a = toEigen(f.cP(0)), b = toEigen(f.cP(1)), c = toEigen(f.cP(2));
+    t.volume += a.dot(b.cross(c)) / 6.0;
+  }
+  return t;
+}
+
+RibCageParams coarse() {
+  RibCageParams p;
+  p.edgeLength = 5;
+  return p;
+}
+}  // namespace
+
+TEST(MarchingTets, SphereIsClosedOrientedAndAccurate) {
+  SparseGrid g;
+  g.h = 0.37;
+  g.origin = Eigen::Vector3d::Constant(-6.0);
+  g.points = {34, 34, 34};
+  g.block = 8;
+  const auto nb = g.blocks();
+  g.active.assign(std::size_t(nb[0]) * nb[1] * nb[2], 1);
+  const TriSoup s = marchingTets(g, [](const Eigen::Vector3d& p) { return p.norm() - 4.0; });
+  CMeshO m;
+  auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, s.V.size());
+  for (const auto& v : s.V) { vi->P() = toPoint(v); ++vi; }
+  auto fi = vcg::tri::Allocator<CMeshO>::AddFaces(m, s.F.size());
+  for (const auto& f : s.F) { for (int k = 0; k < 3; ++k) fi->V(k) = &m.vert[std::size_t(f[std::size_t(k)])]; ++fi; }
+  const Topo t = topology(m);
+  EXPECT_EQ(t.boundary, 0);
+  EXPECT_EQ(t.nonManifoldEdges, 0);
+  EXPECT_EQ(t.components, 1);
+  EXPECT_EQ(t.selfIntersections, 0);
+  EXPECT_NEAR(t.volume, 4.0 / 3.0 * M_PI * 64, 0.02 * 4.0 / 3.0 * M_PI * 64);  // positive: outward normals
+  for (const auto& v : s.V) EXPECT_NEAR(v.norm(), 4.0, 0.05);
+}
+
+class RibCageCoarse : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    mesh = new CMeshO;
+    lms = new std::vector<Landmark>(generateRibCage(coarse(), *mesh, &stats));
+  }
+  static void TearDownTestSuite() { delete mesh; delete lms; }
+  static CMeshO* mesh;
+  static std::vector<Landmark>* lms;
+  static RibCageStats stats;
+};
+CMeshO* RibCageCoarse::mesh = nullptr;
+std::vector<Landmark>* RibCageCoarse::lms = nullptr;
+RibCageStats RibCageCoarse::stats;
+
+TEST_F(RibCageCoarse, WatertightManifoldNoSelfIntersection) {
+  CMeshO m;
+  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(m, *mesh);
+  const Topo t = topology(m);
+  EXPECT_GT(m.fn, 2000);
+  EXPECT_LT(m.fn, 40000);
+  EXPECT_EQ(t.boundary, 0);
+  EXPECT_EQ(t.nonManifoldEdges, 0);
+  EXPECT_EQ(t.nonManifoldVerts, 0);
+  EXPECT_EQ(t.selfIntersections, 0);
+  // ribs 1-10 joined to the sternum (one component) + the floating ribs 11 and 12 on both sides
+  EXPECT_EQ(t.components, 1 + 4);
+  EXPECT_GT(t.volume, 0);
+}
+
+TEST_F(RibCageCoarse, HallerIndexMeasuredOnMesh) {
+  const auto h = measureHaller(*mesh);
+  ASSERT_TRUE(h.has_value());
+  EXPECT_NEAR(h->index, 4.0, 0.03 * 4.0) << "T " << h->transverse << " AP " << h->ap;
+  EXPECT_NEAR(stats.hallerModel, 4.0, 0.005 * 4.0);
+  EXPECT_LT(stats.hallerRest, 3.0);
+  EXPECT_GT(stats.funnelDepth, 10);
+  // the chest is as wide as asked (inner transverse diameter of a 7-year-old: 181 mm)
+  EXPECT_NEAR(h->transverse, stats.dims.chestWidth, 0.03 * stats.dims.chestWidth);
+}
+
+TEST_F(RibCageCoarse, EveryFaceLabelled) {
+  const auto l = readFaceLabels(*mesh);
+  ASSERT_TRUE(l.has_value());
+  std::map<int, int> tissues;
+  std::set<int> parts;
+  for (std::size_t i = 0; i < mesh->face.size(); ++i) {
+    ++tissues[l->tissue[i]];
+    parts.insert(l->part[i]);
+    EXPECT_NE(l->part[i], 0);
+  }
+  EXPECT_EQ(tissues.count(0), 0u);
+  EXPECT_GT(tissues[int(Tissue::Bone)], 0);
+  EXPECT_GT(tissues[int(Tissue::Cartilage)], 0);
+  EXPECT_GT(tissues[int(Tissue::Sternum)], 0);
+  for (int side = 1; side <= 2; ++side)
+    for (int k = 1; k <= 12; ++k) EXPECT_TRUE(parts.count(ribPart(side, k))) << side << " " << k;
+  EXPECT_TRUE(parts.count(kManubrium));
+  EXPECT_TRUE(parts.count(kSternumBody));
+  EXPECT_TRUE(parts.count(kXiphoid));
+  // labels also as colour + quality (what survives PLY saving)
+  for (const auto& f : mesh->face) EXPECT_GT(f.cQ(), 1000.0f);
+}
+
+TEST_F(RibCageCoarse, Landmarks) {
+  std::set<int> codes;
+  for (const auto& l : *lms) codes.insert(l.code);
+  for (int side = 1; side <= 2; ++side) {
+    for (int k = 1; k <= 12; ++k) EXPECT_TRUE(codes.count(cvjLandmark(side, k)));
+    EXPECT_TRUE(codes.count(barExitLandmark(side, 4)));
+    EXPECT_TRUE(codes.count(barExitLandmark(side, 5)));
+  }
+  for (int c : {kSternumLowerEnd, kFunnelDeepest, kSternumUpperEnd, kVertebraAtDeepest, kDiaphragmDome, kLungApex})
+    EXPECT_TRUE(codes.count(c)) << c;
+  const auto deep = findLandmark(*lms, kFunnelDeepest), vert = findLandmark(*lms, kVertebraAtDeepest);
+  const auto lo = findLandmark(*lms, kSternumLowerEnd), up = findLandmark(*lms, kSternumUpperEnd);
+  ASSERT_TRUE(deep && vert && lo && up);
+  EXPECT_GT(up->z(), lo->z());
+  EXPECT_GT(deep->y(), vert->y());
+  // deepest anterior point lies behind the rest of the sternum's front
+  EXPECT_LT(deep->y(), up->y());
+  // right joints at -x, left at +x, rib 1 above rib 12
+  EXPECT_LT(findLandmark(*lms, cvjLandmark(1, 1))->x(), 0);
+  EXPECT_GT(findLandmark(*lms, cvjLandmark(2, 1))->x(), 0);
+  EXPECT_GT(findLandmark(*lms, cvjLandmark(1, 1))->z(), findLandmark(*lms, cvjLandmark(1, 12))->z());
+  // bar exits far lateral (mid-axillary)
+  EXPECT_GT(findLandmark(*lms, barExitLandmark(2, 4))->x(), 0.4 * stats.dims.chestWidth);
+}
+
+TEST(RibCage, DeterministicAndOtherParameters) {
+  RibCageParams p = coarse();
+  p.hallerIndex = 5.3;
+  p.ribPairs = 10;
+  p.age = 5;
+  p.funnelCenterX = 8;
+  CMeshO a, b;
+  RibCageStats sa;
+  generateRibCage(p, a, &sa);
+  generateRibCage(p, b);
+  ASSERT_EQ(a.vn, b.vn);
+  ASSERT_EQ(a.fn, b.fn);
+  for (std::size_t i = 0; i < a.vert.size(); ++i) ASSERT_EQ(a.vert[i].cP(), b.vert[i].cP());
+  for (std::size_t i = 0; i < a.face.size(); ++i) ASSERT_EQ(a.face[i].cQ(), b.face[i].cQ());
+  const auto h = measureHaller(a);
+  ASSERT_TRUE(h);
+  EXPECT_NEAR(h->index, 5.3, 0.03 * 5.3);
+  const Topo t = topology(a);
+  EXPECT_EQ(t.boundary, 0);
+  EXPECT_EQ(t.selfIntersections, 0);
+  EXPECT_EQ(t.components, 1);
+}
+
+TEST(RibCage, ExplicitDimensionsFinerMesh) {
+  RibCageParams p;
+  p.fromAge = false;
+  p.chestWidth = 220;
+  p.chestDepth = 95;
+  p.spineHeight = 230;
+  p.hallerIndex = 3.6;
+  p.ribPairs = 11;
+  p.edgeLength = 2.5;
+  CMeshO m;
+  RibCageStats st;
+  generateRibCage(p, m, &st);
+  const auto h = measureHaller(m);
+  ASSERT_TRUE(h);
+  EXPECT_NEAR(h->index, 3.6, 0.03 * 3.6);
+  EXPECT_NEAR(h->transverse, 220, 0.03 * 220);
+  const Topo t = topology(m);
+  EXPECT_EQ(t.boundary, 0);
+  EXPECT_EQ(t.nonManifoldEdges, 0);
+  EXPECT_EQ(t.selfIntersections, 0);
+  EXPECT_EQ(t.components, 1 + 2);  // rib 11 floats on both sides
+  EXPECT_GT(m.fn, 20000);
+}
+
+TEST(RibCage, BadInputNamesParameterAndRange) {
+  auto expectError = [](RibCageParams p, const std::string& name) {
+    CMeshO m;
+    try {
+      generateRibCage(p, m);
+      ADD_FAILURE() << "no error for " << name;
+    } catch (const InputError& e) {
+      const std::string w = e.what();
+      EXPECT_NE(w.find("'" + name + "'"), std::string::npos) << w;
+      EXPECT_NE(w.find("["), std::string::npos) << w;
+    }
+  };
+  RibCageParams p = coarse();
+  p.hallerIndex = 0.8;
+  expectError(p, "hallerIndex");
+  p = coarse();
+  p.hallerIndex = 1.5;  // below the index of the chest without funnel
+  expectError(p, "hallerIndex");
+  p = coarse();
+  p.age = -3;
+  expectError(p, "age");
+  p = coarse();
+  p.edgeLength = -1;
+  expectError(p, "edgeLength");
+  p = coarse();
+  p.funnelWidth = 400;
+  expectError(p, "funnelWidth");
+  p = coarse();
+  p.ribPairs = 9;
+  expectError(p, "ribPairs");
+}
