@@ -11,6 +11,7 @@ namespace pectus::vol {
 
 namespace {
 constexpr double kPi = 3.14159265358979323846;
+constexpr double kLargeGap = kPi / 3;  // gaps wider than 60 degrees (missing spine, abdominal opening): chord
 inline double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b) { return a.x() * b.y() - a.y() * b.x(); }
 }  // namespace
 
@@ -196,12 +197,23 @@ SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K) {
       double m0 = runSlope(R.radius, R.hit, k, -1), m1 = runSlope(R.radius, R.hit, k1, +1);
       if (!std::isfinite(m0)) m0 = secant;
       if (!std::isfinite(m1)) m1 = secant;
-      const double floor = 0.05 * std::min(r0, r1);
+      // the chord between the gap's end points, along each ray (a straight closure)
+      const Eigen::Vector2d P0 = r0 * Eigen::Vector2d(std::cos(k * dth), std::sin(k * dth));
+      const Eigen::Vector2d P1 = r1 * Eigen::Vector2d(std::cos(k1 * dth), std::sin(k1 * dth));
+      const bool large = g * dth > kLargeGap;
       for (int j = 1; j < g; ++j) {
-        const double t = double(j) / g, t2 = t * t, t3 = t2 * t;
-        const double h00 = 2 * t3 - 3 * t2 + 1, h01 = -2 * t3 + 3 * t2, h10 = t3 - 2 * t2 + t, h11 = t3 - t2;
-        const double r = h00 * r0 + h01 * r1 + (h10 * m0 + h11 * m1) * g;
-        R.radius[(k + j) % K] = std::max(r, floor);
+        const double th = (k + j) * dth;
+        const Eigen::Vector2d d(std::cos(th), std::sin(th));
+        const double den = cross2(d, P1 - P0);
+        const double chord = std::abs(den) > 1e-300 ? cross2(P0, P1 - P0) / den : std::min(r0, r1);
+        double r = chord;
+        if (!large) {
+          const double t = double(j) / g, t2 = t * t, t3 = t2 * t;
+          const double h00 = 2 * t3 - 3 * t2 + 1, h01 = -2 * t3 + 3 * t2, h10 = t3 - 2 * t2 + t, h11 = t3 - t2;
+          const double herm = h00 * r0 + h01 * r1 + (h10 * m0 + h11 * m1) * g;
+          r = std::clamp(herm, chord, std::max({r0, r1, chord}));
+        }
+        R.radius[(k + j) % K] = std::max(r, 0.05 * std::min(r0, r1));
       }
       k = k1;
     } else {

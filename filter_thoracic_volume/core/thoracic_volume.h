@@ -51,9 +51,13 @@ void requireComparablePair(const Soup& before, const Soup& after, const std::str
 // rib, cartilage, sternum or vertebra section). Rays that hit nothing pass through a gap between
 // sections: their radius is filled by a cubic Hermite interpolation in the angle between the two
 // neighbouring hit rays, with the boundary slopes dr/dtheta taken by least squares over up to four
-// hit rays on each side (so the gap is bridged by the curve continuing the walls, not by a chord).
-// The region is the closed polygon through the K boundary points; a slice with fewer than 3 hit
-// rays is empty.
+// hit rays on each side (so an intercostal gap is bridged by the curve continuing the walls), kept
+// between the chord joining the gap's end points (no concave dent) and the larger end radius (no
+// balloon). Gaps wider than 60 degrees (a missing spine, the abdominal opening) are closed by the
+// chord. Before filling, rays that see an outer wall through a gap (short runs lying outward of the
+// chord of their neighbours, and run ends jumping outward of the run's linear trend by > 1 %) are
+// treated as gaps. The region is the closed polygon through the K boundary points; a slice with
+// fewer than 3 hit rays is empty.
 
 struct Seg2 {
   Eigen::Vector2d a, b;
