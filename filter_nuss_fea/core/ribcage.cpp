@@ -6,6 +6,8 @@
 #include <sstream>
 
 #include <vcg/complex/allocate.h>
+#include <vcg/complex/append.h>
+#include <vcg/complex/algorithms/clean.h>
 
 #include "marching_tets.h"
 #include "mesh_simplify.h"
@@ -253,7 +255,34 @@ std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCa
     area += 0.5 * (soup.V[std::size_t(f[1])] - soup.V[std::size_t(f[0])]).cross(soup.V[std::size_t(f[2])] - soup.V[std::size_t(f[0])]).norm();
   soup = TriSoup{};
   const int target = int(area / (0.433 * p.edgeLength * p.edgeLength));
-  decimateQuadric(out, target);
+  // The marching-tets surface is embedded; decimation can fold it across narrow gaps (neighbouring
+  // cartilages). Check, and redo with the vertices around any intersection frozen (kept as extracted).
+  CMeshO raw;
+  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(raw, out);
+  std::vector<vcg::Box3<Scalarm>> frozen;
+  for (int attempt = 0;; ++attempt) {
+    if (attempt > 0) {
+      out.Clear();
+      vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(out, raw);
+      for (auto& v : out.vert)
+        for (const auto& b : frozen)
+          if (b.IsIn(v.P())) { v.ClearW(); break; }
+    }
+    decimateQuadric(out, attempt < 3 ? target : target << (attempt - 2));
+    for (auto& v : out.vert) v.SetW();
+    if (!out.face.IsMarkEnabled()) out.face.EnableMark();
+    std::vector<CFaceO*> si;
+    vcg::tri::Clean<CMeshO>::SelfIntersections(out, si);
+    st.decimationRetries = attempt;
+    if (si.empty()) break;
+    if (attempt == 7) throw std::runtime_error("rib cage: decimation left self-intersections; use a smaller edgeLength");
+    for (CFaceO* f : si) {
+      vcg::Box3<Scalarm> b;
+      for (int k = 0; k < 3; ++k) b.Add(f->P(k));
+      b.Offset(Scalarm(2.0 * (attempt + 1) * p.edgeLength));
+      frozen.push_back(b);
+    }
+  }
   st.secondsDecimate = secondsSince(t0);
 
   // --- labels

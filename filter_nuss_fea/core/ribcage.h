@@ -47,6 +47,7 @@ struct RibCageStats {
   double transverseInner = 0, apMin = 0, zDeepest = 0;
   double gridSpacing = 0;
   std::size_t rawFaces = 0;     ///< faces before decimation
+  int decimationRetries = 0;    ///< re-decimations with vertices frozen around self-intersections
   double secondsField = 0, secondsExtract = 0, secondsDecimate = 0, secondsLabel = 0;
 };
 

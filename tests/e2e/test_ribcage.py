@@ -12,7 +12,7 @@ NAME = "Create Pectus Excavatum Rib Cage"
 PALETTE = {(235, 222, 190): 1, (90, 160, 235): 2, (215, 110, 95): 3}
 
 
-def script(haller=4.0, edge=6.0, ribs=12, age=7.0):
+def script(haller=4.0, edge=5.0, ribs=12, age=7.0):
     return mlx.Script([mlx.Filter(
         NAME,
         sizeMode=mlx.Enum(0, ["From age", "Explicit dimensions"]),
