@@ -182,3 +182,14 @@ TEST(PectusIndexTest, DentedPrism) {
   au.searchRange = {10, 110};
   EXPECT_NEAR(pectusIndex(cage, au).haller, 2 * a / (2 * b - D), 0.02);
 }
+
+TEST(ThoracicVolumeSlice, RasterResolutionIsUsed) {
+  // the raster converges to the polygon areas as the resolution grows
+  const auto cage = bandedCylinder(130, 90, 8, 0, 240, 720, 240);
+  SliceParams coarse;
+  coarse.resolution = 24;
+  const auto c = sliceVolume(cage, {20, 220}, coarse), f = sliceVolume(cage, {20, 220}, SliceParams{});
+  EXPECT_NEAR(c.pixel / f.pixel, 512.0 / 24.0, 1e-9);
+  EXPECT_GT(std::abs(c.volume - c.polygonVolume), std::abs(f.volume - f.polygonVolume));
+  EXPECT_LT(std::abs(f.volume - f.polygonVolume) / f.polygonVolume, 5e-4);
+}
