@@ -3,7 +3,7 @@
 generates, writing everything into one output folder and printing what it found.
 
 Stages run when their filters are installed in the prefix (the pipeline grows as capabilities land):
-  1. a jittered saddle surface (thesis eq. 3-25) and its element quality (alpha), triangles and quads
+  1. a jittered saddle surface (thesis eq. 3-25), its element quality (alpha), MGA smoothing, quality after
   2. the default pectus-excavatum rib cage (if 'Create Pectus Excavatum Rib Cage' is available)
 """
 from __future__ import annotations
@@ -131,6 +131,17 @@ def main(argv: list[str]) -> int:
         print(res.stdout, file=sys.stderr)
         return 1
     rows.append((f"saddle, {len(F)} triangles (alpha)", parse_quality(res.log)))
+
+    # 1b. MGA smoothing of the saddle (thesis ch. 4.2), then its quality
+    if "MGA Surface Mesh Smoothing" in have:
+        smoothed = os.path.join(out, "saddle_mga.ply")
+        res = mlx.run([saddle], os.path.join(ROOT, "filter_mga_smooth", "examples", "mga_smooth.mlx"), [(smoothed, "fq fc")])
+        if res.rc == 0:
+            res = mlx.run([smoothed], quality_script(1), [(os.path.join(out, "saddle_mga_quality.ply"), "fq fc")])
+        if res.rc != 0:
+            print(res.stdout[-3000:], file=sys.stderr)
+            return 1
+        rows.append(("saddle after MGA smoothing (alpha)", parse_quality(res.log)))
 
     # 2. default rib cage, when its filter is installed
     if "Create Pectus Excavatum Rib Cage" in have:
