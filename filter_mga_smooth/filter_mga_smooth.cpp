@@ -13,6 +13,18 @@
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
 
+namespace {
+/// Per-face quality (one value per face index) into `mm`, with MeshLab's red-to-blue ramp on [0, 1]
+/// so that colours compare across layers and before/after smoothing. Call after ctx.modify(mm).
+void writeFaceQuality(MeshModel& mm, const std::vector<double>& perFace, bool colorize) {
+  mm.updateDataMask(MeshModel::MM_FACEQUALITY | (colorize ? MeshModel::MM_FACECOLOR : 0));
+  CMeshO& m = mm.cm;
+  for (std::size_t i = 0; i < m.face.size(); ++i)
+    if (!m.face[i].IsD()) m.face[i].Q() = CMeshO::ScalarType(perFace[i]);
+  if (colorize) vcg::tri::UpdateColor<CMeshO>::PerFaceQualityRamp(m, 0.0f, 1.0f);
+}
+}  // namespace
+
 FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
   pectus::ml::FilterSpec q;
   q.id = FP_ELEMENT_QUALITY;
@@ -136,11 +148,8 @@ void FilterMgaSmoothPlugin::runElementQuality(FilterContext& ctx) {
   const auto q = pectus::computeElementQuality(mm.cm, kind, 10);
 
   ctx.progress(80, "writing quality");
-  CMeshO& m = ctx.modify(mm);
-  mm.updateDataMask(MeshModel::MM_FACEQUALITY | (colorize ? MeshModel::MM_FACECOLOR : 0));
-  for (std::size_t i = 0; i < m.face.size(); ++i)
-    if (!m.face[i].IsD()) m.face[i].Q() = float(q.perFace[i]);
-  if (colorize) vcg::tri::UpdateColor<CMeshO>::PerFaceQualityRamp(m, 0.0f, 1.0f);
+  ctx.modify(mm);
+  writeFaceQuality(mm, q.perFace, colorize);
 
   const bool quads = kind == pectus::ElementKind::Quads;
   std::string head = quads ? "Element quality (quad beta): " + std::to_string(q.mesh.quads()) + " quads" +
@@ -202,14 +211,11 @@ void FilterMgaSmoothPlugin::runMgaSmooth(FilterContext& ctx) {
   const auto r = pectus::smooth::smoothMesh(mm.cm, o, userFixed);
 
   CMeshO& m = ctx.modify(mm);
-  mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
   for (std::size_t i = 0; i < m.vert.size(); ++i)
     if (!m.vert[i].IsD())
       m.vert[i].P() = CMeshO::CoordType(CMeshO::ScalarType(r.positions[i].x()), CMeshO::ScalarType(r.positions[i].y()),
                                         CMeshO::ScalarType(r.positions[i].z()));
-  for (std::size_t i = 0; i < m.face.size(); ++i)
-    if (!m.face[i].IsD()) m.face[i].Q() = CMeshO::ScalarType(r.perFace[i]);
-  vcg::tri::UpdateColor<CMeshO>::PerFaceQualityRamp(m, 0.0f, 1.0f);
+  writeFaceQuality(mm, r.perFace, true);
   vcg::tri::UpdateBounding<CMeshO>::Box(m);
   vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFace(m);
 
