@@ -8,6 +8,7 @@
 
 #include "pectus/c1_cmesh.h"
 #include "pectus/c1_surface.h"
+#include "pectus/element_quality.h"
 #include "pectus/errors.h"
 #include "pectus/mesh_checks.h"
 
@@ -18,11 +19,6 @@
 namespace pectus::smooth {
 
 using c1::C1Surface;
-
-double elementQuality(const std::vector<Vec3>& P, const Element& e) {
-  if (e.nv == 3) return triangleAlpha(P[std::size_t(e.v[0])], P[std::size_t(e.v[1])], P[std::size_t(e.v[2])]);
-  return quadBeta(P[std::size_t(e.v[0])], P[std::size_t(e.v[1])], P[std::size_t(e.v[2])], P[std::size_t(e.v[3])]);
-}
 
 namespace {
 
@@ -155,11 +151,7 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
   return lo < guard ? -50.0 + 0.01 * sum : sum;
 }
 
-QualityStats stats(const Mesh& M) {
-  std::vector<double> q(M.E.size());
-  for (std::size_t i = 0; i < M.E.size(); ++i) q[i] = elementQuality(M.X, M.E[i]);
-  return summarizeQuality(q, 10);
-}
+QualityStats stats(const Mesh& M) { return summarizeQuality(elementQualities(M.E, M.X), 10); }
 
 }  // namespace
 
@@ -387,12 +379,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
     if (M.X[i] != tm.V[i]) ++res.nodesMoved;
     res.positions[std::size_t(toM[i])] = M.X[i];
   }
-  res.perFace.assign(m.face.size(), 0.0);
-  for (std::size_t i = 0; i < M.E.size(); ++i) {
-    const double q = elementQuality(M.X, M.E[i]);
-    for (int f : M.E[i].face)
-      if (f >= 0) res.perFace[std::size_t(f)] = q;
-  }
+  res.perFace = spreadToFaces(M.E, elementQualities(M.E, M.X), m.face.size());
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }

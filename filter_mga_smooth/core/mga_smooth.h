@@ -72,7 +72,4 @@ struct Result {
 /// (edge or vertex), invalid quads, or a mesh with no free node.
 Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& userFixed = {});
 
-/// Quality of one element from positions: alpha (eq. 3-20) or beta (eq. 3-23, own normal).
-double elementQuality(const std::vector<Vec3>& P, const Element& e);
-
 }  // namespace pectus::smooth
