@@ -9,12 +9,25 @@ namespace pectus::fe {
 
 CalibrationResult calibrateForce(const std::function<double(double)>& displacement, double target,
                                  const CalibrationOptions& opt) {
+  return calibrateForce([&](double f, const Observer&) { return displacement(f); }, target, opt);
+}
+
+CalibrationResult calibrateForce(const std::function<double(double, const Observer&)>& displacement, double target,
+                                 const CalibrationOptions& opt) {
   if (!(target > 0)) throw InputError("The target displacement must be positive.");
   if (!(opt.initialForce > 0) || !(opt.maxForce >= opt.initialForce))
     throw InputError("Calibration: need 0 < initial force <= maximum force.");
   CalibrationResult r;
+  double lo = 0, dlo = 0;                 // below target (origin)
+  double hi = -1, dhi = 0;                // above target once found
+  // intermediate points seen on the way (load increments) tighten the bracket
+  const Observer observe = [&](double f, double d) {
+    if (!(f > 0) || !std::isfinite(d)) return;
+    if (d < target - opt.tolerance && f > lo) lo = f, dlo = d;
+    if (d > target + opt.tolerance && (hi < 0 || f < hi)) hi = f, dhi = d;
+  };
   auto eval = [&](double f) {
-    const double d = displacement(f);
+    const double d = displacement(f, observe);
     if (!std::isfinite(d)) throw InputError("Calibration: the displacement is not finite at force " + std::to_string(f) + " N.");
     r.history.emplace_back(f, d);
     ++r.evaluations;
@@ -22,8 +35,6 @@ CalibrationResult calibrateForce(const std::function<double(double)>& displaceme
     r.displacement = d;
     return d;
   };
-  double lo = 0, dlo = 0;                 // below target (origin)
-  double hi = -1, dhi = 0;                // above target once found
   double fPrev = 0, dPrev = 0;
   double f = std::min(opt.initialForce, opt.maxForce);
   while (true) {

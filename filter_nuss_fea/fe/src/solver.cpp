@@ -418,7 +418,9 @@ Result Solver::solveNonlinear(const NewtonOptions& opt, double scale) {
   double lam = 0, dlam = 1.0 / opt.loadSteps;
   int cut = 0;
   while (lam < 1.0 - 1e-12) {
-    const double target = std::min(1.0, lam + dlam);
+    double target = std::min(1.0, lam + dlam);
+    for (double s : opt.stops)
+      if (s > lam + 1e-12 && s < target - 1e-12) { target = s; break; }
     Eigen::VectorXd uTrial = u;
     for (size_t d = 0; d < I.freeIndex.size(); ++d)
       if (I.isConstrained[d]) uTrial(d) = target * scale * I.prescribed(d);
@@ -455,6 +457,7 @@ Result Solver::solveNonlinear(const NewtonOptions& opt, double scale) {
       u = uTrial;
       lam = target;
       ++res.increments;
+      if (opt.onIncrement) opt.onIncrement(lam, u);
     } else {
       if (++cut > opt.maxCutbacks) {
         std::ostringstream s;

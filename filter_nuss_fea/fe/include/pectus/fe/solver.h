@@ -8,6 +8,8 @@
 #include <string>
 #include <vector>
 
+#include <functional>
+
 #include <Eigen/Core>
 
 #include "pectus/fe/tet_mesh.h"
@@ -42,6 +44,10 @@ struct NewtonOptions {
   double tolResidual = 1e-8;  ///< ||r_free|| <= tolResidual * max(||f_ext||, ||reactions||, 1e-12)
   double tolDisplacement = 1e-8;  ///< and ||du|| <= tolDisplacement * ||u||
   int maxCutbacks = 4;        ///< halve a failing increment at most this many times
+  /// load factors in (0,1] every increment sequence must hit exactly (e.g. 20 N steps of a force curve)
+  std::vector<double> stops;
+  /// called after every converged increment with (load factor, displacements)
+  std::function<void(double, const Eigen::VectorXd&)> onIncrement;
 };
 
 struct Result {
