@@ -65,7 +65,8 @@ def build_script(outdir: str, age: float, haller: float, elevation: float, quick
     sl = example("slice", "Thoracic Volume (Slice Method)").set(**compare)
     env = example("envelope", "Thoracic Volume (Ferguson Envelope)").set(**compare)
     idx = example("index", "Pectus Index").set(**compare)
-    return mlx.Script([gen, quality, mga, nuss, sl, env, idx])
+    quality_after = example("quality", "Compute Element Quality (Triangle Alpha / Quad Beta)")
+    return mlx.Script([gen, quality, mga, quality_after, nuss, sl, env, idx])
 
 
 def grab(log: list[str], pattern: str, cast=float):
@@ -82,11 +83,15 @@ def grab_all(log: list[str], pattern: str):
 
 def parse(log: list[str]) -> dict:
     q = [l for l in log if l.startswith("Element quality (")]
+    hist = [[int(x) for x in l.split(":", 1)[1].split()] for l in log if l.startswith("Element quality histogram")]
     r = {
         "haller_generator": grab(log, r"measured on mesh ([0-9.]+)"),
         "faces": grab(log, r"Rib cage: ([0-9]+) faces", int),
         "quality_mean_before": grab(q, r"mean ([0-9.]+)"),
         "quality_min_before": grab(q, r"min ([0-9.]+)"),
+        "quality_mean_after": grab(q[1:], r"mean ([0-9.]+)"),
+        "quality_min_after": grab(q[1:], r"min ([0-9.]+)"),
+        "histograms": hist,
         "mga": next((l for l in log if l.startswith("MGA smoothing")), ""),
         "tets": grab(log, r"Nuss FE model: ([0-9]+) TET"),
         "element": grab(log, r"Nuss FE model: [0-9]+ (TET[0-9]+)", str),
