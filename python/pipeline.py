@@ -50,23 +50,28 @@ def example(key: str, name: str) -> mlx.Filter:
     raise KeyError(f"{name!r} not in {EX[key]}")
 
 
-def build_script(outdir: str, age: float, haller: float, elevation: float, quick: bool) -> mlx.Script:
-    gen = example("ribcage", "Create Pectus Excavatum Rib Cage").set(age=age, hallerIndex=haller, edgeLength=5.0)
-    quality = example("quality", "Compute Element Quality (Triangle Alpha / Quad Beta)")
-    mga = example("mga", "MGA Surface Mesh Smoothing").set(maxSweeps=2 if quick else 4)
+def analysis_filters(outdir: str, elevation: float, quick: bool, cage: int, landmarks: int) -> list:
+    """Nuss FE (calibrated) on the current layer, then both volumes and the pectus index, before = `cage`."""
     nuss = example("nuss", "Nuss Procedure FE Analysis").set(
-        landmarkLayer=LANDMARKS, mode=0, targetElevation=elevation,
+        landmarkLayer=landmarks, mode=0, targetElevation=elevation,
         resultBase=mlx.SaveFile(os.path.join(outdir, "nuss") + ".vtu", ".vtu"))
     if quick:
         nuss.set(analysis=1, order=1, tetQuality=0.0)  # small strain TET4: seconds, for the end-to-end test
     else:
         nuss.set(analysis=0, order=0, tetQuality=0.0)  # large displacement, TET10
-    compare = dict(compare=True, beforeLayer=CAGE, landmarkLayer=LANDMARKS)
+    compare = dict(compare=True, beforeLayer=cage, landmarkLayer=landmarks)
     sl = example("slice", "Thoracic Volume (Slice Method)").set(**compare)
     env = example("envelope", "Thoracic Volume (Ferguson Envelope)").set(**compare)
     idx = example("index", "Pectus Index").set(**compare)
+    return [nuss, sl, env, idx]
+
+
+def build_script(outdir: str, age: float, haller: float, elevation: float, quick: bool) -> mlx.Script:
+    gen = example("ribcage", "Create Pectus Excavatum Rib Cage").set(age=age, hallerIndex=haller, edgeLength=5.0)
+    quality = example("quality", "Compute Element Quality (Triangle Alpha / Quad Beta)")
+    mga = example("mga", "MGA Surface Mesh Smoothing").set(maxSweeps=2 if quick else 4)
     quality_after = example("quality", "Compute Element Quality (Triangle Alpha / Quad Beta)")
-    return mlx.Script([gen, quality, mga, quality_after, nuss, sl, env, idx])
+    return mlx.Script([gen, quality, mga, quality_after] + analysis_filters(outdir, elevation, quick, CAGE, LANDMARKS))
 
 
 def grab(log: list[str], pattern: str, cast=float):
@@ -140,6 +145,15 @@ def table(r: dict, age: float, sex: str, target: float) -> str:
     return "\n".join(lines)
 
 
+def write_summary(path: str, r: dict, sex: str, age: float, elevation: float, case: str = ""):
+    keys = [k for k in r if not isinstance(r[k], (list, tuple))]
+    hb, ha = (r["haller"] + [None, None])[:2]
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["case", "sex", "age", "target_elevation_mm"] + keys + ["haller_before", "haller_after"])
+        w.writerow([case, sex, age, elevation] + [r[k] for k in keys] + [hb, ha])
+
+
 def run_pipeline(outdir: str, age=8.0, haller=5.3, elevation=44.7, sex="M", quick=False, prefix=None) -> tuple[int, dict, mlx.Result]:
     os.makedirs(outdir, exist_ok=True)
     script = build_script(outdir, age, haller, elevation, quick)
@@ -156,12 +170,7 @@ def run_pipeline(outdir: str, age=8.0, haller=5.3, elevation=44.7, sex="M", quic
     r["seconds"] = time.time() - t0
     with open(os.path.join(outdir, "meshlabserver.log"), "w") as fh:
         fh.write(res.stdout)
-    with open(os.path.join(outdir, "summary.csv"), "w", newline="") as fh:
-        w = csv.writer(fh)
-        keys = [k for k in r if not isinstance(r[k], (list, tuple))]
-        w.writerow(["sex", "age", "target_elevation_mm"] + keys + ["haller_before", "haller_after"])
-        hb, ha = (r["haller"] + [None, None])[:2]
-        w.writerow([sex, age, elevation] + [r[k] for k in keys] + [hb, ha])
+    write_summary(os.path.join(outdir, "summary.csv"), r, sex, age, elevation)
     return res.rc, r, res
 
 
