@@ -361,6 +361,7 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
     fe::Result r = solver.solveNonlinear(no, F);
     ++a.nonlinearSolves;
     a.newtonIterations += r.newtonIterations;
+    a.factorizations += r.factorizations;
     if (curve) {
       curve->clear();
       for (const auto& p : pts) {

@@ -51,13 +51,16 @@ struct Placement {
 };
 
 /// Newton settings of the analysis: 5 increments at least, relative tolerances 1e-6 (the elevation is
-/// converged to far below the 0.1 mm calibration tolerance), 6 cut-backs.
+/// converged to far below the 0.1 mm calibration tolerance), modified Newton (refactorise only when
+/// the residual stalls), up to 60 iterations per increment, 6 cut-backs.
 inline fe::NewtonOptions analysisNewton() {
   fe::NewtonOptions n;
   n.loadSteps = 5;
   n.tolResidual = 1e-6;
   n.tolDisplacement = 1e-6;
+  n.maxIterations = 60;
   n.maxCutbacks = 6;
+  n.modified = true;
   return n;
 }
 
@@ -104,7 +107,7 @@ struct Analysis {
   std::vector<std::vector<int>> supportNodes;    ///< right s, right s+1, left s, left s+1
   std::vector<std::string> supportNames;
   int components = 0;
-  int nonlinearSolves = 0, newtonIterations = 0;
+  int nonlinearSolves = 0, newtonIterations = 0, factorizations = 0;
   double secondsMesh = 0, secondsSolve = 0;
   Eigen::Vector3d displacementAt(const Eigen::Vector3d& p) const;  ///< of the nearest node
 };

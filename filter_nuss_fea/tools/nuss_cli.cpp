@@ -48,12 +48,12 @@ int main(int argc, char** argv) {
     const auto surf = nuss::cageFromMesh(cage);
     const auto a = nuss::analyze(surf, lms, o);
     std::printf("faces=%zu tets=%d nodes=%d order=%d dofs=%d force=%.2f elevation=%.3f compliance=%.5f "
-                "maxStress=%.3f maxStrain=%.4f strainCart=%.4f strainBone=%.5f maxStressAll=%.3f nlSolves=%d newton=%d "
+                "maxStress=%.3f maxStrain=%.4f strainCart=%.4f strainBone=%.5f maxStressAll=%.3f nlSolves=%d newton=%d factor=%d "
                 "tCage=%.2f tMesh=%.2f tSolve=%.2f\n",
                 surf.surface.faces.size(), a.mesh.numTets(), a.mesh.numNodes(), a.mesh.order,
                 3 * a.mesh.numNodes() - 3 * int(a.fixedNodes.size()), a.force, a.elevation, a.linearCompliance,
                 a.maxStress, a.maxStrain, a.maxStrainCartilage, a.maxStrainBone, a.maxStressAll, a.nonlinearSolves,
-                a.newtonIterations, tCage, a.secondsMesh, a.secondsSolve);
+                a.newtonIterations, a.factorizations, tCage, a.secondsMesh, a.secondsSolve);
     std::printf("max stress at %s\nmax strain at %s\n", a.maxStressAt.describe().c_str(), a.maxStrainAt.describe().c_str());
     std::printf("fixed %zu, sternum %zu, supports", a.fixedNodes.size(), a.sternumNodes.size());
     for (size_t k = 0; k < a.supportNodes.size(); ++k) std::printf(" %s:%zu", a.supportNames[k].c_str(), a.supportNodes[k].size());

@@ -425,7 +425,7 @@ Result Solver::solveNonlinear(const NewtonOptions& opt, double scale) {
     for (size_t d = 0; d < I.freeIndex.size(); ++d)
       if (I.isConstrained[d]) uTrial(d) = target * scale * I.prescribed(d);
     bool converged = false;
-    double duNorm = 0;
+    double duNorm = 0, lastRn = 1e300;
     for (int it = 0; it <= opt.maxIterations; ++it) {
       I.assemble(uTrial, true, fint);
       const Eigen::VectorXd r = I.freePart(target * scale * I.fext - fint);
@@ -440,8 +440,11 @@ Result Solver::solveNonlinear(const NewtonOptions& opt, double scale) {
         break;
       }
       if (it == opt.maxIterations) break;
-      try {
+      const bool refactor = !opt.modified || it == 0 || !(rn < lastRn / 3);
+      lastRn = rn;
+      if (refactor) try {
         I.factorize(lastFactorSeconds_);
+        ++res.factorizations;
       } catch (const InputError&) {
         if (it == 0 && lam == 0) throw;  // singular at the undeformed state: a real input problem
         break;                             // lost positive definiteness (buckling/inversion): cut back
