@@ -92,13 +92,26 @@ PolyMesh fromCMesh(const CMeshO& m, bool quads, std::vector<int>* vertexIndex) {
 }
 
 void toCMesh(const PolyMesh& p, CMeshO& m) {
+  // A faux diagonal must be an edge of no other face, or MeshLab (and buildElements) would see a polygon of
+  // more than four sides: where v0-v2 is taken (e.g. two quads around a node of valence 2), use v1-v3.
+  std::unordered_map<std::uint64_t, int> used;
+  const auto key = [](int a, int b) {
+    if (a > b) std::swap(a, b);
+    return (std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b);
+  };
+  for (const auto& q : p.F)
+    for (int k = 0; k < q.nv; ++k) ++used[key(q.v[k], q.v[(k + 1) % q.nv])];
   m.Clear();
   auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, p.V.size());
   for (std::size_t i = 0; i < p.V.size(); ++i, ++vi) vi->P() = toPoint(p.V[i]);
   const std::size_t nf = p.F.size() + p.quads();
-  auto fi = vcg::tri::Allocator<CMeshO>::AddFaces(m, nf);
+  vcg::tri::Allocator<CMeshO>::AddFaces(m, nf);
   std::size_t k = 0;
-  for (const auto& q : p.F) {
+  for (Poly q : p.F) {
+    if (q.nv == 4) {
+      if (used.count(key(q.v[0], q.v[2])) && !used.count(key(q.v[1], q.v[3]))) q.v = {q.v[1], q.v[2], q.v[3], q.v[0]};
+      ++used[key(q.v[0], q.v[2])];
+    }
     auto& f = m.face[k++];
     f.ClearF(0); f.ClearF(1); f.ClearF(2);
     for (int j = 0; j < 3; ++j) f.V(j) = &m.vert[q.v[j]];
@@ -112,7 +125,6 @@ void toCMesh(const PolyMesh& p, CMeshO& m) {
       g.SetF(0);  // edge v0-v2
     }
   }
-  (void)fi;
 }
 
 void chooseDiagonal(const PolyMesh& m, Poly& q) {

@@ -62,29 +62,52 @@ std::vector<Candidate> quadCandidates(const c1::TriMesh& tri, const ConvertOptio
 PolyMesh splitToQuads(const PolyMesh& m, const PlaceFn& place, std::size_t* newNodes) {
   PolyMesh out;
   out.V = m.V;
+  std::vector<Vec3> linear;  // straight-line position of every new node
   std::unordered_map<std::uint64_t, int> mid;
   mid.reserve(m.F.size() * 2);
+  const auto addNode = [&](const Vec3& p) {
+    linear.push_back(p);
+    out.V.push_back(place(p));
+    return int(out.V.size()) - 1;
+  };
   const auto midpoint = [&](int a, int b) {
-    auto [it, fresh] = mid.emplace(edgeKey(a, b), int(out.V.size()));
-    if (fresh) out.V.push_back(place(0.5 * (m.V[a] + m.V[b])));
-    return it->second;
+    auto it = mid.find(edgeKey(a, b));
+    if (it != mid.end()) return it->second;
+    const int i = addNode(0.5 * (m.V[a] + m.V[b]));
+    mid.emplace(edgeKey(a, b), i);
+    return i;
   };
   out.F.reserve(m.F.size() * 4);
   for (const auto& f : m.F) {
     Vec3 c = Vec3::Zero();
     for (int k = 0; k < f.nv; ++k) c += m.V[f.v[k]];
-    const int ci = int(out.V.size());
-    out.V.push_back(place(c / f.nv));
+    const int ci = addNode(c / f.nv);
     std::array<int, 4> mids{};
     for (int k = 0; k < f.nv; ++k) mids[k] = midpoint(f.v[k], f.v[(k + 1) % f.nv]);
     for (int k = 0; k < f.nv; ++k) {
       Poly q;
       q.nv = 4;
       q.v = {f.v[k], mids[k], ci, mids[(k + f.nv - 1) % f.nv]};
-      chooseDiagonal(out, q);
       out.F.push_back(q);
     }
   }
+  // A sub-quad of a convex element is convex in the element's own (bilinear / affine) parametrisation; where
+  // placing its new nodes on the surface makes it non-convex (strong curvature, poor elements), those nodes
+  // go back to their straight-line positions.
+  const int n0 = int(m.V.size());
+  for (int round = 0; round < 3; ++round) {
+    bool changed = false;
+    for (const auto& q : out.F) {
+      if (polyQuality(out, q) > 0) continue;
+      for (int k = 0; k < 4; ++k)
+        if (q.v[k] >= n0 && out.V[q.v[k]] != linear[q.v[k] - n0]) {
+          out.V[q.v[k]] = linear[q.v[k] - n0];
+          changed = true;
+        }
+    }
+    if (!changed) break;
+  }
+  for (auto& q : out.F) chooseDiagonal(out, q);
   if (newNodes) *newNodes = out.V.size() - m.V.size();
   return out;
 }

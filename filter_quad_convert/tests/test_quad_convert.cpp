@@ -421,3 +421,52 @@ TEST(Writer, OffObjVtk) {
   EXPECT_NE(all.str().find("POLYGONS 9 45"), std::string::npos);
   EXPECT_THROW(writePolyMesh("/nonexistent-dir/q.obj", r.mesh, PolyFormat::OBJ), InputError);
 }
+
+TEST(PolyMesh, FauxDiagonalsNeverCollide) {
+  // two quads around a node b of valence 2 whose stored diagonals are the same edge p-q
+  PolyMesh m;
+  m.V = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 2, 0}, {-1, -1, 0}};  // b p q c d
+  Poly q1, q2;
+  q1.nv = q2.nv = 4;
+  q1.v = {1, 3, 2, 0};  // p c q b: diagonal p-q
+  q2.v = {2, 4, 1, 0};  // q d p b: diagonal q-p
+  m.F = {q1, q2};
+  CMeshO cm;
+  toCMesh(m, cm);
+  PolyMesh back;
+  ASSERT_NO_THROW(back = fromCMesh(cm, true));
+  EXPECT_EQ(back.quads(), 2u);
+}
+
+TEST(Convert, AllQuadsSplitNeverInvalidOnACurvedClosedSurface) {
+  // a coarse, jittered UV sphere with one triangle removed: strongly curved, an odd count; the split must still give only valid quads
+  c1::TriMesh t;
+  const int nu = 10, nvv = 7;
+  std::mt19937 rng(4);
+  std::uniform_real_distribution<double> U(-0.15, 0.15);
+  t.V.push_back({0, 0, 1});
+  for (int j = 1; j < nvv; ++j)
+    for (int i = 0; i < nu; ++i) {
+      const double th = M_PI * (j + U(rng)) / nvv, ph = 2 * M_PI * (i + U(rng)) / nu;
+      t.V.push_back({std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)});
+    }
+  t.V.push_back({0, 0, -1});
+  const int S = int(t.V.size()) - 1;
+  const auto id = [&](int j, int i) { return 1 + (j - 1) * nu + (i % nu); };
+  for (int i = 0; i < nu; ++i) t.F.push_back({0, id(1, i), id(1, i + 1)});
+  for (int j = 1; j < nvv - 1; ++j)
+    for (int i = 0; i < nu; ++i) {
+      t.F.push_back({id(j, i), id(j + 1, i), id(j + 1, i + 1)});
+      t.F.push_back({id(j, i), id(j + 1, i + 1), id(j, i + 1)});
+    }
+  for (int i = 0; i < nu; ++i) t.F.push_back({S, id(nvv - 1, i + 1), id(nvv - 1, i)});
+  t.F.erase(t.F.begin() + 7);  // odd count: no perfect matching
+  ConvertOptions o;
+  const auto r = convertToQuads(t, o);
+  EXPECT_TRUE(r.subdivided);
+  EXPECT_DOUBLE_EQ(r.stats.quadPercent, 100.0);
+  EXPECT_EQ(r.stats.invalidQuads, 0u);
+  CMeshO cm;
+  toCMesh(r.mesh, cm);
+  EXPECT_EQ(fromCMesh(cm, true).quads(), r.mesh.quads());
+}
