@@ -92,7 +92,7 @@ PolyMesh asPoly(const c1::TriMesh& t) {
 
 }  // namespace
 
-TEST(Matching, MaxCardinalityMaxWeightEqualsBruteForce) {
+TEST(quad_matching, MaxCardinalityMaxWeightEqualsBruteForce) {
   std::mt19937 rng(11);
   int perfect = 0;
   for (int trial = 0; trial < 300; ++trial) {
@@ -114,7 +114,7 @@ TEST(Matching, MaxCardinalityMaxWeightEqualsBruteForce) {
   EXPECT_GT(perfect, 20);  // the random graphs include perfect-matchable ones
 }
 
-TEST(Matching, GreedyIsNeverBetterAndCanBeWorse) {
+TEST(quad_matching, GreedyIsNeverBetterAndCanBeWorse) {
   // path a-b-c-d: greedy takes the heavy middle edge (1 pair), the optimum takes both ends (2 pairs)
   std::vector<WeightedEdge> e{{0, 1, 0.6}, {1, 2, 0.9}, {2, 3, 0.6}};
   int pg = 0, po = 0;
@@ -127,7 +127,7 @@ TEST(Matching, GreedyIsNeverBetterAndCanBeWorse) {
   EXPECT_NEAR(matchingWeight(maxWeightMatching(4, e, false), e, &pw), 1.2, 1e-9);
 }
 
-TEST(Convert, OptimalGivesAllQuadsOnAJitteredGrid) {
+TEST(quad_convert, OptimalGivesAllQuadsOnAJitteredGrid) {
   const auto t = gridTri(10, 0.3, 5, [](double x, double y) { return 0.05 * x * x - 0.03 * y * y; });
   ConvertOptions o;
   o.pairing = Pairing::Optimal;
@@ -147,7 +147,7 @@ TEST(Convert, OptimalGivesAllQuadsOnAJitteredGrid) {
   EXPECT_EQ(g.stats.invalidQuads, 0u);
 }
 
-TEST(Convert, AllQuadsSplitsLeftoversWithNodesOnTheSurface) {
+TEST(quad_convert, AllQuadsSplitsLeftoversWithNodesOnTheSurface) {
   // odd triangle count: one triangle removed from a paraboloid grid, so no perfect matching exists
   const auto h = [](double x, double y) { return 0.04 * ((x - 4) * (x - 4) + (y - 4) * (y - 4)); };
   auto t = gridTri(8, 0.25, 3, h);
@@ -175,7 +175,7 @@ TEST(Convert, AllQuadsSplitsLeftoversWithNodesOnTheSurface) {
   EXPECT_GT(r.newNodes, 0u);
 }
 
-TEST(Convert, NeverMakesNonConvexQuads) {
+TEST(quad_convert, NeverMakesNonConvexQuads) {
   // a dart: the two triangles (0,1,2) and (0,2,3) make a non-convex quad 0-1-2-3
   c1::TriMesh t;
   t.V = {{0, 0, 0}, {2, -1, 0}, {0.5, 0, 0}, {2, 1, 0}};
@@ -188,7 +188,7 @@ TEST(Convert, NeverMakesNonConvexQuads) {
   EXPECT_GT(quadCandidates(t, {})[0].beta, 0.3);
 }
 
-TEST(Convert, BadInput) {
+TEST(quad_convert, BadInput) {
   c1::TriMesh empty;
   EXPECT_THROW(convertToQuads(empty, {}), InputError);
   c1::TriMesh isolated;  // two triangles without a common edge
@@ -202,7 +202,7 @@ TEST(Convert, BadInput) {
   }
 }
 
-TEST(Convert, DihedralLimitKeepsCreases) {
+TEST(quad_convert, DihedralLimitKeepsCreases) {
   c1::TriMesh t;  // two triangles folded by 90 degrees
   t.V = {{0, 0, 0}, {1, 0, 0}, {0.5, 1, 0}, {0.5, 0, -1}};
   t.F = {{0, 1, 2}, {1, 0, 3}};
@@ -213,7 +213,7 @@ TEST(Convert, DihedralLimitKeepsCreases) {
   EXPECT_EQ(quadCandidates(t, o).size(), 1u);
 }
 
-TEST(PolyMesh, CMeshRoundTripKeepsQuads) {
+TEST(quad_polymesh, CMeshRoundTripKeepsQuads) {
   const auto t = gridTri(4, 0.2, 1);
   const auto r = convertToQuads(t, {});
   CMeshO m;
@@ -230,7 +230,7 @@ TEST(PolyMesh, CMeshRoundTripKeepsQuads) {
     EXPECT_NEAR(polyQuality(back, back.F[i]), polyQuality(r.mesh, r.mesh.F[i]), 1e-6);
 }
 
-TEST(Structure, TriangleOperatorsImproveValenceAndQuality) {
+TEST(quad_structure, TriangleOperatorsImproveValenceAndQuality) {
   // alternating diagonals: interior valences 4 and 8; edge swaps move them toward 6
   auto t = gridTri(8, 0.0, 1, {}, true);
   const auto pm = asPoly(t);
@@ -243,7 +243,7 @@ TEST(Structure, TriangleOperatorsImproveValenceAndQuality) {
   EXPECT_EQ(r.mesh.F.size(), pm.F.size());
 }
 
-TEST(Structure, TriangleNodeEliminationRemovesValence3Nodes) {
+TEST(quad_structure, TriangleNodeEliminationRemovesValence3Nodes) {
   auto t = gridTri(6, 0.1, 2, {}, false);
   // insert a node in the middle of 3 interior triangles: three valence-3 nodes
   for (int f : {20, 31, 44}) {
@@ -265,7 +265,7 @@ TEST(Structure, TriangleNodeEliminationRemovesValence3Nodes) {
   EXPECT_EQ(r.after.valence[3], 0u);
 }
 
-TEST(Structure, TriangleEdgeDividingSplitsLongEdges) {
+TEST(quad_structure, TriangleEdgeDividingSplitsLongEdges) {
   // a thin rhombus across a long edge: two obtuse triangles; dividing the long diagonal helps
   c1::TriMesh t;
   t.V = {{0, 0, 0}, {4, 0, 0}, {2, 0.6, 0}, {2, -0.6, 0}, {-1, 1, 0}, {5, 1, 0}, {5, -1, 0}, {-1, -1, 0}};
@@ -297,7 +297,7 @@ PolyMesh quadGrid(int n) {
 }
 }  // namespace
 
-TEST(Structure, QuadEdgeSwapRestoresTheGrid) {
+TEST(quad_structure, QuadEdgeSwapRestoresTheGrid) {
   // the 2x1 block of quads (2,2),(3,2) split by its other diagonal: valences 5, 5, 3, 3 -> a swap gives 4s
   PolyMesh q = quadGrid(6);
   const int a = 2 * 7 + 2;
@@ -319,7 +319,7 @@ TEST(Structure, QuadEdgeSwapRestoresTheGrid) {
   EXPECT_GT(r.after.beta.min, r.before.beta.min);
 }
 
-TEST(Structure, QuadOperators) {
+TEST(quad_structure, QuadOperators) {
   // quad grid; one quad split into three around a centre node (valence 3): node elimination undoes it
   PolyMesh q;
   const int n = 6;
@@ -361,7 +361,7 @@ TEST(Structure, QuadOperators) {
   EXPECT_EQ(r.after.invalidQuads, 0u);
 }
 
-TEST(Structure, QuadEdgeSwapTowardValence4) {
+TEST(quad_structure, QuadEdgeSwapTowardValence4) {
   // a converted jittered mesh: swaps lower the valence energy and never the worst beta
   const auto t = gridTri(12, 0.35, 9);
   ConvertOptions co;
@@ -381,7 +381,7 @@ TEST(Structure, QuadEdgeSwapTowardValence4) {
               r.before.beta.min, r.after.beta.min, r.before.beta.mean, r.after.beta.mean);
 }
 
-TEST(Writer, OffObjVtk) {
+TEST(quad_writer, OffObjVtk) {
   const auto t = gridTri(3, 0.0, 1);
   const auto r = convertToQuads(t, {});
   const std::string dir = ::testing::TempDir();
@@ -422,7 +422,7 @@ TEST(Writer, OffObjVtk) {
   EXPECT_THROW(writePolyMesh("/nonexistent-dir/q.obj", r.mesh, PolyFormat::OBJ), InputError);
 }
 
-TEST(PolyMesh, FauxDiagonalsNeverCollide) {
+TEST(quad_polymesh, FauxDiagonalsNeverCollide) {
   // two quads around a node b of valence 2 whose stored diagonals are the same edge p-q
   PolyMesh m;
   m.V = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {2, 2, 0}, {-1, -1, 0}};  // b p q c d
@@ -438,7 +438,7 @@ TEST(PolyMesh, FauxDiagonalsNeverCollide) {
   EXPECT_EQ(back.quads(), 2u);
 }
 
-TEST(Convert, AllQuadsSplitNeverInvalidOnACurvedClosedSurface) {
+TEST(quad_convert, AllQuadsSplitNeverInvalidOnACurvedClosedSurface) {
   // a coarse, jittered UV sphere with one triangle removed: strongly curved, an odd count; the split must still give only valid quads
   c1::TriMesh t;
   const int nu = 10, nvv = 7;

@@ -158,7 +158,19 @@ check(r.rc == 0 and m is not None, "structure (triangles): exit 0, counts in the
 if m:
     check(int(m.group(1)) + int(m.group(2)) + int(m.group(3)) > 0, "some operations applied", log)
     check(float(m.group(5)) >= float(m.group(4)), "worst alpha not lower", log)
-check("Valence of interior nodes before: " in log and "Valence of interior nodes after: " in log, "valence histograms")
+
+
+def valence_hist(log, when):
+    m = re.search(f"Valence of interior nodes {when}: (.*)", log)
+    return {int(k.rstrip("+")): int(v) for k, v in (p.split(":") for p in m.group(1).split(", "))} if m else {}
+
+
+vb, va = valence_hist(log, "before"), valence_hist(log, "after")
+check(vb.get(6, 0) == 0 and va.get(6, 0) > 0.5 * sum(va.values()),
+      "triangles: valence histogram logged; most interior nodes reach valence 6 (alternating grid has 4 and 8)",
+      f"{vb} -> {va}")
+tri_out = read_ply(os.path.join(d, "stri.ply"))
+check(abs(len(tri_out["F"]) - 1152) < 100, "structure (triangles): about the same element count", str(len(tri_out["F"])))
 print(log)
 r = run([off], script("structure.mlx", "squad"), [(os.path.join(d, "squad.ply"), "fq sa")])
 log = log_of(r)
