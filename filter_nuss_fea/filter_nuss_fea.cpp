@@ -313,7 +313,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
     if (!v.IsD()) q.push_back(v.Q());
   std::sort(q.begin(), q.end());
   const float hi = q.empty() ? 1.0f : std::max(q[std::min(q.size() - 1, size_t(0.98 * q.size()))], 1e-12f);
-  vcg::tri::UpdateColor<CMeshO>::PerVertexQualityRamp(res.cm, 0.0f, hi);
+  vcg::tri::UpdateColor<CMeshO>::PerVertexQualityRamp(res.cm, hi, 0.0f);  // red = high, blue = low
   vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(res.cm);
   vcg::tri::UpdateBounding<CMeshO>::Box(res.cm);
 

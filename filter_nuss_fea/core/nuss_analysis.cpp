@@ -362,13 +362,7 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
     ++a.nonlinearSolves;
     a.newtonIterations += r.newtonIterations;
     a.factorizations += r.factorizations;
-    if (curve) {
-      curve->clear();
-      for (const auto& p : pts) {
-        const double k = p.first / opt.curveStep;
-        if (std::abs(k - std::round(k)) < 1e-6 || p.first >= F - 1e-9) curve->push_back(p);
-      }
-    }
+    if (curve) *curve = pts;  // every converged increment: the curveStep multiples and the steps between
     return r;
   };
 

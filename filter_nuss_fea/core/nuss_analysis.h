@@ -97,7 +97,7 @@ struct Analysis {
   double elevation = 0;               ///< mm
   double linearCompliance = 0;        ///< mm/N of the linear model
   std::optional<fe::CalibrationResult> calibration;
-  std::vector<std::pair<double, double>> curve;  ///< (Fe N, elevation mm), from 0, every curveStep N
+  std::vector<std::pair<double, double>> curve;  ///< (Fe N, elevation mm) from 0: every increment (incl. each curveStep N)
   std::vector<double> nodalStress, nodalStrain;  ///< volume-averaged to nodes
   double maxStress = 0, maxStrain = 0;           ///< away from the joints and load patches
   Location maxStressAt, maxStrainAt;
