@@ -162,18 +162,27 @@ TEST(MgaSmooth, QuadGrid) {
   const TriMesh t = grid(10, 0.3, 5, &quads);
   const auto mp = toMesh(t, true);
   const CMeshO& m = *mp;
-  sm::Options o = fastOptions();
-  o.kind = pectus::ElementKind::Quads;
-  const auto r = sm::smoothMesh(m, o);
-  std::printf("quad grid: beta mean %.4f -> %.4f, min %.4f -> %.4f, %zu moved, %.2f s\n", r.before.mean, r.after.mean,
-              r.before.min, r.after.min, r.nodesMoved, r.seconds);
-  EXPECT_EQ(r.quads, 81u);
-  EXPECT_EQ(r.elements, 81u);
-  EXPECT_GT(r.after.mean, r.before.mean + 0.02);
-  EXPECT_GT(r.after.min, r.before.min + 0.05);
-  // both triangles of a quad carry its beta
-  for (std::size_t f = 0; f + 1 < r.perFace.size(); f += 2) EXPECT_EQ(r.perFace[f], r.perFace[f + 1]);
-  for (const auto& p : r.positions) EXPECT_LT(std::abs(p.z()), 1e-9);
+  for (auto method : {sm::Method::MicroGA, sm::Method::ConjugateGradient}) {
+    sm::Options o = fastOptions();
+    o.kind = pectus::ElementKind::Quads;
+    o.method = method;
+    const auto r = sm::smoothMesh(m, o);
+    std::printf("quad grid (%s): beta mean %.4f -> %.4f, min %.4f -> %.4f, %zu moved, %.2f s\n",
+                method == sm::Method::MicroGA ? "MGA" : "CG", r.before.mean, r.after.mean, r.before.min, r.after.min,
+                r.nodesMoved, r.seconds);
+    EXPECT_EQ(r.quads, 81u);
+    EXPECT_EQ(r.elements, 81u);
+    EXPECT_GT(r.after.mean, 0.99);  // the ideal is a square grid (beta 1)
+    EXPECT_GT(r.after.min, r.before.min + 0.2);
+    // both triangles of a quad carry its beta
+    for (std::size_t f = 0; f + 1 < r.perFace.size(); f += 2) EXPECT_EQ(r.perFace[f], r.perFace[f + 1]);
+    for (int j = 0; j < 10; ++j)
+      for (int i = 0; i < 10; ++i) {
+        const auto v = std::size_t(j * 10 + i);
+        EXPECT_LT(std::abs(r.positions[v].z()), 1e-9);
+        if (i == 0 || j == 0 || i == 9 || j == 9) EXPECT_EQ(r.positions[v], t.V[v]);
+      }
+  }
 }
 
 TEST(MgaSmooth, SameResultForOneAndTwoThreads) {
@@ -241,6 +250,107 @@ TEST(MgaSmooth, NeverFoldsAVeryBadMesh) {
   EXPECT_GE(r.after.min, r.before.min);
 }
 
+double maxSaddleDeviation(const std::vector<Vec3>& P) {
+  double dev = 0;
+  for (const auto& p : P) dev = std::max(dev, std::abs(p.z() - saddle(p.x(), p.y())));
+  return dev;
+}
+
+TEST(GradientSmooth, SaddleTrianglesVersusMga) {
+  // the thesis' Table 4-1 comparison on one input: both improve, CG needs fewer fitness evaluations
+  const auto mp = toMesh(saddleMesh(3));
+  const CMeshO& m = *mp;
+  sm::Options o;
+  o.maxSweeps = 15;
+  o.seed = 11;
+  o.method = sm::Method::ConjugateGradient;
+  const auto cg = sm::smoothMesh(m, o);
+  o.method = sm::Method::MicroGA;
+  o.maxSweeps = 3;
+  const auto ga = sm::smoothMesh(m, o);
+  const double dev = maxSaddleDeviation(cg.positions);
+  std::printf("saddle CG: alpha mean %.4f -> %.4f, min %.4f -> %.4f, %zu moved, %d sweeps, %zu evaluations "
+              "(MGA, 3 sweeps: %zu), max |z - saddle| %.5f, %.2f s\n",
+              cg.before.mean, cg.after.mean, cg.before.min, cg.after.min, cg.nodesMoved, cg.sweeps, cg.evaluations,
+              ga.evaluations, dev, cg.seconds);
+  EXPECT_GT(cg.after.mean, 0.84);
+  EXPECT_GT(cg.after.min, cg.before.min);
+  EXPECT_GT(cg.after.min, 0.2);
+  EXPECT_LT(dev, 0.01);
+  EXPECT_GT(cg.nodesMoved, 400u);
+  EXPECT_LT(cg.evaluations * 3, ga.evaluations * std::size_t(cg.sweeps));  // per sweep, under a third
+}
+
+TEST(GradientSmooth, NeverFoldsAndIsThreadIndependent) {
+  const TriMesh t = grid(9, 0.4, 13);
+  const auto mp = toMesh(t);
+  const CMeshO& m = *mp;
+  sm::Options o = fastOptions();
+  o.method = sm::Method::ConjugateGradient;
+  omp_set_num_threads(1);
+  const auto r1 = sm::smoothMesh(m, o);
+  omp_set_num_threads(2);
+  const auto r = sm::smoothMesh(m, o);
+  for (const auto& f : t.F) {
+    const Vec3 a = r.positions[std::size_t(f[0])], b = r.positions[std::size_t(f[1])], c = r.positions[std::size_t(f[2])];
+    EXPECT_GT((b - a).cross(c - a).z(), 0);
+  }
+  EXPECT_GT(r.after.min, r.before.min + 0.1);
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < r.positions.size(); ++i) differ += r.positions[i] != r1.positions[i];
+  EXPECT_EQ(differ, 0u);
+}
+
+/// a cone (apex height `height` over a ring of 9 nodes at radius 1, jittered in angle) on a flat
+/// annulus out to radius 2 (boundary): the apex is the only node with a wide normal cone
+TriMesh cone(double height) {
+  TriMesh t;
+  t.V.emplace_back(0.1, -0.05, height);
+  const int n = 9;
+  for (int ring = 1; ring <= 2; ++ring)
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * M_PI * (i + (ring == 1 ? 0.25 * std::sin(3.0 * i) : 0.5)) / n;
+      t.V.emplace_back(ring * std::cos(a), ring * std::sin(a), 0);
+    }
+  for (int i = 0; i < n; ++i) {
+    const int a = 1 + i, b = 1 + (i + 1) % n, A = 1 + n + i, B = 1 + n + (i + 1) % n;
+    t.F.push_back({0, a, b});
+    t.F.push_back({a, A, b});
+    t.F.push_back({b, A, B});
+  }
+  return t;
+}
+
+TEST(MgaSmooth, SingularNodesStay) {
+  const TriMesh t = cone(0.6);  // faces around the apex tilt by about 31 degrees: normal cone about 62
+  const auto mp = toMesh(t);
+  const CMeshO& m = *mp;
+  const auto in = positions(m);
+  for (auto method : {sm::Method::MicroGA, sm::Method::ConjugateGradient}) {
+    sm::Options o = fastOptions();
+    o.method = method;
+    o.singularAngleDeg = 50;
+    const auto r = sm::smoothMesh(m, o);
+    EXPECT_EQ(r.singularNodes, 1u);
+    EXPECT_EQ(r.featureNodes, 0u);
+    EXPECT_EQ(r.boundaryNodes, 9u);
+    EXPECT_EQ(r.freeNodes, 9u);
+    EXPECT_EQ(r.positions[0], in[0]);
+    // with the singular test off the apex is free and moves
+    o.singularAngleDeg = 180;
+    const auto r2 = sm::smoothMesh(m, o);
+    EXPECT_EQ(r2.singularNodes, 0u);
+    EXPECT_EQ(r2.freeNodes, 10u);
+    EXPECT_GT((r2.positions[0] - in[0]).norm(), 1e-3);
+    // the default (90 degrees) keeps this gentle cone free, and fixes a steep one (normal cone ~ 127)
+    EXPECT_EQ(sm::smoothMesh(m, fastOptions()).singularNodes, 0u);
+    const auto steep = toMesh(cone(2.0));
+    sm::Options d = fastOptions();
+    d.featureAngleDeg = 180;
+    EXPECT_EQ(sm::smoothMesh(*steep, d).singularNodes, 1u);
+  }
+}
+
 TEST(MgaSmooth, BadInput) {
   const auto mp = toMesh(grid(5, 0.2, 1));
   const CMeshO& m = *mp;
@@ -253,6 +363,22 @@ TEST(MgaSmooth, BadInput) {
   o = sm::Options();
   o.maxSweeps = 0;
   EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o = sm::Options();
+  o.singularAngleDeg = 0;
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o.singularAngleDeg = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o = sm::Options();
+  o.method = sm::Method::ConjugateGradient;
+  o.cgIterations = 0;
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o.cgIterations = 10;
+  o.featureAngleDeg = -1;
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o = sm::Options();
+  o.method = sm::Method::ConjugateGradient;
+  o.tolerance = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
 
   // no free node: a single triangle (all boundary)
   TriMesh one;
@@ -264,9 +390,16 @@ TEST(MgaSmooth, BadInput) {
   } catch (const pectus::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no free node"), std::string::npos) << e.what();
   }
-  // every node fixed by the selection
+  // every node fixed by the selection (both methods)
   std::vector<char> all(m.vert.size(), 1);
   EXPECT_THROW(sm::smoothMesh(m, sm::Options(), all), pectus::InputError);
+  sm::Options cgo;
+  cgo.method = sm::Method::ConjugateGradient;
+  EXPECT_THROW(sm::smoothMesh(m, cgo, all), pectus::InputError);
+  // non-manifold and NaN input with the gradient method
+  TriMesh nan2 = grid(5, 0.2, 1);
+  nan2.V[7].y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(sm::smoothMesh(*toMesh(nan2), cgo), pectus::InputError);
 
   // NaN coordinate
   TriMesh nan = grid(5, 0.2, 1);
