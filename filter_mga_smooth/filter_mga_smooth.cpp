@@ -63,7 +63,7 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
       "r1 in [0,1], r2 in [0,0.5]) is mapped onto the C1 (Goodman-Said) surface of the input mesh, so the "
       "nodes stay on the original surface. Fitness: the sum of alpha (triangles, eq. 3-21) or Knupp's beta "
       "(quads, eq. 3-24) over the node's elements. A move never inverts or folds an element, never lowers "
-      "the node's sum, and never lets the node's worst element drop below min(its value, 0.5). "
+      "the node's sum, and never lets the node's worst element drop below min(its value, the guard, 0.35 by default). "
       "The best position over the adjacent elements is kept; sweeps repeat until the mean quality improves "
       "by less than the tolerance.<br>"
       FIXED_NODES_INFO "Nodes of one colour of a greedy colouring share no element and are smoothed in parallel, with "
@@ -87,7 +87,7 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
       "tangent plane of the surface at the node, in units of the node's mean edge length), with numerical "
       "gradients and a line search of halving steps from half an edge length plus one parabolic step; every "
       "trial point is projected onto the C1 surface and a step is taken only if it raises the fitness, so "
-      "no element inverts or folds and the node's worst element never drops below min(its value, 0.5). "
+      "no element inverts or folds and the node's worst element never drops below min(its value, the guard). "
       "Faster than MGA, a local search.<br>" FIXED_NODES_INFO
       "<br>Per-face quality, colours and the Log as for MGA smoothing; bad input is refused with a message.";
   g.cls = s.cls;
@@ -137,6 +137,14 @@ void FilterMgaSmoothPlugin::initParameters(int id, MeshDocument&, RichParameterL
                            "Conjugate gradient iterations (each: a numerical gradient and a line search) per node "
                            "and sweep. In [1, 10000]."));
     }
+    par.addParam(RichFloat("worstGuard", float(pectus::smooth::kMinQualityGuard), "Worst-element guard",
+                           "A move is refused if the worst of the node's elements would drop below min(its current "
+                           "value, this), so the sum cannot buy a better mean with one very poor element. In [0, 1]; "
+                           "0 = the thesis' plain sum of qualities."));
+    par.addParam(RichFloat("minPassBelow", 0.0f, "Final worst-element pass below",
+                           "After the sweeps, up to three more sweeps over the nodes whose worst element is below "
+                           "this, maximising that worst element (up to this value, then the sum). In [0, 1]; 0 = off "
+                           "(the thesis' algorithm)."));
     par.addParam(RichFloat("featureAngle", 60.0f, "Feature angle (degrees)",
                            "An edge whose dihedral angle (angle between the normals of its two faces) exceeds "
                            "this is sharp, and every node on a sharp edge stays fixed so creases are kept. "
@@ -214,6 +222,8 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
   } else {
     o.cgIterations = ctx.intIn("cgIterations", 1, 10000);
   }
+  o.worstGuard = ctx.floatIn("worstGuard", 0, 1);
+  o.minPassBelow = ctx.floatIn("minPassBelow", 0, 1);
   o.featureAngleDeg = ctx.floatIn("featureAngle", 0, 180, true, false);
   o.singularAngleDeg = ctx.floatIn("singularAngle", 0, 180, true, false);
   const int selMode = ctx.enumIn("selectionMode", 3);
@@ -267,7 +277,8 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
           std::to_string(r.elements) + " elements; worst " + q + " " + fmt(r.before.min) + " -> " + fmt(r.after.min) +
           ", mean " + q + " " + fmt(r.before.mean) + " -> " + fmt(r.after.mean) + "; nodes moved " +
           std::to_string(r.nodesMoved) + " of " + std::to_string(r.freeNodes) + " free; sweeps " +
-          std::to_string(r.sweeps) + "; time " + fmt(r.seconds, 2) + " s");
+          std::to_string(r.sweeps) +
+          (r.minPassSweeps ? " + " + std::to_string(r.minPassSweeps) + " worst-element" : std::string()) + "; time " + fmt(r.seconds, 2) + " s");
   ctx.log(what + ": fixed nodes: " + std::to_string(r.boundaryNodes) + " boundary, " +
           std::to_string(r.featureNodes) + " feature, " + std::to_string(r.singularNodes) + " singular, " +
           std::to_string(r.userFixedNodes) + " by the selection; " + std::to_string(r.colours) + " colours; " +

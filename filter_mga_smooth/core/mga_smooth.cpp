@@ -124,9 +124,12 @@ struct Mesh {
   std::vector<std::vector<int>> vE;     // node -> elements
 };
 
-/// fitness of node n at position x with surface normal nrm: sum of element qualities if none is
-/// folded against nrm, else below any valid value
-double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double guard, double* minQ = nullptr) {
+/// fitness of node n at position x with surface normal nrm: sum of element qualities (cap > 0, the final
+/// pass: the worst element's quality up to the cap, plus kCapSumWeight times the sum) if none is folded
+/// against nrm and the worst is not below the guard, else below any valid value
+constexpr double kCapSumWeight = 0.01;
+double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double guard, double cap = 0,
+                 double* minQ = nullptr) {
   double sum = 0, lo = 1e300;
   int invalid = 0;
   Vec3 p[4];
@@ -148,7 +151,8 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
   }
   if (minQ) *minQ = lo;
   if (invalid) return -100.0 * invalid + 0.01 * sum;
-  return lo < guard ? -50.0 + 0.01 * sum : sum;
+  if (lo < guard) return -50.0 + 0.01 * sum;
+  return cap > 0 ? std::min(lo, cap) + kCapSumWeight * sum : sum;
 }
 
 QualityStats stats(const Mesh& M) { return summarizeQuality(elementQualities(M.E, M.X), 10); }
@@ -161,6 +165,7 @@ struct NodeSearch {
   Vec3 x0, n0;       ///< position and surface normal now
   Loc l0;
   double guard;      ///< the node's worst element may not drop below this
+  double cap;        ///< > 0: final pass fitness (the worst element up to cap, then the sum)
   double startFit;   ///< fitness at x0
   double bestFit;
   Vec3 bestX;
@@ -173,7 +178,7 @@ struct NodeSearch {
     Vec3 N;
     L = proj.project(q, l0, P, N);
     ++evaluations;
-    return fitnessAt(M, n, P, N, guard);
+    return fitnessAt(M, n, P, N, guard, cap);
   }
   void offer(double fit, const Vec3& P, const Loc& L, const Vec3& q) {
     if (fit > bestFit) {
@@ -340,6 +345,10 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   if (!(opt.tolerance >= 0)) throw InputError("tolerance must not be negative");
   if (!(opt.featureAngleDeg > 0 && opt.featureAngleDeg <= 180))
     throw InputError("feature angle must be in (0, 180] degrees");
+  if (!(opt.worstGuard >= 0 && opt.worstGuard <= 1)) throw InputError("worst-element guard must be in [0, 1]");
+  if (!(opt.minPassBelow >= 0 && opt.minPassBelow <= 1))
+    throw InputError("final worst-element pass threshold must be in [0, 1]");
+  if (opt.minPassSweeps < 0) throw InputError("final worst-element pass sweeps must not be negative");
   if (!(opt.singularAngleDeg > 0 && opt.singularAngleDeg <= 180))
     throw InputError("singular angle must be in (0, 180] degrees");
   if (opt.method == Method::ConjugateGradient && (opt.cgIterations < 1 || opt.cgIterations > 10000))
@@ -487,8 +496,11 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   double mean = res.before.mean;
   std::vector<double> projDist(nv, 0.0);
   std::vector<std::size_t> evaluations(nv, 0);
-  for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
+  // one sweep over the free nodes; maxMin: only nodes whose worst element is below opt.minPassBelow,
+  // maximising that worst element
+  auto sweepOnce = [&](int sweep, bool maxMin) {
     const std::uint64_t sweepSeed = mga::itemSeed(opt.seed, std::uint64_t(sweep));
+    const double guardLevel = opt.worstGuard;
     for (const auto& cls : classes) {
 #pragma omp parallel for schedule(dynamic, 8)
       for (int ci = 0; ci < int(cls.size()); ++ci) {
@@ -497,33 +509,46 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         const Loc l0 = loc[std::size_t(n)];
         const Vec3 n0 = S.at(l0.face, Vec3(1 - l0.s - l0.t, l0.s, l0.t)).normal;
         double curMin = 0;
-        double fit0 = fitnessAt(M, n, x0, n0, -1.0, &curMin);
-        // the node's worst element may not drop below min(its current value, kMinQualityGuard)
-        const double guard = std::min(curMin, kMinQualityGuard);
-        if (fit0 >= 0) fit0 = fitnessAt(M, n, x0, n0, guard);
-        NodeSearch ns{M, proj, n, x0, n0, l0, guard, fit0, fit0, x0, l0};
+        const double cap = maxMin ? opt.minPassBelow : 0.0;
+        double fit0 = fitnessAt(M, n, x0, n0, -1.0, cap, &curMin);
+        if (maxMin && !(curMin < opt.minPassBelow)) continue;
+        // the node's worst element may not drop below min(its current value, the guard level)
+        const double guard = std::min(curMin, guardLevel);
+        if (fit0 >= 0) fit0 = fitnessAt(M, n, x0, n0, guard, cap);
+        NodeSearch ns{M, proj, n, x0, n0, l0, guard, cap, fit0, fit0, x0, l0};
         if (opt.method == Method::MicroGA)
           searchMga(ns, mo, mga::itemSeed(sweepSeed, std::uint64_t(toM[std::size_t(n)])));
         else
           searchGradient(ns, opt.cgIterations);
-        const Vec3 bestX = ns.bestX;
-        const Loc bestLoc = ns.bestLoc;
-        const double bestDist = ns.bestDist;
         evaluations[std::size_t(n)] += ns.evaluations;
         // the node moves after its own search: neighbours of the same colour do not see it, and
         // no node of this colour reads it (they share no element)
-        M.X[std::size_t(n)] = bestX;
-        loc[std::size_t(n)] = bestLoc;
-        projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], bestDist);
+        M.X[std::size_t(n)] = ns.bestX;
+        loc[std::size_t(n)] = ns.bestLoc;
+        projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], ns.bestDist);
       }
     }
+  };
+  bool stopped = false;
+  for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
+    sweepOnce(sweep, false);
     res.sweeps = sweep + 1;
     const double newMean = stats(M).mean;
     const double gain = newMean - mean;
     mean = newMean;
-    if (opt.progress && !opt.progress(sweep + 1, mean)) break;
+    if (opt.progress && !opt.progress(sweep + 1, mean)) {
+      stopped = true;
+      break;
+    }
     if (gain < opt.tolerance) break;
   }
+  if (opt.minPassBelow > 0 && !stopped)
+    for (int k = 0; k < opt.minPassSweeps; ++k) {
+      const double before = stats(M).min;
+      sweepOnce(opt.maxSweeps + k, true);
+      ++res.minPassSweeps;
+      if (stats(M).min <= before) break;
+    }
 
   res.after = stats(M);
   res.evaluations = std::accumulate(evaluations.begin(), evaluations.end(), std::size_t(0));

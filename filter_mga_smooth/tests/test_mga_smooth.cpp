@@ -151,9 +151,11 @@ TEST(MgaSmooth, SaddleTriangles) {
               "%d sweeps, %d colours, max |z - saddle| %.5f, %.2f s\n",
               t.V.size(), t.F.size(), r.before.mean, r.after.mean, r.before.min, r.after.min, r.nodesMoved, r.sweeps,
               r.colours, dev, r.seconds);
-  EXPECT_GT(r.after.mean, 0.85);
+  EXPECT_GT(r.after.mean, 0.865);  // measured 0.868 (seed 11, 15 sweeps, guard 0.35)
   EXPECT_GT(r.after.min, r.before.min);
-  EXPECT_GT(r.after.min, 0.25);  // measured 0.30 (seed 11, 15 sweeps); the issue target 0.40 is not reached yet
+  // measured 0.3133: the bound of this mesh, two corner triangles whose three nodes are boundary nodes
+  // (the issue's 0.40 cannot be reached while the boundary stays fixed; bench/saddle_bound.py)
+  EXPECT_GT(r.after.min, 0.313);
   EXPECT_LT(dev, 0.01);
 }
 
@@ -279,6 +281,34 @@ TEST(GradientSmooth, SaddleTrianglesVersusMga) {
   EXPECT_LT(dev, 0.01);
   EXPECT_GT(cg.nodesMoved, 400u);
   EXPECT_LT(cg.evaluations * 3, ga.evaluations * std::size_t(cg.sweeps));  // per sweep, under a third
+}
+
+TEST(GradientSmooth, GuardAndFinalWorstElementPass) {
+  // the guard trades mean for minimum; the final pass lifts the minimum to the bound of this mesh, the
+  // triangles whose three nodes are all boundary nodes (alpha 0.3133; printed by bench/saddle_bound.py)
+  const auto mp = toMesh(saddleMesh(3));
+  const CMeshO& m = *mp;
+  sm::Options o;
+  o.method = sm::Method::ConjugateGradient;
+  o.maxSweeps = 30;
+  o.worstGuard = 0;  // the thesis' plain sum
+  const auto plain = sm::smoothMesh(m, o);
+  o.worstGuard = 0.3;
+  o.minPassBelow = 0.32;
+  const auto pass = sm::smoothMesh(m, o);
+  std::printf("saddle CG: plain sum mean %.4f min %.4f; guard 0.3 + final pass below 0.32: mean %.4f min %.4f "
+              "(%d + %d sweeps)\n", plain.after.mean, plain.after.min, pass.after.mean, pass.after.min, pass.sweeps,
+              pass.minPassSweeps);
+  EXPECT_GT(plain.after.mean, 0.875);
+  EXPECT_LT(plain.after.min, 0.1);  // the plain sum sacrifices single elements
+  EXPECT_GT(pass.minPassSweeps, 0);
+  EXPECT_GT(pass.after.min, 0.313);
+  EXPECT_GT(pass.after.mean, 0.865);
+  o.minPassBelow = 1.5;
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o.minPassBelow = 0;
+  o.worstGuard = -0.1;
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
 }
 
 TEST(GradientSmooth, NeverFoldsAndIsThreadIndependent) {

@@ -76,6 +76,18 @@ for ex in EXAMPLES:
     results[ex] = W
     print(log)
 
+# 1b. the final worst-element pass: Log says so, the minimum does not drop below the default run's
+out3 = os.path.join(d, "tri_pass.ply")
+r = run([inp], script("triPass", "Gradient", maxSweeps=6, minPassBelow=0.95), [(out3, "vq sa")])
+log = "\n".join(r.log)
+check(r.rc == 0 and re.search(r"sweeps \d+ \+ [1-3] worst-element; time", log) is not None,
+      "final worst-element pass runs and is logged", log)
+if r.rc == 0:
+    W3 = np.array(read_ply(out3)["V"], float)
+    a3 = np.array([alpha(*(W3[i] for i in f)) for f in F])
+    a2 = np.array([alpha(*(results["Gradient"][i] for i in f)) for f in F])
+    check(a3.min() >= a2.min() - 1e-6, "final pass: min alpha not below the run without it", f"{a2.min():.4f} -> {a3.min():.4f}")
+
 # 2. the same seed gives the same file; another seed another result
 out2 = os.path.join(d, "tri_s2.ply")
 r = run([inp], script("triMGA", "MGA", maxSweeps=6, seed=3), [(out2, "vq sa")])
@@ -108,6 +120,8 @@ for ex in EXAMPLES:
            {"CG iterations 0": (inp, script("b2" + ex, ex, cgIterations=0), "cgIterations"),
             "NaN tolerance": (inp, script("b3" + ex, ex, tolerance="nan"), "tolerance")}),
         "singular angle 0": (inp, script("b7" + ex, ex, singularAngle=0), "singularAngle"),
+        "guard 2": (inp, script("b8" + ex, ex, worstGuard=2), "worstGuard"),
+        "final pass below -1": (inp, script("b9" + ex, ex, minPassBelow=-1), "minPassBelow"),
         "no free node": (one, script("b4" + ex, ex), "no free node"),
         "non-manifold edge": (nm, script("b5" + ex, ex), "manifold"),
         "smooth only selected, nothing selected": (inp, script("b6" + ex, ex, selectionMode=1), "no selected vertex"),
