@@ -256,18 +256,16 @@ def main():
 
     print(f"load average before/after the run: {load0[0]:.1f} / {os.getloadavg()[0]:.1f} ({os.cpu_count()} cores; "
           "other jobs on the machine inflate the times)")
-    print(f"{'input':26s} {'method':46s} {'q min':>7s} {'q mean':>7s} {'max dev':>9s} {'time s':>8s}")
+    print(f"{'method':48s} {'q min':>7s} {'q mean':>7s} {'max dev':>9s} {'time s':>8s}")
     last = None
     for r in rows:
-        label = r[0] if r[0] != last else ""
         if r[0] != last:
-            kind = "beta" if "quads" in r[0] else "alpha"
-            label = f"{r[0]} ({r[6]} nodes, {kind})"
+            print(f"{r[0]} ({r[6]} nodes, {r[7]} {'quads, beta' if 'quads' in r[0] else 'triangles, alpha'})")
         last = r[0]
         if r[2] is None:
-            print(f"{label:26s} {r[1]:46s} failed: {r[8]}")
+            print(f"  {r[1]:46s} failed: {r[8]}")
         else:
-            print(f"{label:26s} {r[1]:46s} {r[2]:7.4f} {r[3]:7.4f} {r[4]:9.2e} {r[5]:8.2f}")
+            print(f"  {r[1]:46s} {r[2]:7.4f} {r[3]:7.4f} {r[4]:9.2e} {r[5]:8.2f}")
     print("max dev: saddle rows |z - saddle(x, y)|; femur/bunny rows distance to the input surface / bbox diagonal")
     for r in rows:
         if r[1].startswith("ours: MGA, defaults") and r[5]:
