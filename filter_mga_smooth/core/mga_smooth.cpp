@@ -304,9 +304,8 @@ void searchGradient(NodeSearch& ns, int iterations) {
       const double a0 = bestA * 0.5, a2 = std::min(bestA * 2, amax);
       if (a2 > bestA) {
         const double f0 = f(p + a0 * d), f2 = f(p + a2 * d);
-        const double den = (f0 - 2 * bestF + f2);
-        if (den < 0) {
-          // vertex of the parabola through equally spaced points in log-steps is approximated linearly
+        // concave through (a0, f0), (a, f), (a2, f2) (second divided difference < 0): try its vertex
+        if ((f2 - bestF) / (a2 - bestA) - (bestF - f0) / (bestA - a0) < 0) {
           const double num = (bestA - a0) * (bestA - a0) * (bestF - f2) - (bestA - a2) * (bestA - a2) * (bestF - f0);
           const double dd = (bestA - a0) * (bestF - f2) - (bestA - a2) * (bestF - f0);
           if (dd != 0) {
