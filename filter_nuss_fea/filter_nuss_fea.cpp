@@ -2,9 +2,15 @@
 
 #include <chrono>
 
+#include <QFileInfo>
+#include <vcg/complex/algorithms/update/color.h>
+
 #include "pectus/errors.h"
 #include "pectus/labels.h"
 #include "haller.h"
+#include "nuss_analysis.h"
+#include "pectus/fe/io.h"
+#include "plot.h"
 #include "ribcage.h"
 
 using pectus::ml::FilterContext;
@@ -35,15 +41,43 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
   s.needsCurrentMesh = false;
   s.postCondition = MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY;
   addFilter(this, s);
+
+  pectus::ml::FilterSpec n;
+  n.id = FP_NUSS_FEA;
+  n.name = "Nuss Procedure FE Analysis";
+  n.info =
+      "Finite element analysis of a Nuss pectus excavatum repair on the current layer (thesis 6.1, 6.2, 6.4.1): a "
+      "closed rib cage surface whose faces carry tissue and part labels (as 'Create Pectus Excavatum Rib Cage' writes "
+      "them) plus a landmark layer.<br>"
+      "<b>Model.</b> TetGen tetrahedralises the surface (quality and maximum volume below); each tet takes the tissue "
+      "of the nearest surface face. Bone and sternum E = 11.5 GPa, pectus costal cartilage E = 12.25 MPa (thesis). "
+      "<b>Boundary conditions</b> (Fig. 6-4): every node within the joint radius of a costovertebral joint landmark "
+      "is fixed. <b>Loads</b> (Fig. 6-3): the elevating force Fe, anterior, spread over the sternum surface nodes "
+      "near the lower sternum end (landmark 500); four rib support forces Fsr = Fe/4, posterior, on the ribs above "
+      "and below the bar's exits in the chosen intercostal space (landmarks 600+10*side+s): Fe = 2Fs = 4Fsr.<br>"
+      "<b>Solve.</b> Large displacement (total Lagrangian, St Venant-Kirchhoff: what ANSYS' large-displacement "
+      "static and CalculiX NLGEOM do with a linear material; Newton with load increments every curve step) or small "
+      "strain; linear TET4 (the thesis' SOLID185) or quadratic TET10 (no locking); CHOLMOD sparse Cholesky. With "
+      "'Calibrate', Fe is searched so the sternum end rises by the target elevation (Table 6-1: 34.0-44.7 mm).<br>"
+      "<b>Results.</b> A new layer 'nuss fe result' (the deformed surface; vertex quality and colour = von Mises "
+      "stress in MPa or equivalent strain), a layer 'nuss landmarks after' (landmarks moved with the cage), a Log "
+      "summary like Table 6-1 and, with a result file base, BASE.vtu (ParaView), BASE.inp (CalculiX deck of the same "
+      "model), BASE_force_displacement.csv/.png (Fig. 6-14) and BASE_rib_strain.csv (strain along a rib, Fig. 6-18).";
+  n.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Measure | MeshFilterInterface::Remeshing);
+  n.arity = MeshFilterInterface::VARIABLE;
+  n.postCondition = MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR;
+  addFilter(this, n);
 }
 
-void FilterNussFeaPlugin::initParameters(int id, MeshDocument&, RichParameterList& par) {
+void FilterNussFeaPlugin::initParameters(int id, MeshDocument& md, RichParameterList& par) {
   if (id == FP_CREATE_RIBCAGE) initCreateRibCage(par);
+  if (id == FP_NUSS_FEA) initNussFea(md, par);
 }
 
 void FilterNussFeaPlugin::run(int id, FilterContext& ctx) {
   switch (id) {
     case FP_CREATE_RIBCAGE: runCreateRibCage(ctx); break;
+    case FP_NUSS_FEA: runNussFea(ctx); break;
     default: throw std::logic_error("unknown filter id");
   }
 }
@@ -126,6 +160,189 @@ void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
           " mm; dimensions: chest width " + fmt(d.chestWidth) + " depth " + fmt(d.chestDepth) + " spine " +
           fmt(d.spineHeight) + " sternum " + fmt(d.sternumLength) + " mm; " + std::to_string(lms.size()) +
           " landmarks; " + fmt(secs, 3) + " s");
+}
+
+
+namespace {
+QStringList orders() { return QStringList() << "Quadratic TET10 (no locking)" << "Linear TET4 (thesis, ANSYS SOLID185)"; }
+QStringList analyses() { return QStringList() << "Large displacement (nonlinear)" << "Small strain (linear)"; }
+QStringList modes() { return QStringList() << "Calibrate Fe to the target elevation" << "Given elevating force"; }
+QStringList fields() { return QStringList() << "von Mises stress (MPa)" << "Equivalent strain"; }
+QStringList sides() { return QStringList() << "Right" << "Left"; }
+Eigen::Vector3d toE(const Point3m& p) { return Eigen::Vector3d(p[0], p[1], p[2]); }
+}  // namespace
+
+void FilterNussFeaPlugin::initNussFea(MeshDocument& md, RichParameterList& par) {
+  par.addParam(RichMesh("landmarkLayer", pectus::ml::defaultLandmarkLayer(md), &md, "Landmark layer",
+                        "Point layer of landmarks (vertex quality = code, labels.h) as the rib cage generator writes it: "
+                        "costovertebral joints 100*side+rib (fixed), 500 lower sternum end (Fe), bar exits "
+                        "600+10*side+s (Fsr). By default the layer whose label ends in 'landmarks'."));
+  par.addParam(RichEnum("mode", 0, modes(), "Force",
+                        "Calibrate: search Fe so the sternum end rises by the target elevation (secant/bracketing on the "
+                        "force-displacement curve, to the tolerance). Given: apply the elevating force below."));
+  par.addParam(RichFloat("targetElevation", 44.7f, "Target elevation (mm)",
+                         "Measured rise of the lower sternum end (CT before, X-ray after). Thesis Table 6-1: 34.0-44.7 mm "
+                         "(patient 1: 44.7 mm)."));
+  par.addParam(RichFloat("force", 140.0f, "Elevating force Fe (N)",
+                         "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N."));
+  par.addParam(RichFloat("maxForce", 1000.0f, "Maximum force (N)",
+                         "Calibration gives up (with a message) if this force does not reach the target."));
+  par.addParam(RichFloat("tolerance", 0.1f, "Calibration tolerance (mm)", "|simulated - target elevation| allowed."));
+  par.addParam(RichEnum("analysis", 0, analyses(), "Analysis",
+                        "Large displacement: total Lagrangian St Venant-Kirchhoff, Newton-Raphson with load increments "
+                        "(the thesis used ANSYS' large-displacement static solver). Small strain: linear elasticity."));
+  par.addParam(RichEnum("order", 0, orders(), "Element",
+                        "TET10: quadratic tetrahedra (accurate on thin ribs). TET4: linear, as the thesis' SOLID185; "
+                        "stiffer (locking) on a coarse mesh, so the calibrated force is higher."));
+  par.addParam(RichFloat("tetQuality", 2.0f, "Tet quality (radius-edge ratio)",
+                         "TetGen -q bound, >= 1.2 (smaller: better tets, more of them); 0 = no refinement."));
+  par.addParam(RichFloat("maxTetVolume", 0.0f, "Max tet volume (mm^3)", "TetGen -a bound; 0 = no limit."));
+  par.addParam(RichFloat("nuBone", 0.3f, "Poisson ratio, bone", "Ribs and sternum (cortical bone literature value 0.3)."));
+  par.addParam(RichFloat("nuCartilage", 0.4f, "Poisson ratio, cartilage",
+                         "Costal cartilage (hydrated, nearly incompressible tissue; literature 0.4-0.45)."));
+  par.addParam(RichInt("intercostalSpace", 4, "Bar intercostal space",
+                       "The bar exits between ribs s and s+1 (landmarks 600+10*side+s; the generator writes s = 4, 5)."));
+  par.addParam(RichFloat("jointRadius", 6.0f, "Joint radius (mm)",
+                         "Nodes within this distance of a costovertebral joint landmark are fixed (head and tubercle)."));
+  par.addParam(RichFloat("sternumLoadRadius", 8.0f, "Fe patch radius (mm)",
+                         "Fe is spread evenly over the sternum surface nodes within this distance of the lower sternum end."));
+  par.addParam(RichFloat("ribSupportRadius", 6.0f, "Fsr patch radius (mm)",
+                         "Each Fsr is spread over the rib's surface nodes within this distance of the rib point nearest "
+                         "to the bar exit."));
+  par.addParam(RichBool("usePoints", false, "Place Fe and the exits at the points below",
+                        "Instead of the landmarks 500 and 600+10*side+s (the joints still come from the landmarks)."));
+  par.addParam(RichPoint3f("sternumPoint", Point3m(0, 0, 0), "Lower sternum end (Fe)", "Used with the option above (mm)."));
+  par.addParam(RichPoint3f("exitRight", Point3m(0, 0, 0), "Right bar exit", "Used with the option above (mm)."));
+  par.addParam(RichPoint3f("exitLeft", Point3m(0, 0, 0), "Left bar exit", "Used with the option above (mm)."));
+  par.addParam(RichEnum("field", 0, fields(), "Colour by",
+                        "Per-vertex quality and colour of the result layer: nodal von Mises stress (MPa) or equivalent "
+                        "strain (ANSYS EPEL,EQV form; Green-Lagrange for large displacement)."));
+  par.addParam(RichEnum("pathSide", 0, sides(), "Strain path: side", "Side of the rib for the strain-path CSV (Fig. 6-18)."));
+  par.addParam(RichInt("pathRib", 5, "Strain path: rib", "Rib (and its costal cartilage) for the strain-path CSV, 1-10."));
+  par.addParam(RichSaveFile("resultBase", "", ".vtu", "Result files (base name)",
+                            "If set: BASE.vtu, BASE.inp, BASE_force_displacement.csv/.png, BASE_rib_strain.csv. "
+                            "Empty: no files."));
+}
+
+void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
+  namespace nuss = pectus::nuss;
+  MeshModel& cur = ctx.current();
+  MeshModel& lmLayer = ctx.mesh("landmarkLayer");
+  if (&lmLayer == &cur)
+    throw pectus::InputError("The landmark layer is the cage layer itself: pick the point layer of landmarks (e.g. "
+                             "'ribcage landmarks') and make the labelled cage the current layer.");
+  const auto lms = pectus::readLandmarks(lmLayer.cm);
+  if (lms.empty())
+    throw pectus::InputError("The landmark layer '" + lmLayer.label().toStdString() + "' has no vertices.");
+
+  nuss::Options o;
+  const bool calibrate = ctx.enumIn("mode", 2) == 0;
+  o.targetElevation = calibrate ? ctx.floatIn("targetElevation", 0, 300, true) : 0.0;
+  o.force = ctx.floatIn("force", 0, 1e5, true);
+  o.maxForce = ctx.floatIn("maxForce", 0, 1e6, true);
+  o.tolerance = ctx.floatIn("tolerance", 0, 50, true);
+  o.nonlinear = ctx.enumIn("analysis", 2) == 0;
+  o.mesh.order = ctx.enumIn("order", 2) == 0 ? 2 : 1;
+  o.mesh.radiusEdgeRatio = ctx.floatIn("tetQuality", 0, 100);
+  if (o.mesh.radiusEdgeRatio > 0 && o.mesh.radiusEdgeRatio < 1.2)
+    throw pectus::InputError("parameter 'tetQuality' must be 0 or at least 1.2 (TetGen does not terminate below), got " +
+                             fmt(o.mesh.radiusEdgeRatio));
+  o.mesh.maxVolume = ctx.floatIn("maxTetVolume", 0, 1e9);
+  o.nuBone = ctx.floatIn("nuBone", -1, 0.5, true, true);
+  o.nuCartilage = ctx.floatIn("nuCartilage", -1, 0.5, true, true);
+  o.place.intercostalSpace = ctx.intIn("intercostalSpace", 1, 10);
+  o.place.jointRadius = ctx.floatIn("jointRadius", 0, 100, true);
+  o.place.sternumLoadRadius = ctx.floatIn("sternumLoadRadius", 0, 100, true);
+  o.place.ribSupportRadius = ctx.floatIn("ribSupportRadius", 0, 100, true);
+  if (ctx.boolean("usePoints")) {
+    const RichParameterList& par = ctx.params();
+    o.place.sternumPoint = toE(par.getPoint3m("sternumPoint"));
+    o.place.exitRight = toE(par.getPoint3m("exitRight"));
+    o.place.exitLeft = toE(par.getPoint3m("exitLeft"));
+  }
+  const bool stressField = ctx.enumIn("field", 2) == 0;
+  const int pathSide = ctx.enumIn("pathSide", 2) + 1;
+  const int pathRib = ctx.intIn("pathRib", 1, 10);
+  std::string base = ctx.params().getSaveFileName("resultBase").trimmed().toStdString();
+  if (base.size() > 4 && base.compare(base.size() - 4, 4, ".vtu") == 0) base.resize(base.size() - 4);
+  o.progress = [&](int pc, const std::string& w) { ctx.progress(pc, w.c_str()); };
+
+  const auto cage = nuss::cageFromMesh(cur.cm);
+  const auto t0 = std::chrono::steady_clock::now();
+  const nuss::Analysis a = nuss::analyze(cage, lms, o);
+  const auto path = nuss::strainAlongRib(a, pathSide, pathRib);
+
+  // files first: a failure to write leaves the document unchanged
+  std::string files;
+  if (!base.empty()) {
+    pectus::fe::writeVtu(base + ".vtu", a.mesh, &a.result);
+    const pectus::fe::Problem prob = nuss::problemAt(a, o, a.force);
+    pectus::fe::InpOptions io;
+    io.nlgeom = o.nonlinear;
+    io.increments = std::max(10, static_cast<int>(std::ceil(a.force / 20.0)));
+    io.printNodes = a.sternumNodes;
+    io.heading = "pectus-meshlab Nuss FE model, Fe = " + fmt(a.force, 2) + " N";
+    pectus::fe::writeCalculixInp(base + ".inp", prob, io);
+    nuss::writeCurveCsv(base + "_force_displacement.csv", a);
+    nuss::writeRibPathCsv(base + "_rib_strain.csv", path);
+    std::vector<std::pair<double, std::string>> hl;
+    if (calibrate) hl.push_back({o.targetElevation, "target " + fmt(o.targetElevation, 1) + " mm"});
+    pectus::ml::writeLinePlot(base + "_force_displacement.png", "Elevating force vs sternum end displacement (Fig. 6-14)",
+                              "Elevating force Fe (N)", "Displacement of the end of the sternum (mm)",
+                              {{o.nonlinear ? "large displacement" : "small strain", a.curve, 0x1f77b4, true}}, hl);
+    files = "; files " + base + ".vtu/.inp/_force_displacement.csv/.png/_rib_strain.csv";
+  }
+
+  // deformed surface layer: vertex i moves with FE node nodeOfVertex[i]
+  const auto& nodal = stressField ? a.nodalStress : a.nodalStrain;
+  MeshModel& res = ctx.addLayer("nuss fe result");
+  res.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR);
+  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(res.cm, cur.cm);
+  if (auto l = pectus::readFaceLabels(cur.cm)) pectus::writeFaceLabels(res.cm, l->tissue, l->part);
+  for (size_t i = 0; i < res.cm.vert.size() && i < cage.nodeOfVertex.size(); ++i) {
+    auto& v = res.cm.vert[i];
+    const int n = cage.nodeOfVertex[i];
+    if (v.IsD() || n < 0) continue;
+    const Eigen::Vector3d d = a.result.displacement(n);
+    v.P() += Point3m(Scalarm(d.x()), Scalarm(d.y()), Scalarm(d.z()));
+    v.Q() = Scalarm(nodal[n]);
+  }
+  // colours: the 98th percentile caps the ramp so the joints' stress peaks do not wash out the map
+  std::vector<float> q;
+  for (const auto& v : res.cm.vert)
+    if (!v.IsD()) q.push_back(v.Q());
+  std::sort(q.begin(), q.end());
+  const float hi = q.empty() ? 1.0f : std::max(q[std::min(q.size() - 1, size_t(0.98 * q.size()))], 1e-12f);
+  vcg::tri::UpdateColor<CMeshO>::PerVertexQualityRamp(res.cm, hi, 0.0f);  // red = high, blue = low
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(res.cm);
+  vcg::tri::UpdateBounding<CMeshO>::Box(res.cm);
+
+  std::vector<pectus::Landmark> moved = lms;
+  for (auto& l : moved) l.p += a.displacementAt(l.p);
+  MeshModel& lmAfter = ctx.addLayer("nuss landmarks after", false);
+  lmAfter.updateDataMask(MeshModel::MM_VERTQUALITY);
+  pectus::writeLandmarks(lmAfter.cm, moved);
+  vcg::tri::UpdateBounding<CMeshO>::Box(lmAfter.cm);
+  ctx.doc().setCurrentMesh(res.id());
+
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  ctx.log("Nuss FE model: " + std::to_string(a.mesh.numTets()) + (a.mesh.order == 2 ? " TET10" : " TET4") + " elements, " +
+          std::to_string(a.mesh.numNodes()) + " nodes, " + std::to_string(a.fixedNodes.size()) + " fixed nodes at the joints, Fe on " +
+          std::to_string(a.sternumNodes.size()) + " sternum nodes, Fsr on " + a.supportNames[0] + "/" + a.supportNames[1] + "/" +
+          a.supportNames[2] + "/" + a.supportNames[3] + (cage.weldedFaces ? "; welded " + std::to_string(cage.weldedFaces) + " sliver faces" : ""));
+  ctx.log(std::string("Nuss FE result (") + (o.nonlinear ? "large displacement" : "small strain") + "): Fe = " + fmt(a.force, 2) +
+          " N (Fs = " + fmt(a.force / 2, 2) + " N, Fsr = " + fmt(a.force / 4, 2) + " N)" +
+          (calibrate ? ", calibrated to " + fmt(o.targetElevation, 2) + " mm in " + std::to_string(a.calibration->evaluations) + " solves" : "") +
+          "; sternum end displacement " + fmt(a.elevation, 2) + " mm; linear compliance " + fmt(a.linearCompliance, 4) + " mm/N");
+  ctx.log("Max von Mises stress " + fmt(a.maxStress, 2) + " MPa at the " + a.maxStressAt.describe() +
+          " (away from the joints and load patches; " + fmt(a.maxStressAll, 2) + " MPa including them)");
+  ctx.log("Max equivalent strain " + fmt(a.maxStrain, 4) + " at the " + a.maxStrainAt.describe() + "; max in cartilage " +
+          fmt(a.maxStrainCartilage, 4) + ", in bone " + fmt(a.maxStrainBone, 5));
+  std::string curve;
+  for (const auto& p : a.curve) curve += " " + fmt(p.first, 1) + ":" + fmt(p.second, 2);
+  ctx.log("Force-displacement (N:mm)" + curve + "; " + std::to_string(a.nonlinearSolves) + " nonlinear solves, " +
+          std::to_string(a.newtonIterations) + " Newton iterations; mesh " + fmt(a.secondsMesh, 1) + " s, solve " +
+          fmt(a.secondsSolve, 1) + " s, total " + fmt(secs, 1) + " s" + files);
 }
 
 MESHLAB_PLUGIN_NAME_EXPORTER(FilterNussFeaPlugin)

@@ -9,7 +9,7 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   Q_INTERFACES(MeshFilterInterface)
 
  public:
-  enum { FP_CREATE_RIBCAGE };
+  enum { FP_CREATE_RIBCAGE, FP_NUSS_FEA };
   FilterNussFeaPlugin();
   QString pluginName() const override { return "FilterPectusNussFea"; }
 
@@ -20,4 +20,6 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
  private:
   void initCreateRibCage(RichParameterList& par);
   void runCreateRibCage(pectus::ml::FilterContext& ctx);
+  void initNussFea(MeshDocument& md, RichParameterList& par);
+  void runNussFea(pectus::ml::FilterContext& ctx);
 };

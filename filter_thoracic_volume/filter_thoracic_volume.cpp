@@ -12,6 +12,7 @@
 using pectus::InputError;
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
+using pectus::ml::defaultLandmarkLayer;
 namespace vol = pectus::vol;
 
 namespace {
@@ -28,16 +29,6 @@ const char* kCompareHelp =
 QStringList rangeSources() { return QStringList() << "Landmarks" << "Given heights"; }
 QStringList lowerLimits() {
   return QStringList() << "700 dome of the diaphragm" << "500 lower end of the sternum";
-}
-
-MeshModel* defaultLandmarkLayer(MeshDocument& md) {
-  for (MeshModel* m : md.meshList) {
-    QString l = m->label().toLower();
-    const int dot = l.lastIndexOf('.');
-    if (dot > 0) l = l.left(dot);
-    if (l.endsWith("landmarks")) return m;
-  }
-  return md.mm();
 }
 
 void addCommon(MeshDocument& md, RichParameterList& par, int lowerDefault) {

@@ -108,6 +108,17 @@ class Filter:
             if not isinstance(v, _P):
                 raise TypeError(f"parameter {k} of {name!r} needs a type (Float, Int, Bool, Enum, ...), got {v!r}")
 
+    def set(self, **values) -> "Filter":
+        """Override parameter values keeping their types (Enum by index, Point3 by a 3-tuple)."""
+        for k, v in values.items():
+            if k not in self.params:
+                raise KeyError(f"{self.name!r} has no parameter {k!r} (it has {sorted(self.params)})")
+            p = self.params[k]
+            self.params[k] = v if isinstance(v, _P) else (Enum(v, p.values) if isinstance(p, Enum) else type(p)(v))
+            if isinstance(p, SaveFile) and not isinstance(v, _P):
+                self.params[k].ext = p.ext
+        return self
+
     def xml(self) -> str:
         body = "".join(f"  {p.xml(k)}\n" for k, p in self.params.items())
         return f" <filter name={quoteattr(self.name)}>\n{body} </filter>\n"
@@ -126,6 +137,42 @@ class Script:
         return path
 
 
+def load_script(path: str) -> list:
+    """The filters of an .mlx file as Filter objects with typed parameters (e.g. a filter's example
+    script, to reuse its complete parameter list and override a few with Filter.set)."""
+    import xml.etree.ElementTree as ET
+    kinds = {"RichFloat": Float, "RichInt": Int, "RichBool": Bool, "RichString": String, "RichMesh": Mesh,
+             "RichAbsPerc": AbsPerc}
+    out = []
+    for f in ET.parse(path).getroot().iter("filter"):
+        params = {}
+        for p in f.iter("Param"):
+            t, name, v = p.get("type"), p.get("name"), p.get("value")
+            if t == "RichEnum":
+                n = int(p.get("enum_cardinality"))
+                params[name] = Enum(int(v), [p.get(f"enum_val{i}") for i in range(n)])
+            elif t == "RichBool":
+                params[name] = Bool(v.lower() == "true")
+            elif t == "RichPoint3f":
+                params[name] = Point3((float(p.get("x")), float(p.get("y")), float(p.get("z"))))
+            elif t == "RichSaveFile":
+                sf = SaveFile(v)
+                sf.ext = p.get("ext", ".csv")
+                params[name] = sf
+            elif t == "RichOpenFile":
+                params[name] = OpenFile(v)
+            elif t in ("RichFloat", "RichAbsPerc"):
+                params[name] = kinds[t](float(v))
+            elif t in ("RichInt", "RichMesh"):
+                params[name] = kinds[t](int(v))
+            elif t in kinds:
+                params[name] = kinds[t](v)
+            else:
+                raise ValueError(f"{path}: parameter {name} has an unsupported type {t}")
+        out.append(Filter(f.get("name"), **params))
+    return out
+
+
 @dataclass
 class Result:
     rc: int
@@ -136,7 +183,9 @@ class Result:
         """The filters' Log() lines (meshlabserver prints them as 'LOG: <level> <text>')."""
         out = []
         for line in self.stdout.splitlines():
-            if line.startswith("LOG: "):
+            i = line.find("LOG: ")  # other output without a newline can precede it on the line
+            if i >= 0:
+                line = line[i:]
                 parts = line[5:].split(" ", 1)
                 out.append(parts[1] if len(parts) == 2 and parts[0].isdigit() else line[5:])
         return out

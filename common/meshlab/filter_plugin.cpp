@@ -274,4 +274,14 @@ std::string fmt(double v, int precision) {
   return s.str();
 }
 
+MeshModel* defaultLandmarkLayer(MeshDocument& md) {
+  for (MeshModel* m : md.meshList) {
+    QString l = m->label().toLower();
+    const int dot = l.lastIndexOf('.');
+    if (dot > 0) l = l.left(dot);
+    if (l.endsWith("landmarks")) return m;
+  }
+  return md.mm();
+}
+
 }  // namespace pectus::ml

@@ -98,6 +98,10 @@ class FilterPluginBase : public MeshFilterInterface {
   std::vector<FilterSpec> specs_;
 };
 
+/// The first layer whose label (without extension) ends in "landmarks" (labels.h), else the current one:
+/// the default of every "Landmark layer" parameter.
+MeshModel* defaultLandmarkLayer(MeshDocument& md);
+
 /// "a b c" for a histogram, and a fixed-format number, for Log lines
 std::string formatHistogram(const std::vector<std::size_t>& h);
 std::string fmt(double v, int precision = 4);

@@ -74,10 +74,23 @@ PectusIndex pectusIndexOnSlice(const SliceRegion& r, const std::optional<double>
   return out;
 }
 
+// With the vertebra known: cast the rays from the midpoint between the vertebra and the first section
+// above it on the midline (the sternum's posterior surface), which lies inside the chest however deep
+// the funnel; the segments' centroid can fall in front of a deeply depressed sternum.
+std::optional<Eigen::Vector2d> interiorSeed(const std::vector<Seg2>& segs, const IndexInputs& in) {
+  if (!in.spineY || !in.midlineX) return std::nullopt;
+  double yS = 1e300;
+  for (double y : crossings(segs, *in.midlineX))
+    if (y > *in.spineY + 1e-6) yS = std::min(yS, y);
+  if (!(yS < 1e299)) return std::nullopt;
+  return Eigen::Vector2d(*in.midlineX, 0.5 * (*in.spineY + yS));
+}
+
 PectusIndex pectusIndex(const Soup& s, const IndexInputs& in) {
   if (in.level) {
     auto cuts = cutPlanes(s, {*in.level});
-    return pectusIndexOnSlice(regionFromSegments(*in.level, std::move(cuts[0]), in.rays), in.midlineX, in.spineY);
+    const auto seed = interiorSeed(cuts[0], in);
+    return pectusIndexOnSlice(regionFromSegments(*in.level, std::move(cuts[0]), in.rays, seed), in.midlineX, in.spineY);
   }
   // automatic: the deepest level = the slice of the range with the largest correction index
   requireRange(in.searchRange, "of the pectus index search");
@@ -87,7 +100,8 @@ PectusIndex pectusIndex(const Soup& s, const IndexInputs& in) {
   auto cuts = cutPlanes(s, zs);
   std::optional<PectusIndex> best;
   for (int k = 0; k < N; ++k) {
-    const auto r = regionFromSegments(zs[k], std::move(cuts[k]), in.rays);
+    const auto seed = interiorSeed(cuts[k], in);
+    const auto r = regionFromSegments(zs[k], std::move(cuts[k]), in.rays, seed);
     if (r.empty()) continue;
     try {
       const auto pi = pectusIndexOnSlice(r, in.midlineX, in.spineY);

@@ -71,7 +71,7 @@ double runSlope(const std::vector<double>& r, const std::vector<char>& hit, int 
 }
 }  // namespace
 
-SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K) {
+SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K, const std::optional<Eigen::Vector2d>& seed) {
   SliceRegion R;
   R.z = z;
   R.segments = std::move(segments);
@@ -85,6 +85,7 @@ SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K) {
   }
   if (!(len > 0)) return R;
   c /= len;
+  if (seed) c = *seed;
   R.centroid = c;
   const double dth = 2 * kPi / K;
   std::vector<double> best(K, 1e300);

@@ -78,8 +78,11 @@ struct SliceRegion {
 
 /// Cuts `s` with the planes z = zs[k] (faces bucketed once), returns the segments per plane.
 std::vector<std::vector<Seg2>> cutPlanes(const Soup& s, const std::vector<double>& zs);
-/// The intrathoracic region of one cut (rule above) with K rays.
-SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int rays);
+/// The intrathoracic region of one cut (rule above) with K rays, cast from the segments' centroid or
+/// from `seed` (a point known to be inside, e.g. between the vertebra and the sternum of a deep funnel,
+/// where the centroid can fall in front of the sternum).
+SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int rays,
+                               const std::optional<Eigen::Vector2d>& seed = std::nullopt);
 
 struct SliceParams {
   double spacing = 2.6;   ///< plane spacing, mm (thesis 2.6)

@@ -418,12 +418,14 @@ Result Solver::solveNonlinear(const NewtonOptions& opt, double scale) {
   double lam = 0, dlam = 1.0 / opt.loadSteps;
   int cut = 0;
   while (lam < 1.0 - 1e-12) {
-    const double target = std::min(1.0, lam + dlam);
+    double target = std::min(1.0, lam + dlam);
+    for (double s : opt.stops)
+      if (s > lam + 1e-12 && s < target - 1e-12) { target = s; break; }
     Eigen::VectorXd uTrial = u;
     for (size_t d = 0; d < I.freeIndex.size(); ++d)
       if (I.isConstrained[d]) uTrial(d) = target * scale * I.prescribed(d);
     bool converged = false;
-    double duNorm = 0;
+    double duNorm = 0, lastRn = 1e300;
     for (int it = 0; it <= opt.maxIterations; ++it) {
       I.assemble(uTrial, true, fint);
       const Eigen::VectorXd r = I.freePart(target * scale * I.fext - fint);
@@ -438,8 +440,11 @@ Result Solver::solveNonlinear(const NewtonOptions& opt, double scale) {
         break;
       }
       if (it == opt.maxIterations) break;
-      try {
+      const bool refactor = !opt.modified || it == 0 || !(rn < lastRn / 3);
+      lastRn = rn;
+      if (refactor) try {
         I.factorize(lastFactorSeconds_);
+        ++res.factorizations;
       } catch (const InputError&) {
         if (it == 0 && lam == 0) throw;  // singular at the undeformed state: a real input problem
         break;                             // lost positive definiteness (buckling/inversion): cut back
@@ -455,6 +460,7 @@ Result Solver::solveNonlinear(const NewtonOptions& opt, double scale) {
       u = uTrial;
       lam = target;
       ++res.increments;
+      if (opt.onIncrement) opt.onIncrement(lam, u);
     } else {
       if (++cut > opt.maxCutbacks) {
         std::ostringstream s;

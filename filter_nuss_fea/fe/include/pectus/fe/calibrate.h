@@ -29,4 +29,12 @@ struct CalibrationResult {
 CalibrationResult calibrateForce(const std::function<double(double)>& displacement, double target,
                                  const CalibrationOptions& opt = {});
 
+/// (force N, displacement mm) of a state passed on the way to the requested force
+using Observer = std::function<void(double, double)>;
+/// Same, but displacement(F, observe) may report the intermediate states it passed (e.g. the load
+/// increments of a nonlinear solve): they narrow the bracket, so a stiffening curve sampled every 20 N
+/// is calibrated in 2-3 solves instead of 4-6.
+CalibrationResult calibrateForce(const std::function<double(double, const Observer&)>& displacement, double target,
+                                 const CalibrationOptions& opt = {});
+
 }  // namespace pectus::fe

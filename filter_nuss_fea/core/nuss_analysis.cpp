@@ -1,0 +1,511 @@
+#include "nuss_analysis.h"
+
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <sstream>
+
+#include "pectus/errors.h"
+
+namespace pectus::nuss {
+
+using Eigen::Vector3d;
+using Clock = std::chrono::steady_clock;
+
+namespace {
+
+double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
+
+std::string mm(double v, int prec = 1) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(prec);
+  s << v;
+  return s.str();
+}
+
+std::string pointText(const Vector3d& p) { return "(" + mm(p.x()) + ", " + mm(p.y()) + ", " + mm(p.z()) + ") mm"; }
+
+int find(std::vector<int>& parent, int a) {
+  while (parent[a] != a) a = parent[a] = parent[parent[a]];
+  return a;
+}
+
+}  // namespace
+
+std::string partName(int tissue, int part) {
+  if (part == kManubrium) return "manubrium";
+  if (part == kSternumBody) return "sternum body";
+  if (part == kXiphoid) return "xiphoid";
+  const int side = part / 100, rib = part % 100;
+  if ((side == 1 || side == 2) && rib >= 1 && rib <= 12)
+    return std::string(side == 1 ? "right " : "left ") +
+           (tissue == int(Tissue::Cartilage) ? "costal cartilage " : "rib ") + std::to_string(rib);
+  return std::string(tissueName(Tissue(tissue))) + " (part " + std::to_string(part) + ")";
+}
+
+std::string Location::describe() const {
+  std::string s = partName(tissue, part) + " (" + tissueName(Tissue(tissue)) + ")";
+  if (distanceToJoint >= 0)
+    s += distanceToJoint <= kNearSpine ? ", posterior near the spine, " + mm(distanceToJoint, 0) + " mm from its costovertebral joint"
+                                       : ", " + mm(distanceToJoint, 0) + " mm from its costovertebral joint";
+  return s + " at " + pointText(p);
+}
+
+CageSurface cageFromMesh(const CMeshO& m) {
+  if (m.fn == 0) throw InputError("The layer has no faces: the Nuss FE analysis needs the closed, labelled rib cage surface.");
+  const auto labels = readFaceLabels(m);
+  if (!labels)
+    throw InputError(
+        "The layer has no tissue labels: every face needs a tissue (bone, cartilage or sternum) and an anatomical part, "
+        "as 'Create Pectus Excavatum Rib Cage' writes them (attribute pectus_tissue/pectus_part, or the tissue face colours "
+        "with face quality = tissue*1000 + part; save PLY with face colour and quality).");
+  for (size_t i = 0; i < m.vert.size(); ++i) {
+    if (m.vert[i].IsD()) continue;
+    const auto& p = m.vert[i].cP();
+    if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
+      throw InputError("Vertex " + std::to_string(i) + " has a non-finite coordinate.");
+  }
+  // weld micro-edges (shorter than 1e-3 x the mean edge length: marching-cubes / STL slivers that
+  // TetGen cannot mesh) by collapsing them; faces that become degenerate or doubled are dropped
+  std::vector<int> parent(m.vert.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  double sum = 0;
+  std::size_t ne = 0;
+  for (const auto& F : m.face)
+    if (!F.IsD())
+      for (int k = 0; k < 3; ++k) sum += vcg::Distance(F.cP(k), F.cP((k + 1) % 3)), ++ne;
+  const double tol = 1e-3 * sum / std::max<std::size_t>(ne, 1);
+  for (const auto& F : m.face)
+    if (!F.IsD())
+      for (int k = 0; k < 3; ++k)
+        if (vcg::Distance(F.cP(k), F.cP((k + 1) % 3)) < tol)
+          parent[find(parent, int(vcg::tri::Index(m, F.cV(k))))] = find(parent, int(vcg::tri::Index(m, F.cV((k + 1) % 3))));
+  CageSurface c;
+  std::vector<int> compact(m.vert.size(), -1);
+  for (size_t i = 0; i < m.vert.size(); ++i) {
+    if (m.vert[i].IsD()) continue;
+    const int r = find(parent, int(i));
+    if (compact[r] < 0) {
+      compact[r] = static_cast<int>(c.surface.vertices.size());
+      const auto& p = m.vert[r].cP();
+      c.surface.vertices.emplace_back(p[0], p[1], p[2]);
+    }
+  }
+  c.nodeOfVertex.assign(m.vert.size(), -1);
+  for (size_t i = 0; i < m.vert.size(); ++i)
+    if (!m.vert[i].IsD()) c.nodeOfVertex[i] = compact[find(parent, int(i))];
+  std::map<std::array<int, 3>, int> seen;  // sorted vertex triple -> count
+  std::vector<std::array<int, 3>> faces;
+  std::vector<int> tissue, part;
+  for (size_t f = 0; f < m.face.size(); ++f) {
+    const auto& F = m.face[f];
+    if (F.IsD()) continue;
+    std::array<int, 3> t{};
+    for (int k = 0; k < 3; ++k) t[k] = c.nodeOfVertex[vcg::tri::Index(m, F.cV(k))];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) { ++c.weldedFaces; continue; }
+    auto key = t;
+    std::sort(key.begin(), key.end());
+    seen[key]++;
+    faces.push_back(t);
+    tissue.push_back(labels->tissue[f]);
+    part.push_back(labels->part[f]);
+  }
+  for (size_t f = 0; f < faces.size(); ++f) {
+    auto key = faces[f];
+    std::sort(key.begin(), key.end());
+    if (c.weldedFaces > 0 && seen[key] == 2) { ++c.weldedFaces; continue; }  // a collapsed tent leaves a doubled face
+    c.surface.faces.push_back(faces[f]);
+    c.surface.faceTissue.push_back(tissue[f]);
+    c.facePart.push_back(part[f]);
+  }
+  return c;
+}
+
+Vector3d Analysis::displacementAt(const Vector3d& p) const {
+  int best = 0;
+  double bd = 1e300;
+  for (int i = 0; i < mesh.numNodes(); ++i) {
+    const double d = (mesh.nodes[i] - p).squaredNorm();
+    if (d < bd) bd = d, best = i;
+  }
+  return result.u.size() ? Vector3d(result.displacement(best)) : Vector3d::Zero();
+}
+
+namespace {
+
+struct Setup {
+  std::vector<int> fixedNodes, sternumNodes;
+  std::vector<std::vector<int>> supportNodes;
+  std::vector<std::string> supportNames;
+  Vector3d dir;
+};
+
+// surface vertices (= mesh nodes 0..nv-1) of faces with a given predicate, within r of c
+std::vector<int> surfaceNodesNear(const CageSurface& cage, const Vector3d& c, double r,
+                                  const std::function<bool(size_t)>& facePred) {
+  std::vector<char> take(cage.surface.vertices.size(), 0);
+  for (size_t f = 0; f < cage.surface.faces.size(); ++f) {
+    if (!facePred(f)) continue;
+    for (int v : cage.surface.faces[f])
+      if ((cage.surface.vertices[v] - c).norm() <= r) take[v] = 1;
+  }
+  std::vector<int> out;
+  for (size_t v = 0; v < take.size(); ++v)
+    if (take[v]) out.push_back(static_cast<int>(v));
+  return out;
+}
+
+// the surface vertex of a part's faces nearest to p (-1 if the part has no face)
+int nearestVertexOfPart(const CageSurface& cage, int part, const Vector3d& p, int tissue = 0) {
+  int best = -1;
+  double bd = 1e300;
+  for (size_t f = 0; f < cage.surface.faces.size(); ++f) {
+    if (cage.facePart[f] != part || (tissue && cage.surface.faceTissue[f] != tissue)) continue;
+    for (int v : cage.surface.faces[f]) {
+      const double d = (cage.surface.vertices[v] - p).squaredNorm();
+      if (d < bd) bd = d, best = v;
+    }
+  }
+  return best;
+}
+
+Setup place(const CageSurface& cage, const fe::TetMesh& mesh, const std::vector<Landmark>& lms, const Placement& pl) {
+  Setup s;
+  if (!(pl.jointRadius > 0 && pl.sternumLoadRadius > 0 && pl.ribSupportRadius > 0))
+    throw InputError("The joint, sternum load and rib support radii must be positive (mm).");
+  if (pl.direction.norm() < 1e-12 || !pl.direction.allFinite()) throw InputError("The force direction must be a non-zero vector.");
+  s.dir = pl.direction.normalized();
+  // fixed: all mesh nodes (surface and interior) near a costovertebral joint landmark
+  std::vector<char> fixed(mesh.nodes.size(), 0);
+  int joints = 0;
+  for (const auto& l : lms) {
+    const int side = l.code / 100, rib = l.code % 100;
+    if (!(side == 1 || side == 2) || rib < 1 || rib > 12) continue;
+    ++joints;
+    int n = 0;
+    for (int i = 0; i < mesh.numNodes(); ++i)
+      if ((mesh.nodes[i] - l.p).norm() <= pl.jointRadius) fixed[i] = 1, ++n;
+    if (n == 0)
+      throw InputError("No mesh node lies within the joint radius (" + mm(pl.jointRadius) + " mm) of the costovertebral joint of the " +
+                       partName(1, l.code) + " at " + pointText(l.p) + ": increase the joint radius or check the landmark layer.");
+  }
+  if (joints == 0)
+    throw InputError(
+        "No costovertebral joint landmarks (codes 100*side + rib) in the landmark layer: the analysis fixes the ribs there. "
+        "Pick the landmark layer written by 'Create Pectus Excavatum Rib Cage' or add one vertex per joint with that code as quality.");
+  for (int i = 0; i < mesh.numNodes(); ++i)
+    if (fixed[i]) s.fixedNodes.push_back(i);
+
+  auto sternumFace = [&](size_t f) { return cage.surface.faceTissue[f] == int(Tissue::Sternum); };
+  Vector3d sp;
+  if (pl.sternumPoint) sp = *pl.sternumPoint;
+  else if (auto p = findLandmark(lms, kSternumLowerEnd)) sp = *p;
+  else
+    throw InputError("No lower sternum end landmark (code 500) and no sternum point given: the elevating force goes there.");
+  bool anySternum = false;
+  for (size_t f = 0; f < cage.surface.faces.size() && !anySternum; ++f) anySternum = sternumFace(f);
+  if (!anySternum) throw InputError("The cage has no sternum faces (tissue 3): the elevating force acts on the sternum.");
+  s.sternumNodes = surfaceNodesNear(cage, sp, pl.sternumLoadRadius, sternumFace);
+  if (s.sternumNodes.empty())
+    throw InputError("No sternum surface node lies within " + mm(pl.sternumLoadRadius) + " mm of the lower sternum end " + pointText(sp) +
+                     ": increase the sternum load radius or move the point onto the sternum.");
+
+  const int space = pl.intercostalSpace;
+  for (int side = 1; side <= 2; ++side) {
+    std::optional<Vector3d> exit = side == 1 ? pl.exitRight : pl.exitLeft;
+    if (!exit) exit = findLandmark(lms, barExitLandmark(side, space));
+    if (!exit)
+      throw InputError("No bar exit landmark for intercostal space " + std::to_string(space) + " on the " + (side == 1 ? "right" : "left") +
+                       " (code " + std::to_string(barExitLandmark(side, space)) +
+                       ") and no exit point given: choose a space the landmark layer has or give the exit points.");
+    for (int rib : {space, space + 1}) {
+      const int part = ribPart(side, rib);
+      const int v = nearestVertexOfPart(cage, part, *exit, int(Tissue::Bone));
+      const std::string name = partName(int(Tissue::Bone), part);
+      if (v < 0) throw InputError("The cage has no bone faces of the " + name + ": the rib support force of the bar exit goes there.");
+      const Vector3d c = cage.surface.vertices[v];
+      auto nodes = surfaceNodesNear(cage, c, pl.ribSupportRadius, [&](size_t f) { return cage.facePart[f] == part; });
+      if ((c - *exit).norm() > 40)
+        throw InputError("The " + name + " is " + mm((c - *exit).norm(), 0) + " mm from the bar exit " + pointText(*exit) +
+                         ": the exit point is not between ribs " + std::to_string(space) + " and " + std::to_string(space + 1) + ".");
+      s.supportNodes.push_back(nodes);
+      s.supportNames.push_back(name);
+    }
+  }
+  return s;
+}
+
+// connected components of the tet mesh; every one must hold a fixed node
+int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, const std::vector<int>& fixedNodes) {
+  std::vector<int> parent(mesh.numNodes());
+  std::iota(parent.begin(), parent.end(), 0);
+  for (const auto& t : mesh.tets)
+    for (int k = 1; k < mesh.nodesPerTet(); ++k) parent[find(parent, t[k])] = find(parent, t[0]);
+  std::map<int, int> fixedIn;
+  for (int n : fixedNodes) fixedIn[find(parent, n)]++;
+  std::map<int, int> compTet;
+  for (int t = 0; t < mesh.numTets(); ++t) compTet.emplace(find(parent, mesh.tets[t][0]), t);
+  for (const auto& [root, t] : compTet)
+    if (!fixedIn.count(root))
+      throw InputError("A part of the model is not held by any costovertebral joint (the connected piece containing the " +
+                       partName(mesh.tissue[t], tetPart[t]) +
+                       "): the system would be singular. Connect it to the cage, remove it, or add its joint landmark.");
+  return static_cast<int>(compTet.size());
+}
+
+void addLoads(fe::Problem& p, const Setup& s, double fe) {
+  p.force.assign(p.mesh->nodes.size(), Vector3d::Zero());
+  for (int n : s.sternumNodes) p.force[n] += s.dir * (fe / s.sternumNodes.size());
+  for (const auto& nodes : s.supportNodes)
+    for (int n : nodes) p.force[n] -= s.dir * (fe / 4.0 / nodes.size());
+}
+
+double elevationOf(const Eigen::VectorXd& u, const Setup& s) {
+  double e = 0;
+  for (int n : s.sternumNodes) e += s.dir.dot(Vector3d(u.segment<3>(3 * n)));
+  return e / s.sternumNodes.size();
+}
+
+Setup setupOf(const Analysis& a) {
+  Setup s;
+  s.fixedNodes = a.fixedNodes;
+  s.sternumNodes = a.sternumNodes;
+  s.supportNodes = a.supportNodes;
+  s.supportNames = a.supportNames;
+  return s;
+}
+
+}  // namespace
+
+fe::Problem problemAt(const Analysis& a, const Options& opt, double force) {
+  fe::Problem p;
+  p.mesh = &a.mesh;
+  p.materials = fe::thesisMaterials(opt.nuBone, opt.nuCartilage);
+  for (int n : a.fixedNodes) p.fixNode(n);
+  Setup s = setupOf(a);
+  s.dir = opt.place.direction.normalized();
+  addLoads(p, s, force);
+  return p;
+}
+
+Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, const Options& opt) {
+  auto progress = [&](int pc, const std::string& w) {
+    if (opt.progress) opt.progress(pc, w);
+  };
+  if (!(opt.nuBone > -1 && opt.nuBone < 0.5) || !(opt.nuCartilage > -1 && opt.nuCartilage < 0.5))
+    throw InputError("Poisson's ratios must lie in (-1, 0.5).");
+  if (opt.targetElevation <= 0 && !(opt.force > 0)) throw InputError("The elevating force must be positive (N).");
+  if (!(opt.curveStep > 0)) throw InputError("The force-displacement curve step must be positive (N).");
+  if (!(opt.maxForce > 0) || !(opt.tolerance > 0)) throw InputError("The maximum force and the calibration tolerance must be positive.");
+  if (!std::isfinite(opt.targetElevation)) throw InputError("The target elevation must be a finite number (mm).");
+
+  Analysis a;
+  auto t0 = Clock::now();
+  progress(2, "Checking the surface");
+  fe::checkSurfaceForTetgen(cage.surface);
+  progress(5, "TetGen");
+  a.mesh = fe::tetrahedralize(cage.surface, opt.mesh);
+  {
+    std::vector<Vector3d> cent(a.mesh.numTets());
+    for (int t = 0; t < a.mesh.numTets(); ++t) {
+      const auto& T = a.mesh.tets[t];
+      cent[t] = (a.mesh.nodes[T[0]] + a.mesh.nodes[T[1]] + a.mesh.nodes[T[2]] + a.mesh.nodes[T[3]]) / 4;
+    }
+    const auto nf = fe::nearestFaces(cage.surface, cent);
+    a.tetPart.resize(nf.size());
+    for (size_t t = 0; t < nf.size(); ++t) a.tetPart[t] = cage.facePart[nf[t]];
+  }
+  a.secondsMesh = since(t0);
+
+  Setup s = place(cage, a.mesh, lms, opt.place);
+  a.fixedNodes = s.fixedNodes;
+  a.sternumNodes = s.sternumNodes;
+  a.supportNodes = s.supportNodes;
+  a.supportNames = s.supportNames;
+  a.components = checkComponents(a.mesh, a.tetPart, a.fixedNodes);
+
+  t0 = Clock::now();
+  progress(15, "Factorising (CHOLMOD)");
+  fe::Problem prob = problemAt(a, opt, 1.0);  // unit Fe; the solves scale it
+  fe::Solver solver(prob);
+  const fe::Result lin1 = solver.solveLinear(1.0);
+  a.linearCompliance = elevationOf(lin1.u, s);
+  if (!(a.linearCompliance > 0))
+    throw InputError("The sternum does not move along the force direction under the elevating force (compliance " +
+                     std::to_string(a.linearCompliance) + " mm/N): check the direction and the load placement.");
+
+  // one solve at force F; records the curve at every curveStep when `curve` is given
+  auto solveAt = [&](double F, std::vector<std::pair<double, double>>* curve, const fe::Observer& observe) {
+    if (!opt.nonlinear) {
+      fe::Result r = solver.solveLinear(F);
+      if (curve) {
+        curve->assign(1, {0.0, 0.0});
+        for (double f = opt.curveStep; f < F - 1e-9; f += opt.curveStep) curve->push_back({f, a.linearCompliance * f});
+        curve->push_back({F, elevationOf(r.u, s)});
+      }
+      return r;
+    }
+    fe::NewtonOptions no = opt.newton;
+    no.stops.clear();
+    for (double f = opt.curveStep; f < F - 1e-9; f += opt.curveStep) no.stops.push_back(f / F);
+    no.loadSteps = std::max(no.loadSteps, static_cast<int>(std::ceil(F / opt.curveStep)));
+    std::vector<std::pair<double, double>> pts{{0.0, 0.0}};
+    no.onIncrement = [&](double lam, const Eigen::VectorXd& u) {
+      pts.push_back({lam * F, elevationOf(u, s)});
+      if (observe) observe(pts.back().first, pts.back().second);
+    };
+    fe::Result r = solver.solveNonlinear(no, F);
+    ++a.nonlinearSolves;
+    a.newtonIterations += r.newtonIterations;
+    a.factorizations += r.factorizations;
+    if (curve) *curve = pts;  // every converged increment: the curveStep multiples and the steps between
+    return r;
+  };
+
+  if (opt.targetElevation > 0) {
+    fe::CalibrationOptions co;
+    co.tolerance = opt.tolerance;
+    co.maxForce = opt.maxForce;
+    co.initialForce = std::min(opt.targetElevation / a.linearCompliance, opt.maxForce);
+    co.maxEvaluations = 12;
+    fe::Result last;
+    std::vector<std::pair<double, double>> lastCurve;
+    int k = 0;
+    auto disp = [&](double F, const fe::Observer& observe) {
+      progress(std::min(90, 20 + 15 * k++), "Calibrating the force: Fe = " + mm(F) + " N");
+      last = solveAt(F, &lastCurve, observe);
+      a.force = F;
+      return elevationOf(last.u, s);
+    };
+    a.calibration = fe::calibrateForce(disp, opt.targetElevation, co);
+    if (std::abs(a.force - a.calibration->force) > 1e-9 * a.calibration->force) {  // last evaluation not the answer
+      last = solveAt(a.calibration->force, &lastCurve, {});
+      a.force = a.calibration->force;
+    }
+    a.result = std::move(last);
+    a.curve = std::move(lastCurve);
+  } else {
+    progress(30, "Solving");
+    a.force = opt.force;
+    a.result = solveAt(opt.force, &a.curve, {});
+  }
+  a.elevation = elevationOf(a.result.u, s);
+  a.secondsSolve = since(t0);
+
+  progress(95, "Stress and strain");
+  a.nodalStress = fe::averageToNodes(a.mesh, a.result.vonMises);
+  a.nodalStrain = fe::averageToNodes(a.mesh, a.result.eqStrain);
+  // maxima away from the supports and load patches, where nodal forces make the stress singular
+  std::vector<char> special(a.mesh.nodes.size(), 0);
+  for (int n : a.fixedNodes) special[n] = 1;
+  for (int n : a.sternumNodes) special[n] = 1;
+  for (const auto& v : a.supportNodes)
+    for (int n : v) special[n] = 1;
+  int iS = -1, iE = -1;
+  for (int t = 0; t < a.mesh.numTets(); ++t) {
+    a.maxStressAll = std::max(a.maxStressAll, a.result.vonMises[t]);
+    a.maxStrainAll = std::max(a.maxStrainAll, a.result.eqStrain[t]);
+    if (a.mesh.tissue[t] == int(Tissue::Cartilage)) a.maxStrainCartilage = std::max(a.maxStrainCartilage, a.result.eqStrain[t]);
+    else a.maxStrainBone = std::max(a.maxStrainBone, a.result.eqStrain[t]);
+    bool sp = false;
+    for (int k = 0; k < a.mesh.nodesPerTet() && !sp; ++k) sp = special[a.mesh.tets[t][k]];
+    if (sp) continue;
+    if (iS < 0 || a.result.vonMises[t] > a.result.vonMises[iS]) iS = t;
+    if (iE < 0 || a.result.eqStrain[t] > a.result.eqStrain[iE]) iE = t;
+  }
+  auto locate = [&](int t) {
+    Location L;
+    if (t < 0) return L;
+    L.tet = t;
+    const auto& T = a.mesh.tets[t];
+    L.p = (a.mesh.nodes[T[0]] + a.mesh.nodes[T[1]] + a.mesh.nodes[T[2]] + a.mesh.nodes[T[3]]) / 4;
+    L.tissue = a.mesh.tissue[t];
+    L.part = a.tetPart[t];
+    if (auto j = findLandmark(lms, L.part)) L.distanceToJoint = (*j - L.p).norm();
+    return L;
+  };
+  if (iS >= 0) a.maxStress = a.result.vonMises[iS], a.maxStressAt = locate(iS);
+  if (iE >= 0) a.maxStrain = a.result.eqStrain[iE], a.maxStrainAt = locate(iE);
+  progress(100, "Done");
+  return a;
+}
+
+std::vector<PathSample> strainAlongRib(const Analysis& a, int side, int rib, double binWidth) {
+  if (!(binWidth > 0)) throw InputError("The rib path bin width must be positive (mm).");
+  const int part = ribPart(side, rib);
+  auto centroid = [&](int t) {
+    const auto& T = a.mesh.tets[t];
+    return Vector3d((a.mesh.nodes[T[0]] + a.mesh.nodes[T[1]] + a.mesh.nodes[T[2]] + a.mesh.nodes[T[3]]) / 4);
+  };
+  // midline: mean x of the sternum tets; the rib's sternal end: its most medial tet
+  double xs = 0;
+  int ns = 0;
+  int medial = -1;
+  const double sgn = side == 1 ? -1.0 : 1.0;  // right = -x
+  for (int t = 0; t < a.mesh.numTets(); ++t) {
+    if (a.mesh.tissue[t] == int(Tissue::Sternum)) xs += centroid(t).x(), ++ns;
+    if (a.tetPart[t] == part && (medial < 0 || sgn * centroid(t).x() < sgn * centroid(medial).x())) medial = t;
+  }
+  if (medial < 0) throw InputError("The model has no " + partName(int(Tissue::Bone), part) + ".");
+  if (ns) xs /= ns;
+  const double zj = centroid(medial).z();
+  std::map<int, PathSample> bins;
+  std::map<int, std::array<int, 4>> counts;  // tets per tissue in each bin: the bin's tissue is the majority
+  for (int t = 0; t < a.mesh.numTets(); ++t) {
+    const Vector3d c = centroid(t);
+    const bool onPart = a.tetPart[t] == part;
+    const bool sternumHere = a.mesh.tissue[t] == int(Tissue::Sternum) && std::abs(c.z() - zj) <= 5.0 && sgn * (c.x() - xs) >= 0;
+    if (!onPart && !sternumHere) continue;
+    const double d = std::max(0.0, sgn * (c.x() - xs));
+    const int b = static_cast<int>(d / binWidth);
+    auto& s = bins[b];
+    s.distance = (b + 0.5) * binWidth;
+    s.meanStrain += a.result.eqStrain[t];
+    s.meanStress += a.result.vonMises[t];
+    s.maxStrain = std::max(s.maxStrain, a.result.eqStrain[t]);
+    counts[b][std::clamp(a.mesh.tissue[t], 0, 3)]++;
+    ++s.tets;
+  }
+  std::vector<PathSample> out;
+  for (auto& [b, s] : bins) {
+    s.meanStrain /= s.tets;
+    s.meanStress /= s.tets;
+    const auto& c = counts[b];
+    s.tissue = static_cast<int>(std::max_element(c.begin(), c.end()) - c.begin());
+    out.push_back(s);
+  }
+  return out;
+}
+
+}  // namespace pectus::nuss
+
+namespace pectus::nuss {
+
+namespace {
+std::FILE* openOrThrow(const std::string& path) {
+  std::FILE* f = std::fopen(path.c_str(), "w");
+  if (!f) throw InputError("Cannot write '" + path + "': check the folder exists and is writable.");
+  return f;
+}
+}  // namespace
+
+void writeCurveCsv(const std::string& path, const Analysis& a) {
+  std::FILE* f = openOrThrow(path);
+  std::fprintf(f, "force_N,elevation_mm\n");
+  for (const auto& p : a.curve) std::fprintf(f, "%.6g,%.6g\n", p.first, p.second);
+  std::fclose(f);
+}
+
+void writeRibPathCsv(const std::string& path, const std::vector<PathSample>& samples) {
+  std::FILE* f = openOrThrow(path);
+  std::fprintf(f, "distance_from_sternum_midline_mm,tissue,mean_equivalent_strain,max_equivalent_strain,mean_von_mises_MPa,tets\n");
+  for (const auto& s : samples)
+    std::fprintf(f, "%.3f,%s,%.6g,%.6g,%.6g,%d\n", s.distance, tissueName(Tissue(s.tissue)), s.meanStrain, s.maxStrain, s.meanStress, s.tets);
+  std::fclose(f);
+}
+
+}  // namespace pectus::nuss

@@ -1,0 +1,164 @@
+// Nuss FE analysis core on a coarse generated rib cage: loads in equilibrium (Fe = 2Fs = 4Fsr), joints fixed,
+// linear scaling, calibration to a target, nonlinear close to linear at small force, result locations,
+// and the bad-input messages (missing labels/landmarks, a part without a joint, unreachable target).
+#include <gtest/gtest.h>
+
+#include <numeric>
+
+#include "nuss_analysis.h"
+#include "pectus/errors.h"
+#include "ribcage.h"
+
+using namespace pectus;
+
+namespace {
+
+struct Cage {
+  CMeshO mesh;
+  std::vector<Landmark> lms;
+};
+
+Cage& cage() {
+  static Cage c;
+  if (c.mesh.fn == 0) {
+    ribcage::RibCageParams p;
+    p.edgeLength = 6.0;
+    p.ribPairs = 12;
+    c.lms = ribcage::generateRibCage(p, c.mesh);
+  }
+  return c;
+}
+
+nuss::Options coarse() {
+  nuss::Options o;
+  o.mesh.order = 1;
+  o.mesh.radiusEdgeRatio = 0;  // boundary-constrained Delaunay only: fast
+  o.nonlinear = false;
+  o.force = 10;
+  return o;
+}
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(NussAnalysis, LinearModelLoadsSupportsCalibrationAndBadInput) {
+  const auto surf = nuss::cageFromMesh(cage().mesh);
+  ASSERT_GT(surf.surface.faces.size(), 3000u);
+  const auto& lms = cage().lms;
+
+  auto o = coarse();
+  const nuss::Analysis a = nuss::analyze(surf, lms, o);
+  // every joint landmark holds nodes, four support patches, Fe on the sternum
+  EXPECT_GE(a.fixedNodes.size(), 24u * 3);
+  ASSERT_EQ(a.supportNodes.size(), 4u);
+  for (const auto& s : a.supportNodes) EXPECT_GE(s.size(), 1u);
+  EXPECT_EQ(a.supportNames[0], "right rib 4");
+  EXPECT_EQ(a.supportNames[3], "left rib 5");
+  // loads: Fe along +y on the sternum, the four Fsr = Fe/4 opposite: self-equilibrated
+  const fe::Problem p = nuss::problemAt(a, o, 100.0);
+  Eigen::Vector3d sum = Eigen::Vector3d::Zero(), up = Eigen::Vector3d::Zero();
+  for (size_t n = 0; n < p.force.size(); ++n) sum += p.force[n];
+  for (int n : a.sternumNodes) up += p.force[n];
+  EXPECT_LT(sum.norm(), 1e-9);
+  EXPECT_NEAR(up.y(), 100.0, 1e-9);
+  for (const auto& s : a.supportNodes) {
+    double fy = 0;
+    for (int n : s) fy += p.force[n].y();
+    EXPECT_NEAR(fy, -25.0, 1e-9);
+  }
+  // joints do not move; the sternum end rises; linear: elevation = compliance * force
+  for (int n : a.fixedNodes) EXPECT_EQ(a.result.displacement(n).norm(), 0.0);
+  EXPECT_GT(a.elevation, 0.0);
+  EXPECT_NEAR(a.elevation, a.linearCompliance * 10.0, 1e-6 * a.elevation);
+  ASSERT_GE(a.curve.size(), 2u);
+  EXPECT_NEAR(a.curve.back().first, 10.0, 1e-9);
+  // the largest strains are in the cartilage (E 940x lower than bone), as the thesis reports
+  EXPECT_GT(a.maxStrainCartilage, 10 * a.maxStrainBone);
+  EXPECT_EQ(a.maxStrainAt.tissue, int(Tissue::Cartilage));
+  EXPECT_GT(a.maxStress, 0.0);
+  EXPECT_LE(a.maxStress, a.maxStressAll);
+  // the strain path along the right 5th rib starts at the sternum and reaches bone
+  const auto path = nuss::strainAlongRib(a, 1, 5);
+  ASSERT_GE(path.size(), 10u);
+  bool cart = false, bone = false;
+  for (const auto& s : path) cart |= s.tissue == int(Tissue::Cartilage), bone |= s.tissue == int(Tissue::Bone);
+  EXPECT_TRUE(cart && bone);
+
+  // calibration (linear): the target in <= 3 solves, within the tolerance
+  auto oc = coarse();
+  oc.targetElevation = 20.0;
+  const nuss::Analysis c = nuss::analyze(surf, lms, oc);
+  ASSERT_TRUE(c.calibration.has_value());
+  EXPECT_NEAR(c.elevation, 20.0, 0.1);
+  EXPECT_LE(c.calibration->evaluations, 3);
+  EXPECT_NEAR(c.force, 20.0 / a.linearCompliance, 0.1 / a.linearCompliance);
+
+  // large displacement at a small force stays close to linear (within 3%), and is stiffer
+  auto on = coarse();
+  on.nonlinear = true;
+  on.force = 0.5;
+  const nuss::Analysis n = nuss::analyze(surf, lms, on);
+  EXPECT_GT(n.elevation, 0.97 * 0.5 * a.linearCompliance);
+  EXPECT_LT(n.elevation, 1.01 * 0.5 * a.linearCompliance);
+  EXPECT_GE(n.curve.size(), 2u);
+
+  // bad input: each a message naming what to fix
+  auto noJoints = lms;
+  noJoints.erase(std::remove_if(noJoints.begin(), noJoints.end(), [](const Landmark& l) { return l.code < 300; }), noJoints.end());
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, noJoints, coarse()); }).find("costovertebral joint landmarks"), std::string::npos);
+  auto noRib12 = lms;
+  noRib12.erase(std::remove_if(noRib12.begin(), noRib12.end(), [](const Landmark& l) { return l.code == 112; }), noRib12.end());
+  const std::string e12 = errorOf([&] { nuss::analyze(surf, noRib12, coarse()); });
+  EXPECT_NE(e12.find("right rib 12"), std::string::npos) << e12;
+  auto noSternum = lms;
+  noSternum.erase(std::remove_if(noSternum.begin(), noSternum.end(), [](const Landmark& l) { return l.code == kSternumLowerEnd; }), noSternum.end());
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, noSternum, coarse()); }).find("lower sternum end"), std::string::npos);
+  auto space7 = coarse();
+  space7.place.intercostalSpace = 7;
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, lms, space7); }).find("intercostal space 7"), std::string::npos);
+  auto unreachable = coarse();
+  unreachable.targetElevation = 50.0;
+  unreachable.maxForce = 0.5 * 50.0 / a.linearCompliance;
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, lms, unreachable); }).find("reaches the target"), std::string::npos);
+  auto badNu = coarse();
+  badNu.nuCartilage = 0.5;
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, lms, badNu); }).find("Poisson"), std::string::npos);
+}
+
+TEST(NussAnalysis, UnlabelledOrEmptyLayersAreRefused) {
+  CMeshO m;
+  EXPECT_NE(errorOf([&] { nuss::cageFromMesh(m); }).find("no faces"), std::string::npos);
+  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(m, cage().mesh);  // copies geometry, not the label attributes
+  m.face.DisableColor();
+  m.face.DisableQuality();
+  EXPECT_NE(errorOf([&] { nuss::cageFromMesh(m); }).find("no tissue labels"), std::string::npos);
+}
+
+TEST(NussAnalysis, MicroEdgesAreWelded) {
+  // a tetrahedron with one vertex split into two 1e-6 apart (a sliver tent): welded back to 4 faces
+  CMeshO m;
+  auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, 5);
+  const float P[5][3] = {{0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {0, 0, 10}, {0, 0, 10.000001f}};
+  for (int i = 0; i < 5; ++i) vi[i].P() = Point3m(P[i][0], P[i][1], P[i][2]);
+  auto add = [&](int a, int b, int c) { vcg::tri::Allocator<CMeshO>::AddFace(m, &m.vert[a], &m.vert[b], &m.vert[c]); };
+  add(0, 2, 1);
+  add(0, 1, 3);
+  add(1, 2, 4);
+  add(2, 0, 3);
+  add(1, 4, 3);  // degenerate after welding 3-4
+  add(2, 3, 4);  // degenerate after welding 3-4
+  writeFaceLabels(m, std::vector<int>(m.face.size(), 1), std::vector<int>(m.face.size(), 101));
+  const auto c = nuss::cageFromMesh(m);
+  EXPECT_EQ(c.surface.vertices.size(), 4u);
+  EXPECT_EQ(c.surface.faces.size(), 4u);
+  EXPECT_EQ(c.nodeOfVertex[3], c.nodeOfVertex[4]);
+  EXPECT_EQ(c.weldedFaces, 2);
+}

@@ -1,0 +1,69 @@
+// Command-line driver of the Nuss FE analysis core (bench/nuss_convergence.py, quick studies):
+//   pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]
+//                   [--target mm | --force N] [--linear] [--space s] [--threads n] [--vtu out.vtu]
+// Builds the default rib cage, runs the analysis and prints one line of key=value figures.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <string>
+
+#include "nuss_analysis.h"
+#include "pectus/errors.h"
+#include "pectus/fe/io.h"
+#include "ribcage.h"
+
+using namespace pectus;
+
+int main(int argc, char** argv) {
+  ribcage::RibCageParams rp;
+  rp.edgeLength = 4.0;
+  nuss::Options o;
+  o.targetElevation = 0;
+  std::string vtu;
+  for (int i = 1; i < argc; ++i) {
+    auto next = [&]() -> const char* {
+      if (i + 1 >= argc) { std::fprintf(stderr, "missing value after %s\n", argv[i]); std::exit(2); }
+      return argv[++i];
+    };
+    const std::string a = argv[i];
+    if (a == "--edge") rp.edgeLength = std::atof(next());
+    else if (a == "--haller") rp.hallerIndex = std::atof(next());
+    else if (a == "--age") rp.age = std::atof(next());
+    else if (a == "--order") o.mesh.order = std::atoi(next());
+    else if (a == "--maxvol") o.mesh.maxVolume = std::atof(next());
+    else if (a == "--quality") o.mesh.radiusEdgeRatio = std::atof(next());
+    else if (a == "--target") o.targetElevation = std::atof(next());
+    else if (a == "--force") o.force = std::atof(next());
+    else if (a == "--linear") o.nonlinear = false;
+    else if (a == "--space") o.place.intercostalSpace = std::atoi(next());
+    else if (a == "--vtu") vtu = next();
+    else { std::fprintf(stderr, "usage: see the header of tools/nuss_cli.cpp (unknown argument %s)\n", argv[i]); return 2; }
+  }
+  try {
+    CMeshO cage;
+    const auto t0 = std::chrono::steady_clock::now();
+    const auto lms = ribcage::generateRibCage(rp, cage);
+    const double tCage = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    const auto surf = nuss::cageFromMesh(cage);
+    const auto a = nuss::analyze(surf, lms, o);
+    std::printf("faces=%zu tets=%d nodes=%d order=%d dofs=%d force=%.2f elevation=%.3f compliance=%.5f "
+                "maxStress=%.3f maxStrain=%.4f strainCart=%.4f strainBone=%.5f maxStressAll=%.3f nlSolves=%d newton=%d factor=%d "
+                "tCage=%.2f tMesh=%.2f tSolve=%.2f\n",
+                surf.surface.faces.size(), a.mesh.numTets(), a.mesh.numNodes(), a.mesh.order,
+                3 * a.mesh.numNodes() - 3 * int(a.fixedNodes.size()), a.force, a.elevation, a.linearCompliance,
+                a.maxStress, a.maxStrain, a.maxStrainCartilage, a.maxStrainBone, a.maxStressAll, a.nonlinearSolves,
+                a.newtonIterations, a.factorizations, tCage, a.secondsMesh, a.secondsSolve);
+    std::printf("max stress at %s\nmax strain at %s\n", a.maxStressAt.describe().c_str(), a.maxStrainAt.describe().c_str());
+    std::printf("fixed %zu, sternum %zu, supports", a.fixedNodes.size(), a.sternumNodes.size());
+    for (size_t k = 0; k < a.supportNodes.size(); ++k) std::printf(" %s:%zu", a.supportNames[k].c_str(), a.supportNodes[k].size());
+    std::printf("\ncurve");
+    for (const auto& p : a.curve) std::printf(" %.0f:%.2f", p.first, p.second);
+    std::printf("\n");
+    if (!vtu.empty()) fe::writeVtu(vtu, a.mesh, &a.result);
+  } catch (const InputError& e) {
+    std::fprintf(stderr, "error: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}

@@ -1,0 +1,239 @@
+#include "filter_quad_convert.h"
+
+#include <vcg/complex/algorithms/update/bounding.h>
+#include <vcg/complex/algorithms/update/color.h>
+#include <vcg/complex/algorithms/update/normal.h>
+#include <vcg/complex/algorithms/update/topology.h>
+
+#include "pectus/c1_cmesh.h"
+#include "pectus/elements.h"
+#include "pectus/errors.h"
+#include "pectus/mesh_checks.h"
+#include "poly_io.h"
+#include "poly_mesh.h"
+#include "quad_convert.h"
+#include "structure.h"
+
+using pectus::ml::FilterContext;
+using pectus::ml::fmt;
+namespace pq = pectus::quad;
+
+namespace {
+/// Writes `p` into the layer (quads as faux-edge triangle pairs), per-face quality = the element's beta or
+/// alpha with MeshLab's red-to-blue ramp on [0, 1]. Call after ctx.modify(mm).
+void writeLayer(MeshModel& mm, const pq::PolyMesh& p) {
+  CMeshO& m = mm.cm;
+  pq::toCMesh(p, m);
+  mm.updateDataMask(MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR);
+  std::size_t k = 0;
+  for (const auto& f : p.F) {
+    const auto q = CMeshO::ScalarType(pq::polyQuality(p, f));
+    for (int j = 0; j < (f.nv == 4 ? 2 : 1); ++j) m.face[k++].Q() = q;
+  }
+  vcg::tri::UpdateColor<CMeshO>::PerFaceQualityRamp(m, 0.0f, 1.0f);
+  if (mm.hasDataMask(MeshModel::MM_FACEFACETOPO)) vcg::tri::UpdateTopology<CMeshO>::FaceFace(m);
+  if (mm.hasDataMask(MeshModel::MM_VERTFACETOPO)) vcg::tri::UpdateTopology<CMeshO>::VertexFace(m);
+  vcg::tri::UpdateBounding<CMeshO>::Box(m);
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFace(m);
+}
+
+std::string valenceLine(const std::vector<std::size_t>& h) {
+  std::string s;
+  for (std::size_t v = 1; v < h.size(); ++v) {
+    if (!h[v]) continue;
+    if (!s.empty()) s += ", ";
+    s += std::to_string(v) + (v + 1 == h.size() ? "+" : "") + ":" + std::to_string(h[v]);
+  }
+  return s.empty() ? "(no interior node)" : s;
+}
+
+void requireManifold(const MeshModel& mm) {
+  pectus::MeshRequirements req;
+  req.edgeManifold = true;
+  req.vertexManifold = true;
+  pectus::requireMesh(mm.cm, req, mm.label().toStdString());
+}
+}  // namespace
+
+FilterQuadConvertPlugin::FilterQuadConvertPlugin() {
+  const auto cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Polygonal | MeshFilterInterface::Remeshing);
+  pectus::ml::FilterSpec c;
+  c.id = FP_TRI_TO_QUAD;
+  c.name = "Convert Triangles to Quads";
+  c.info =
+      "Merges pairs of adjacent triangles into quads (thesis 4.1.2), in the current layer: the result replaces "
+      "the triangles (like MeshLab's own tri-to-quad filters), quads stored the MeshLab way as two triangles "
+      "sharing a faux edge.<br>"
+      "A pair is a candidate when the two triangles share an edge, are oriented alike, the angle between their "
+      "normals is at most the dihedral limit, and the quad's Knupp shape quality beta (thesis eq. 3-23, along "
+      "its own normal and along the pair's mean normal) is above the minimum quality, which is never below 0: "
+      "no non-convex or inverted quad is ever made.<br>"
+      "<b>Optimal pairing</b>: a maximum-weight matching of the dual graph (Edmonds' blossom algorithm, "
+      "LEMON), of maximum cardinality first (a perfect matching when one exists) and, among those, of "
+      "maximum total beta, like gmsh's Blossom-Quad. <b>Greedy pairing</b> (the thesis' conversion scheme): "
+      "pairs by decreasing beta, each taken when both triangles are still free.<br>"
+      "<b>Leftover triangles</b>: <i>Quad-dominant</i> keeps them. <i>All quads</i>: when triangles remain, "
+      "the quad-dominant mesh is split once, Catmull-Clark style (quad -&gt; 4 quads, triangle -&gt; 3 quads), "
+      "the new nodes at edge midpoints and element centres placed on the C1 (Goodman-Said) surface of the "
+      "input (thesis ch. 3): 100% quads, about twice as many elements as triangles in the input.<br>"
+      "Per-face quality gets each element's beta (quads) or alpha (triangles). The Log gives the % of quads, "
+      "the invalid quads (beta &lt;= 0), min / mean beta and the time. Refused with a message: a layer that "
+      "already holds quads (faux edges), non-manifold edges or vertices, and a mesh where no two triangles "
+      "make an acceptable quad (isolated triangles).";
+  c.cls = cls;
+  c.postCondition = MeshModel::MM_GEOMETRY_AND_TOPOLOGY_CHANGE | MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
+  addFilter(this, c);
+
+  pectus::ml::FilterSpec s;
+  s.id = FP_STRUCTURE;
+  s.name = "Mesh Structure Improvement";
+  s.info =
+      "The mesh structure modification operators of thesis 4.1.3 on the current layer, for a triangle mesh or a "
+      "quad (quad-dominant) mesh: <b>edge swapping</b> toward the ideal number of elements around a node (6 "
+      "triangles, 4 quads), <b>node elimination</b> of under-connected interior nodes (triangles: 3 "
+      "elements; quads: 2 or 3 elements), and <b>edge dividing</b> of long interior edges (longer than the "
+      "factor times the mean edge length; two triangles -&gt; four, two quads -&gt; three), the new node on "
+      "the C1 surface of the layer.<br>"
+      "An operation is applied only if every new element is valid, the worst quality of the elements it "
+      "replaces does not drop, the valence or the local quality improves, and the neighbourhood is nearly flat "
+      "(element normals within the dihedral limit), so the surface is kept; the boundary is never changed. In "
+      "quad mode the operators act on quads; leftover triangles stay. Passes repeat until nothing changes.<br>"
+      "The Log gives the number of each operation and the histogram of interior-node valences before and "
+      "after. Refused with a message: non-manifold edges or vertices, faux edges that do not describe quads.";
+  s.cls = cls;
+  s.postCondition = MeshModel::MM_GEOMETRY_AND_TOPOLOGY_CHANGE | MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
+  addFilter(this, s);
+
+  pectus::ml::FilterSpec w;
+  w.id = FP_SAVE_POLY;
+  w.name = "Save Polygonal Mesh";
+  w.info =
+      "Writes the current layer with real quads (faux-edge triangle pairs) and its remaining triangles to a "
+      "file: Wavefront OBJ, OFF or legacy VTK polydata (ASCII). MeshLab 2020.09 cannot save quads from "
+      "meshlabserver (its OBJ and PLY exporters write triangles, its OFF exporter writes wrong indices).<br>"
+      "The layer is not changed. An unwritable path is refused with a message.";
+  w.cls = MeshFilterInterface::Polygonal;
+  addFilter(this, w);
+}
+
+void FilterQuadConvertPlugin::initParameters(int id, MeshDocument&, RichParameterList& par) {
+  if (id == FP_TRI_TO_QUAD) {
+    par.addParam(RichEnum("pairing", 0, QStringList() << "Optimal (maximum-weight matching)" << "Greedy (by quad quality)",
+                          "Pairing",
+                          "Optimal: maximum-cardinality, maximum total beta matching of the dual graph (Blossom). "
+                          "Greedy: the thesis' scheme, best quads first."));
+    par.addParam(RichEnum("leftovers", 0, QStringList() << "All quads" << "Quad-dominant", "Leftover triangles",
+                          "All quads: if triangles remain unpaired, split every element once into quads (new nodes on "
+                          "the C1 surface). Quad-dominant: keep the unpaired triangles."));
+    par.addParam(RichFloat("minQuality", 0.0f, "Minimum quad quality (beta)",
+                           "Pairs whose quad has beta at or below this are never merged. In [0, 1); 0 only "
+                           "excludes non-convex and inverted quads."));
+    par.addParam(RichFloat("maxDihedral", 60.0f, "Dihedral limit (degrees)",
+                           "Pairs whose two triangles' normals differ by more than this angle are never merged "
+                           "(keeps creases). In (0, 180]."));
+  }
+  if (id == FP_STRUCTURE) {
+    par.addParam(RichBool("edgeSwap", true, "Edge swapping", "Swap edges toward the ideal valence (6 / 4)."));
+    par.addParam(RichBool("nodeElimination", true, "Node elimination",
+                          "Remove interior nodes with too few elements (triangles: 3; quads: 2, 3)."));
+    par.addParam(RichBool("edgeDividing", true, "Edge dividing", "Divide long interior edges at their middle."));
+    par.addParam(RichFloat("longEdgeFactor", 1.6f, "Long edge factor",
+                           "An interior edge longer than this times the mean edge length is divided. > 1."));
+    par.addParam(RichFloat("maxDihedral", 30.0f, "Dihedral limit (degrees)",
+                           "Operators act only where the normals of the elements involved differ by at most this "
+                           "angle, so the surface is kept. In (0, 180]."));
+    par.addParam(RichInt("maxPasses", 10, "Maximum passes", "Upper bound on the passes over the mesh."));
+  }
+  if (id == FP_SAVE_POLY) {
+    par.addParam(RichSaveFile("fileName", "quads.obj", ".obj", "File", "The file to write (its folder must exist)."));
+    par.addParam(RichEnum("format", 0, QStringList() << "OBJ" << "OFF" << "VTK (legacy polydata)", "Format",
+                          "OBJ: v / f records. OFF: polygon lists. VTK: legacy ASCII POLYDATA with POLYGONS."));
+  }
+}
+
+void FilterQuadConvertPlugin::run(int id, FilterContext& ctx) {
+  switch (id) {
+    case FP_TRI_TO_QUAD: runConvert(ctx); break;
+    case FP_STRUCTURE: runStructure(ctx); break;
+    case FP_SAVE_POLY: runSave(ctx); break;
+    default: throw std::logic_error("unknown filter id");
+  }
+}
+
+void FilterQuadConvertPlugin::runConvert(FilterContext& ctx) {
+  MeshModel& mm = ctx.current();
+  const std::string layer = mm.label().toStdString();
+  pq::ConvertOptions o;
+  o.pairing = ctx.enumIn("pairing", 2) == 1 ? pq::Pairing::Greedy : pq::Pairing::Optimal;
+  o.leftovers = ctx.enumIn("leftovers", 2) == 1 ? pq::Leftovers::QuadDominant : pq::Leftovers::AllQuads;
+  o.minQuality = ctx.floatIn("minQuality", 0, 1, false, true);
+  o.maxDihedralDeg = ctx.floatIn("maxDihedral", 0, 180, true, false);
+  requireManifold(mm);
+  if (pectus::hasFauxEdges(mm.cm))
+    throw pectus::InputError("layer '" + layer + "' already holds quads or polygons (faux edges); "
+                             "convert a triangle mesh, or use 'Mesh Structure Improvement' on the quads");
+  ctx.progress(5, "pairing triangles");
+  const auto tri = pectus::c1::toTriMesh(mm.cm);
+  const auto r = pq::convertToQuads(tri, o);
+
+  ctx.progress(90, "writing quads");
+  ctx.modify(mm);
+  writeLayer(mm, r.mesh);
+  const auto& s = r.stats;
+  ctx.log("Convert Triangles to Quads (" + std::string(o.pairing == pq::Pairing::Greedy ? "greedy" : "optimal") + ", " +
+          (o.leftovers == pq::Leftovers::AllQuads ? "all quads" : "quad-dominant") + "): " + std::to_string(tri.F.size()) +
+          " triangles, " + std::to_string(r.candidates) + " candidate pairs, " + std::to_string(r.merged) +
+          " merged, " + std::to_string(r.leftoverTriangles) + " left over" +
+          (r.subdivided ? "; split into quads (" + std::to_string(r.newNodes) + " new nodes on the C1 surface)" : ""));
+  ctx.log("Quads: " + fmt(s.quadPercent, 1) + "% quads (" + std::to_string(s.quads) + " quads, " +
+          std::to_string(s.triangles) + " triangles); invalid quads (beta <= 0): " + std::to_string(s.invalidQuads) +
+          "; beta min " + fmt(s.beta.min) + " mean " + fmt(s.beta.mean) + "; time " + fmt(r.seconds, 3) + " s");
+}
+
+void FilterQuadConvertPlugin::runStructure(FilterContext& ctx) {
+  MeshModel& mm = ctx.current();
+  pq::StructureOptions o;
+  o.swap = ctx.boolean("edgeSwap");
+  o.eliminate = ctx.boolean("nodeElimination");
+  o.divide = ctx.boolean("edgeDividing");
+  o.longEdgeFactor = ctx.floatIn("longEdgeFactor", 1, 100, true, false);
+  o.maxDihedralDeg = ctx.floatIn("maxDihedral", 0, 180, true, false);
+  o.maxPasses = ctx.intIn("maxPasses", 1, 1000);
+  requireManifold(mm);
+  const bool quads = pectus::hasFauxEdges(mm.cm);
+  const auto pm = pq::fromCMesh(mm.cm, quads);
+  ctx.progress(5, "building the C1 surface");
+  pectus::c1::C1Surface surface(pectus::c1::toTriMesh(mm.cm));
+  surface.buildIndex();
+  ctx.progress(20, "structure operators");
+  const auto r = pq::improveStructure(pm, &surface, o);
+
+  ctx.modify(mm);
+  writeLayer(mm, r.mesh);
+  const auto& b = r.before;
+  const auto& a = r.after;
+  const std::string q = quads ? "beta" : "alpha";
+  const auto& qb = quads ? b.beta : b.alpha;
+  const auto& qa = quads ? a.beta : a.alpha;
+  ctx.log("Mesh Structure Improvement (" + std::string(quads ? "quads" : "triangles") + "): edge swaps " +
+          std::to_string(r.swaps) + ", node eliminations " + std::to_string(r.eliminations) + ", edge divisions " +
+          std::to_string(r.divisions) + "; passes " + std::to_string(r.passes) + "; elements " +
+          std::to_string(pm.F.size()) + " -> " + std::to_string(r.mesh.F.size()) + "; worst " + q + " " + fmt(qb.min) +
+          " -> " + fmt(qa.min) + ", mean " + q + " " + fmt(qb.mean) + " -> " + fmt(qa.mean) + "; time " +
+          fmt(r.seconds, 3) + " s");
+  ctx.log("Valence of interior nodes before: " + valenceLine(b.valence));
+  ctx.log("Valence of interior nodes after: " + valenceLine(a.valence));
+}
+
+void FilterQuadConvertPlugin::runSave(FilterContext& ctx) {
+  MeshModel& mm = ctx.current();
+  const std::string path = ctx.params().getSaveFileName("fileName").toStdString();
+  const int f = ctx.enumIn("format", 3);
+  pectus::requireMesh(mm.cm, {}, mm.label().toStdString());
+  const auto pm = pq::fromCMesh(mm.cm, pectus::hasFauxEdges(mm.cm));
+  pq::writePolyMesh(path, pm, f == 0 ? pq::PolyFormat::OBJ : f == 1 ? pq::PolyFormat::OFF : pq::PolyFormat::VTK);
+  ctx.log("Save Polygonal Mesh: wrote " + std::to_string(pm.V.size()) + " vertices, " + std::to_string(pm.quads()) +
+          " quads, " + std::to_string(pm.triangles()) + " triangles to " + path);
+}
+
+MESHLAB_PLUGIN_NAME_EXPORTER(FilterQuadConvertPlugin)

@@ -1,0 +1,118 @@
+#!/usr/bin/env python3
+"""Run the Nuss analysis and the volume/index measures over a cohort of patient rib cages, one meshlabserver
+per patient, and collect one summary CSV (issue 9). Standard library only (+ the project's pectus_mlx).
+
+A cohort folder holds patients.csv (columns: case,sex,age,elevation_mm) and, per case, CASE.ply (the closed
+rib cage with tissue labels as face colour + face quality, e.g. from 'Create Pectus Excavatum Rib Cage' saved
+with -m fc fq, or from a segmentation tool relabelled so) and CASE_landmarks.ply (landmark points, code in
+the vertex quality; labels.h).
+
+    python3 python/cohort.py demo DIR              # five synthetic patients shaped like the thesis' Table 6-1
+    python3 python/cohort.py run DIR CASE OUTDIR   # one patient -> OUTDIR/CASE/ (what GNU parallel / an array job calls)
+    python3 python/cohort.py collect DIR OUTDIR    # OUTDIR/cohort_summary.csv from every OUTDIR/*/summary.csv
+    scripts/cohort.sh DIR [OUTDIR] [--quick]       # all of it in parallel (GNU parallel); cluster: scripts/cohort_array.sh
+"""
+from __future__ import annotations
+
+import csv
+import os
+import sys
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+sys.path.insert(0, HERE)
+import pectus_mlx as mlx  # noqa: E402
+import pipeline  # noqa: E402
+
+# Table 6-1: sex/age, pectus index, measured elevation of the end of the sternum (mm)
+THESIS = [("case1", "M", 8, 5.3, 44.7), ("case2", "F", 7, 4.7, 34.0), ("case3", "M", 7, 5.2, 39.9),
+          ("case4", "M", 6, 3.7, 35.4), ("case5", "M", 5, 3.6, 37.5)]
+
+
+def patients(folder: str) -> list[dict]:
+    with open(os.path.join(folder, "patients.csv")) as fh:
+        return list(csv.DictReader(fh))
+
+
+def demo(folder: str, edge: float = 5.0) -> int:
+    os.makedirs(folder, exist_ok=True)
+    with open(os.path.join(folder, "patients.csv"), "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["case", "sex", "age", "elevation_mm"])
+        for case, sex, age, haller, elev in THESIS:
+            w.writerow([case, sex, age, elev])
+    for case, sex, age, haller, elev in THESIS:
+        gen = pipeline.example("ribcage", "Create Pectus Excavatum Rib Cage").set(age=age, hallerIndex=haller, edgeLength=edge)
+        res = mlx.run([], mlx.Script([gen]), [(os.path.join(folder, f"{case}.ply"), "fc fq", 0),
+                                             (os.path.join(folder, f"{case}_landmarks.ply"), "vq", 1)])
+        print(f"{case}: {'ok' if res.rc == 0 else 'FAILED'}", flush=True)
+        if res.rc != 0:
+            print(res.stdout[-2000:], file=sys.stderr)
+            return 1
+    return 0
+
+
+def run_one(folder: str, case: str, outdir: str, quick: bool = False) -> int:
+    row = next((p for p in patients(folder) if p["case"] == case), None)
+    if row is None:
+        print(f"case {case} is not in {folder}/patients.csv", file=sys.stderr)
+        return 2
+    out = os.path.join(os.path.abspath(outdir), case)
+    os.makedirs(out, exist_ok=True)
+    elev = float(row["elevation_mm"])
+    # inputs: landmarks (layer 0), then the cage (layer 1, current); the FE adds layers 2 and 3
+    script = mlx.Script(pipeline.analysis_filters(out, elev, quick, cage=1, landmarks=0))
+    path = script.write(os.path.join(out, "analysis.mlx"))
+    res = mlx.run([os.path.join(folder, f"{case}_landmarks.ply"), os.path.join(folder, f"{case}.ply")], path,
+                  [(os.path.join(out, "nuss_result.ply"), "vq vc fc fq", 2)])
+    with open(os.path.join(out, "meshlabserver.log"), "w") as fh:
+        fh.write(res.stdout)
+    r = pipeline.parse(res.log)
+    pipeline.write_summary(os.path.join(out, "summary.csv"), r, row["sex"], float(row["age"]), elev, case)
+    print(f"{case}: rc {res.rc}, Fe {r['force']} N, elevation {r['elevation']} mm, slice {r['slice_change_pct']} %, "
+          f"envelope {r['envelope_change_pct']} %", flush=True)
+    return 0 if res.rc == 0 else 1
+
+
+def collect(folder: str, outdir: str) -> int:
+    rows, header = [], None
+    for p in patients(folder):
+        s = os.path.join(outdir, p["case"], "summary.csv")
+        if not os.path.exists(s):
+            print(f"{p['case']}: no summary (failed or not run)", file=sys.stderr)
+            continue
+        with open(s) as fh:
+            rd = list(csv.reader(fh))
+        header = header or rd[0]
+        rows.append(rd[1])
+    path = os.path.join(outdir, "cohort_summary.csv")
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        if header:
+            w.writerow(header)
+        w.writerows(rows)
+    keys = ["case", "sex", "age", "target_elevation_mm", "force", "elevation", "max_stress", "max_strain",
+            "slice_change_pct", "envelope_change_pct", "haller_before", "haller_after"]
+    if header:
+        idx = [header.index(k) for k in keys]
+        print(" ".join(f"{k:>12.12s}" for k in keys))
+        for r in rows:
+            print(" ".join(f"{r[i][:12]:>12s}" for i in idx))
+    print(f"cohort summary: {path} ({len(rows)} cases)")
+    return 0 if rows else 1
+
+
+def main(argv: list[str]) -> int:
+    quick = "--quick" in argv
+    a = [x for x in argv[1:] if x != "--quick"]
+    if len(a) >= 2 and a[0] == "demo":
+        return demo(a[1])
+    if len(a) >= 4 and a[0] == "run":
+        return run_one(a[1], a[2], a[3], quick)
+    if len(a) >= 3 and a[0] == "collect":
+        return collect(a[1], a[2])
+    print(__doc__, file=sys.stderr)
+    return 2
+
+
+if __name__ == "__main__":
+    sys.exit(main(sys.argv))

@@ -1,0 +1,57 @@
+"""Complete, typed filter definitions of the pectus-meshlab filters for .mlx scripts (standard library only).
+
+Each function returns a pectus_mlx.Filter with every parameter the filter declares (meshlabserver aborts
+on a missing one), defaults as in the GUI, any of them overridable by keyword:
+
+    from pectus_filters import create_ribcage, nuss_fea
+    s = Script([create_ribcage(edgeLength=4.0, hallerIndex=5.3, age=8), nuss_fea(landmarkLayer=1)])
+"""
+from __future__ import annotations
+
+import pectus_mlx as mlx
+from pectus_mlx import Bool, Enum, Filter, Float, Int, Mesh, Point3, SaveFile
+
+
+def _build(name: str, spec: dict, overrides: dict) -> Filter:
+    params = {}
+    for key, (kind, default, *extra) in spec.items():
+        v = overrides.pop(key, default)
+        if isinstance(v, mlx._P):
+            params[key] = v
+        elif kind is Enum:
+            params[key] = Enum(v, extra[0])
+        else:
+            params[key] = kind(v)
+    if overrides:
+        raise TypeError(f"{name}: unknown parameter(s) {sorted(overrides)}")
+    return Filter(name, **params)
+
+
+RIBCAGE_SIZE = ["From age", "Explicit dimensions"]
+
+
+def create_ribcage(**kw) -> Filter:
+    return _build("Create Pectus Excavatum Rib Cage", {
+        "sizeMode": (Enum, 0, RIBCAGE_SIZE), "age": (Float, 7.0), "chestWidth": (Float, 181.0),
+        "chestDepth": (Float, 74.0), "spineHeight": (Float, 172.0), "ribPairs": (Int, 12),
+        "hallerIndex": (Float, 4.0), "funnelCenterX": (Float, 0.0), "funnelCenterZ": (Float, 0.8),
+        "funnelWidth": (Float, 80.0), "funnelHeight": (Float, 70.0), "edgeLength": (Float, 2.0)}, dict(kw))
+
+
+NUSS_MODE = ["Calibrate Fe to the target elevation", "Given elevating force"]
+NUSS_ANALYSIS = ["Large displacement (nonlinear)", "Small strain (linear)"]
+NUSS_ORDER = ["Quadratic TET10 (no locking)", "Linear TET4 (thesis, ANSYS SOLID185)"]
+NUSS_FIELD = ["von Mises stress (MPa)", "Equivalent strain"]
+SIDES = ["Right", "Left"]
+
+
+def nuss_fea(**kw) -> Filter:
+    return _build("Nuss Procedure FE Analysis", {
+        "landmarkLayer": (Mesh, 1), "mode": (Enum, 0, NUSS_MODE), "targetElevation": (Float, 44.7),
+        "force": (Float, 140.0), "maxForce": (Float, 1000.0), "tolerance": (Float, 0.1),
+        "analysis": (Enum, 0, NUSS_ANALYSIS), "order": (Enum, 0, NUSS_ORDER), "tetQuality": (Float, 2.0),
+        "maxTetVolume": (Float, 0.0), "nuBone": (Float, 0.3), "nuCartilage": (Float, 0.4),
+        "intercostalSpace": (Int, 4), "jointRadius": (Float, 6.0), "sternumLoadRadius": (Float, 8.0),
+        "ribSupportRadius": (Float, 6.0), "usePoints": (Bool, False), "sternumPoint": (Point3, (0, 0, 0)),
+        "exitRight": (Point3, (0, 0, 0)), "exitLeft": (Point3, (0, 0, 0)), "field": (Enum, 0, NUSS_FIELD),
+        "pathSide": (Enum, 0, SIDES), "pathRib": (Int, 5), "resultBase": (SaveFile, "")}, dict(kw))

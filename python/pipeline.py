@@ -1,0 +1,201 @@
+#!/usr/bin/env python3
+"""The thesis pipeline in one MeshLab script, run by the real meshlabserver (issue 9):
+
+  create the pectus rib cage (thesis patient 1: boy of 8, pectus index 5.3) -> element quality ->
+  MGA smoothing -> Nuss FE analysis with the force calibrated to the measured elevation (44.7 mm) ->
+  thoracic volume by the slice and the Ferguson envelope methods, before and after -> pectus index
+  before and after.
+
+The script is assembled from the filters' example scripts (every parameter, typed) with a few values
+overridden, written next to the results as pipeline.mlx (it runs unchanged in the GUI: Filters >
+Load filter script... > pipeline.mlx, Apply). Results: the layers as PLY, the FE model (.vtu, .inp),
+the force-displacement CSV/PNG, the rib strain CSV, quality histograms, summary.csv, and a table
+shaped like the thesis' Table 6-1 on stdout.
+
+    python3 python/pipeline.py [OUTDIR] [--age 8] [--haller 5.3] [--elevation 44.7] [--quick]
+"""
+from __future__ import annotations
+
+import argparse
+import csv
+import datetime
+import os
+import re
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, HERE)
+import pectus_mlx as mlx  # noqa: E402
+
+EX = {
+    "ribcage": os.path.join(ROOT, "filter_nuss_fea", "examples", "create_ribcage.mlx"),
+    "nuss": os.path.join(ROOT, "filter_nuss_fea", "examples", "nuss_fea.mlx"),
+    "quality": os.path.join(ROOT, "filter_mga_smooth", "examples", "element_quality.mlx"),
+    "mga": os.path.join(ROOT, "filter_mga_smooth", "examples", "mga_smooth.mlx"),
+    "slice": os.path.join(ROOT, "filter_thoracic_volume", "examples", "thoracic_volume_slice.mlx"),
+    "envelope": os.path.join(ROOT, "filter_thoracic_volume", "examples", "thoracic_volume_envelope.mlx"),
+    "index": os.path.join(ROOT, "filter_thoracic_volume", "examples", "pectus_index.mlx"),
+}
+
+# layers of the document while the script runs (no input files: the generator creates them)
+CAGE, LANDMARKS, RESULT, LANDMARKS_AFTER = 0, 1, 2, 3
+
+
+def example(key: str, name: str) -> mlx.Filter:
+    for f in mlx.load_script(EX[key]):
+        if f.name == name:
+            return f
+    raise KeyError(f"{name!r} not in {EX[key]}")
+
+
+def analysis_filters(outdir: str, elevation: float, quick: bool, cage: int, landmarks: int) -> list:
+    """Nuss FE (calibrated) on the current layer, then both volumes and the pectus index, before = `cage`."""
+    nuss = example("nuss", "Nuss Procedure FE Analysis").set(
+        landmarkLayer=landmarks, mode=0, targetElevation=elevation,
+        resultBase=mlx.SaveFile(os.path.join(outdir, "nuss") + ".vtu", ".vtu"))
+    if quick:
+        nuss.set(analysis=1, order=1, tetQuality=0.0)  # small strain TET4: seconds, for the end-to-end test
+    else:
+        nuss.set(analysis=0, order=0, tetQuality=0.0)  # large displacement, TET10
+    compare = dict(compare=True, beforeLayer=cage, landmarkLayer=landmarks)
+    sl = example("slice", "Thoracic Volume (Slice Method)").set(**compare)
+    env = example("envelope", "Thoracic Volume (Ferguson Envelope)").set(**compare)
+    idx = example("index", "Pectus Index").set(**compare)
+    return [nuss, sl, env, idx]
+
+
+def build_script(outdir: str, age: float, haller: float, elevation: float, quick: bool) -> mlx.Script:
+    gen = example("ribcage", "Create Pectus Excavatum Rib Cage").set(age=age, hallerIndex=haller, edgeLength=5.0)
+    quality = example("quality", "Compute Element Quality (Triangle Alpha / Quad Beta)")
+    mga = example("mga", "MGA Surface Mesh Smoothing").set(maxSweeps=2 if quick else 4)
+    quality_after = example("quality", "Compute Element Quality (Triangle Alpha / Quad Beta)")
+    return mlx.Script([gen, quality, mga, quality_after] + analysis_filters(outdir, elevation, quick, CAGE, LANDMARKS))
+
+
+def grab(log: list[str], pattern: str, cast=float):
+    for line in log:
+        m = re.search(pattern, line)
+        if m:
+            return cast(m.group(1))
+    return None
+
+
+def grab_all(log: list[str], pattern: str):
+    return [float(m.group(1)) for m in (re.search(pattern, l) for l in log) if m]
+
+
+def parse(log: list[str]) -> dict:
+    q = [l for l in log if l.startswith("Element quality (")]
+    hist = [[int(x) for x in l.split(":", 1)[1].split()] for l in log if l.startswith("Element quality histogram")]
+    r = {
+        "haller_generator": grab(log, r"measured on mesh ([0-9.]+)"),
+        "faces": grab(log, r"Rib cage: ([0-9]+) faces", int),
+        "quality_mean_before": grab(q, r"mean ([0-9.]+)"),
+        "quality_min_before": grab(q, r"min ([0-9.]+)"),
+        "quality_mean_after": grab(q[1:], r"mean ([0-9.]+)"),
+        "quality_min_after": grab(q[1:], r"min ([0-9.]+)"),
+        "histograms": hist,
+        "mga": next((l for l in log if l.startswith("MGA smoothing")), ""),
+        "tets": grab(log, r"Nuss FE model: ([0-9]+) TET"),
+        "element": grab(log, r"Nuss FE model: [0-9]+ (TET[0-9]+)", str),
+        "force": grab(log, r"Fe = ([0-9.]+) N \(Fs"),
+        "elevation": grab(log, r"sternum end displacement ([0-9.]+) mm"),
+        "solves": grab(log, r"in ([0-9]+) solves", int),
+        "max_stress": grab(log, r"Max von Mises stress ([0-9.]+) MPa"),
+        "max_stress_where": grab(log, r"Max von Mises stress [0-9.]+ MPa at the (.*?) at \(", str),
+        "max_strain": grab(log, r"Max equivalent strain ([0-9.]+)"),
+        "max_strain_where": grab(log, r"Max equivalent strain [0-9.]+ at the (.*?) at \(", str),
+        "slice_change_cm3": grab(log, r"Slice method intrathoracic volume change: \+?(-?[0-9.]+) cm3"),
+        "slice_change_pct": grab(log, r"Slice method intrathoracic volume change: .*?\(\+?(-?[0-9.]+) ?%"),
+        "envelope_change_cm3": grab(log, r"Ferguson envelope thoracic volume change: \+?(-?[0-9.]+) cm3"),
+        "envelope_change_pct": grab(log, r"Ferguson envelope thoracic volume change: .*?\(\+?(-?[0-9.]+) ?%"),
+        "slice_volumes": grab_all(log, r"Slice method, layer .*intrathoracic volume ([0-9.]+) cm3"),
+        "envelope_volumes": grab_all(log, r"Ferguson envelope, layer .*thoracic volume ([0-9.]+) cm3"),
+        "haller": grab_all(log, r"Pectus index, layer .*Haller index ([0-9.]+)"),
+        "fe_seconds": grab(log, r"total ([0-9.]+) s; files"),
+    }
+    m = re.search(r"mean alpha ([0-9.]+) -> ([0-9.]+)", r["mga"] or "")
+    r["mga_mean"] = (float(m.group(1)), float(m.group(2))) if m else None
+    return r
+
+
+def table(r: dict, age: float, sex: str, target: float) -> str:
+    def f(v, fmt="{:.2f}"):
+        return "n/a" if v is None else fmt.format(v)
+    hb, ha = (r["haller"] + [None, None])[:2]
+    rows = [
+        ("Sex/Age", f"{sex}/{age:g}"),
+        ("Pectus (Haller) index before -> after", f"{f(hb)} -> {f(ha)}"),
+        ("Elevation of the end of sternum, target (cm)", f(target / 10, "{:.2f}")),
+        ("1. simulated displacement of the end of sternum (cm)", f(None if r["elevation"] is None else r["elevation"] / 10)),
+        ("2. loading force at sternum end (N)", f(r["force"], "{:.1f}")),
+        ("3. max. stress (MPa)", f"{f(r['max_stress'])}  at the {r['max_stress_where'] or 'n/a'}"),
+        ("4. max. strain", f"{f(r['max_strain'], '{:.3f}')}  at the {r['max_strain_where'] or 'n/a'}"),
+        ("5. increasing volume, slice method (cm3)", f(r["slice_change_cm3"])),
+        ("6. increasing volume, slice method (%)", f(r["slice_change_pct"])),
+        ("7. increasing volume, Ferguson envelope (cm3)", f(r["envelope_change_cm3"])),
+        ("8. increasing volume, Ferguson envelope (%)", f(r["envelope_change_pct"])),
+    ]
+    w = max(len(a) for a, _ in rows)
+    lines = ["Table 6-1 (this run; the thesis' patient 1: M/8, index 5.3, 4.47 cm, 4.49 cm, 140 N, 43.5 MPa, 0.93, 89.98 cm3, 6.09 %)",
+             "-" * (w + 50)]
+    lines += [f"{a:<{w}}  {b}" for a, b in rows]
+    return "\n".join(lines)
+
+
+def write_summary(path: str, r: dict, sex: str, age: float, elevation: float, case: str = ""):
+    keys = [k for k in r if not isinstance(r[k], (list, tuple))]
+    hb, ha = (r["haller"] + [None, None])[:2]
+    with open(path, "w", newline="") as fh:
+        w = csv.writer(fh)
+        w.writerow(["case", "sex", "age", "target_elevation_mm"] + keys + ["haller_before", "haller_after"])
+        w.writerow([case, sex, age, elevation] + [r[k] for k in keys] + [hb, ha])
+
+
+def run_pipeline(outdir: str, age=8.0, haller=5.3, elevation=44.7, sex="M", quick=False, prefix=None) -> tuple[int, dict, mlx.Result]:
+    os.makedirs(outdir, exist_ok=True)
+    script = build_script(outdir, age, haller, elevation, quick)
+    script_path = script.write(os.path.join(outdir, "pipeline.mlx"))
+    outputs = [(os.path.join(outdir, "ribcage_smoothed.ply"), "fc fq", CAGE),
+               (os.path.join(outdir, "ribcage_landmarks.ply"), "vq", LANDMARKS),
+               (os.path.join(outdir, "nuss_result.ply"), "vq vc fc fq", RESULT),
+               (os.path.join(outdir, "nuss_landmarks_after.ply"), "vq", LANDMARKS_AFTER),
+               (os.path.join(outdir, "envelope_before.ply"), "", 4),
+               (os.path.join(outdir, "envelope_after.ply"), "", 5)]
+    t0 = time.time()
+    res = mlx.run([], script_path, outputs, prefix=prefix)
+    r = parse(res.log)
+    r["seconds"] = time.time() - t0
+    with open(os.path.join(outdir, "meshlabserver.log"), "w") as fh:
+        fh.write(res.stdout)
+    write_summary(os.path.join(outdir, "summary.csv"), r, sex, age, elevation)
+    return res.rc, r, res
+
+
+def main(argv=None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("outdir", nargs="?")
+    ap.add_argument("--age", type=float, default=8.0)
+    ap.add_argument("--sex", default="M")
+    ap.add_argument("--haller", type=float, default=5.3)
+    ap.add_argument("--elevation", type=float, default=44.7, help="measured sternal elevation (mm)")
+    ap.add_argument("--quick", action="store_true", help="small-strain TET4 FE (seconds), for tests")
+    a = ap.parse_args(argv)
+    out = os.path.abspath(a.outdir or os.path.join(ROOT, "out", "pipeline-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S")))
+    rc, r, res = run_pipeline(out, a.age, a.haller, a.elevation, a.sex, a.quick)
+    if rc != 0:
+        print(res.stdout[-4000:], file=sys.stderr)
+        print(f"pipeline failed (meshlabserver exit {rc}); log in {out}/meshlabserver.log", file=sys.stderr)
+        return 1
+    print(table(r, a.age, a.sex, a.elevation))
+    print(f"\nMGA smoothing: {r['mga']}")
+    print(f"FE: {r['tets']} {r['element']} elements, calibrated in {r['solves']} solves, {r['fe_seconds']} s; "
+          f"whole pipeline {r['seconds']:.0f} s")
+    print(f"Output folder: {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
