@@ -30,7 +30,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "python"))
 import pectus_mlx as mlx  # noqa: E402
-from run_main import saddle_mesh, write_ply  # noqa: E402
+from pectus_meshes import saddle_mesh, write_ply  # noqa: E402
 
 CGAL_DATA = "/usr/share/doc/libcgal-dev/data.tar.gz"
 EX = os.path.join(ROOT, "filter_quad_convert", "examples")

@@ -15,6 +15,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import pipeline  # noqa: E402
+from pectus_meshes import saddle_mesh, write_ply  # noqa: E402,F401  (kept importable from here for older scripts)
 
 
 def plot_histograms(path: str, hists: list[list[int]], labels: list[str]):

@@ -83,6 +83,13 @@ std::optional<Eigen::Vector2d> interiorSeed(const std::vector<Seg2>& segs, const
   for (double y : crossings(segs, *in.midlineX))
     if (y > *in.spineY + 1e-6) yS = std::min(yS, y);
   if (!(yS < 1e299)) return std::nullopt;
+  // keep the segments' centroid (the slice rule's own seed) while it lies between vertebra and sternum
+  double len = 0, cy = 0;
+  for (const auto& sg : segs) {
+    const double l = (sg.b - sg.a).norm();
+    len += l, cy += l * 0.5 * (sg.a.y() + sg.b.y());
+  }
+  if (len > 0 && cy / len > *in.spineY && cy / len < yS) return std::nullopt;
   return Eigen::Vector2d(*in.midlineX, 0.5 * (*in.spineY + yS));
 }
 

@@ -9,7 +9,7 @@ import numpy as np
 from harness import SOURCE, check, finish, grid, read_ply, run, workdir, write_off, write_ply
 
 sys.path.insert(0, os.path.join(SOURCE, "python"))
-from run_main import saddle_mesh  # noqa: E402  (the project's jittered saddle, thesis eq. 3-25)
+from pectus_meshes import saddle_mesh  # noqa: E402  (the project's jittered saddle, thesis eq. 3-25)
 
 EX = os.path.join(SOURCE, "filter_quad_convert", "examples")
 d = workdir("quad")
