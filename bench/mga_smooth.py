@@ -33,7 +33,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "python"))
 import pectus_mlx as mlx  # noqa: E402
-import run_main  # noqa: E402  (the main job's saddle grid)
+import pectus_meshes  # noqa: E402  (the main job's saddle grid)
 
 
 def saddle(x, y):
@@ -75,8 +75,8 @@ def saddle_triangles(seed=3):
 
 
 def saddle_quads(n=25, jitter=0.3, seed=5):
-    """the main job's jittered saddle grid (python/run_main.py), its cells as quads: 625 nodes, 576 quads"""
-    V, _ = run_main.saddle_mesh(n_side=n, jitter=jitter, seed=seed)
+    """the main job's jittered saddle grid (python/pectus_meshes.py), its cells as quads: 625 nodes, 576 quads"""
+    V, _ = pectus_meshes.saddle_mesh(n_side=n, jitter=jitter, seed=seed)
     F = [[j * n + i, j * n + i + 1, (j + 1) * n + i + 1, (j + 1) * n + i] for j in range(n - 1) for i in range(n - 1)]
     return V, F
 
