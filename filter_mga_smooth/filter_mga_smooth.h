@@ -9,7 +9,7 @@ class FilterMgaSmoothPlugin : public QObject, public pectus::ml::FilterPluginBas
   Q_INTERFACES(MeshFilterInterface)
 
  public:
-  enum { FP_ELEMENT_QUALITY, FP_MGA_SMOOTH };
+  enum { FP_ELEMENT_QUALITY, FP_MGA_SMOOTH, FP_GRADIENT_SMOOTH };
   FilterMgaSmoothPlugin();
   QString pluginName() const override { return "FilterPectusMgaSmooth"; }
 
@@ -19,5 +19,6 @@ class FilterMgaSmoothPlugin : public QObject, public pectus::ml::FilterPluginBas
 
  private:
   void runElementQuality(pectus::ml::FilterContext& ctx);
-  void runMgaSmooth(pectus::ml::FilterContext& ctx);
+  /// both smoothing filters: MGA (thesis 4.2) and the conjugate gradient baseline (Table 4-1)
+  void runSmooth(pectus::ml::FilterContext& ctx, bool mga);
 };

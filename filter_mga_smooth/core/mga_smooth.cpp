@@ -124,9 +124,12 @@ struct Mesh {
   std::vector<std::vector<int>> vE;     // node -> elements
 };
 
-/// fitness of node n at position x with surface normal nrm: sum of element qualities if none is
-/// folded against nrm, else below any valid value
-double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double guard, double* minQ = nullptr) {
+/// fitness of node n at position x with surface normal nrm: sum of element qualities (cap > 0, the final
+/// pass: the worst element's quality up to the cap, plus kCapSumWeight times the sum) if none is folded
+/// against nrm and the worst is not below the guard, else below any valid value
+constexpr double kCapSumWeight = 0.01;
+double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double guard, double cap = 0,
+                 double* minQ = nullptr) {
   double sum = 0, lo = 1e300;
   int invalid = 0;
   Vec3 p[4];
@@ -148,10 +151,185 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
   }
   if (minQ) *minQ = lo;
   if (invalid) return -100.0 * invalid + 0.01 * sum;
-  return lo < guard ? -50.0 + 0.01 * sum : sum;
+  if (lo < guard) return -50.0 + 0.01 * sum;
+  return cap > 0 ? std::min(lo, cap) + kCapSumWeight * sum : sum;
 }
 
 QualityStats stats(const Mesh& M) { return summarizeQuality(elementQualities(M.E, M.X), 10); }
+
+/// One node's search: where it starts, the guard, and the best candidate found so far.
+struct NodeSearch {
+  const Mesh& M;
+  const Projector& proj;
+  int n;
+  Vec3 x0, n0;       ///< position and surface normal now
+  Loc l0;
+  double guard;      ///< the node's worst element may not drop below this
+  double cap;        ///< > 0: final pass fitness (the worst element up to cap, then the sum)
+  double startFit;   ///< fitness at x0
+  double bestFit;
+  Vec3 bestX;
+  Loc bestLoc;
+  double bestDist = 0;  ///< candidate-to-surface distance of the best
+  std::size_t evaluations = 0;
+
+  /// fitness of the surface point nearest to q (projected from the node's location); P, L: that point
+  double eval(const Vec3& q, Vec3& P, Loc& L) {
+    Vec3 N;
+    L = proj.project(q, l0, P, N);
+    ++evaluations;
+    return fitnessAt(M, n, P, N, guard, cap);
+  }
+  void offer(double fit, const Vec3& P, const Loc& L, const Vec3& q) {
+    if (fit > bestFit) {
+      bestFit = fit;
+      bestX = P;
+      bestLoc = L;
+      bestDist = (P - q).norm();
+    }
+  }
+};
+
+/// thesis steps 3-7: the micro-GA inside each triangle around the node (a quad gives two)
+void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed) {
+  static const std::vector<mga::Range> ranges{{0.0, 1.0}, {0.0, 0.5}};
+  static const std::vector<double> seedPoint{0.0, 0.0};
+  const Mesh& M = ns.M;
+  const int n = ns.n;
+  int tri = 0;
+  for (int ei : M.vE[std::size_t(n)]) {
+    const Element& e = M.E[std::size_t(ei)];
+    int k = 0;
+    while (e.v[k] != n) ++k;
+    // the triangles of the element around the node: V1 = node, (V2, V3) in boundary order
+    std::array<std::pair<int, int>, 2> fan;
+    int nfan = 1;
+    if (e.nv == 3) {
+      fan[0] = {e.v[(k + 1) % 3], e.v[(k + 2) % 3]};
+    } else {
+      fan[0] = {e.v[(k + 1) % 4], e.v[(k + 2) % 4]};
+      fan[1] = {e.v[(k + 2) % 4], e.v[(k + 3) % 4]};
+      nfan = 2;
+    }
+    for (int fi = 0; fi < nfan; ++fi, ++tri) {
+      const Vec3 V2 = M.X[std::size_t(fan[std::size_t(fi)].first)];
+      const Vec3 V3 = M.X[std::size_t(fan[std::size_t(fi)].second)];
+      auto candidate = [&](const std::vector<double>& r) {
+        return (1 - r[1]) * ns.x0 + r[1] * (1 - r[0]) * V2 + r[0] * r[1] * V3;
+      };
+      auto fitness = [&](const std::vector<double>& r) {
+        if (r[1] <= 0) return ns.startFit;  // r2 = 0: the node itself, exactly
+        Vec3 P;
+        Loc L;
+        return ns.eval(candidate(r), P, L);
+      };
+      mga::Options o = mo;
+      o.seed = mga::itemSeed(nodeSeed, std::uint64_t(tri));
+      const mga::Result r = mga::optimize(ranges, fitness, o, &seedPoint);
+      if (r.fitness > ns.bestFit && r.x[1] > 0) {
+        Vec3 P;
+        Loc L;
+        const Vec3 q = candidate(r.x);
+        ns.offer(ns.eval(q, P, L), P, L, q);
+      }
+    }
+  }
+}
+
+/// the baseline: Polak-Ribiere conjugate gradient ascent in the node's tangent plane (u, v)
+void searchGradient(NodeSearch& ns, int iterations) {
+  const Mesh& M = ns.M;
+  // local parametric frame: tangent plane at the node, unit = mean edge length to its element neighbours
+  double h = 0;
+  int cnt = 0;
+  Vec3 ref(0, 0, 0);
+  for (int ei : M.vE[std::size_t(ns.n)]) {
+    const Element& e = M.E[std::size_t(ei)];
+    for (int k = 0; k < e.nv; ++k)
+      if (e.v[k] != ns.n) {
+        const Vec3 d = M.X[std::size_t(e.v[k])] - ns.x0;
+        h += d.norm();
+        ++cnt;
+        if (ref.squaredNorm() == 0) ref = d;
+      }
+  }
+  if (cnt == 0 || !(h > 0)) return;
+  h /= cnt;
+  Vec3 e1 = ref - ns.n0.dot(ref) * ns.n0;
+  if (!(e1.norm() > 1e-12 * h)) return;
+  e1.normalize();
+  const Vec3 e2 = ns.n0.cross(e1);
+  auto point = [&](const Eigen::Vector2d& p) { return Vec3(ns.x0 + h * (p.x() * e1 + p.y() * e2)); };
+  Eigen::Vector2d p(0, 0);          // current point (the node: u = v = 0)
+  double fp = ns.startFit;
+  auto f = [&](const Eigen::Vector2d& x) {
+    Vec3 P;
+    Loc L;
+    const Vec3 q = point(x);
+    const double v = ns.eval(q, P, L);
+    ns.offer(v, P, L, q);
+    return v;
+  };
+  const double delta = 1e-5;
+  auto grad = [&](const Eigen::Vector2d& x) {
+    Eigen::Vector2d g;
+    for (int i = 0; i < 2; ++i) {
+      Eigen::Vector2d a = x, b = x;
+      a[i] += delta;
+      b[i] -= delta;
+      g[i] = (f(a) - f(b)) / (2 * delta);
+    }
+    return g;
+  };
+  Eigen::Vector2d g = grad(p), d = g;
+  for (int it = 0; it < iterations; ++it) {
+    const double dn = d.norm();
+    if (!(dn > 1e-9) || !g.allFinite()) break;
+    // line search along d: steps of at most half an edge length, halved until better, then a parabola
+    const double amax = 0.5 / dn;
+    double bestA = 0, bestF = fp;
+    for (int k = 0; k < 10; ++k) {
+      const double a = amax * std::ldexp(1.0, -k);
+      const double fa = f(p + a * d);
+      if (fa > bestF) {
+        bestF = fa;
+        bestA = a;
+      } else if (bestA > 0) {
+        break;  // got worse again after an improvement: bracketed
+      }
+    }
+    if (bestA <= 0) break;
+    {
+      // parabola through (a/2, a, 2a) where available
+      const double a0 = bestA * 0.5, a2 = std::min(bestA * 2, amax);
+      if (a2 > bestA) {
+        const double f0 = f(p + a0 * d), f2 = f(p + a2 * d);
+        // concave through (a0, f0), (a, f), (a2, f2) (second divided difference < 0): try its vertex
+        if ((f2 - bestF) / (a2 - bestA) - (bestF - f0) / (bestA - a0) < 0) {
+          const double num = (bestA - a0) * (bestA - a0) * (bestF - f2) - (bestA - a2) * (bestA - a2) * (bestF - f0);
+          const double dd = (bestA - a0) * (bestF - f2) - (bestA - a2) * (bestF - f0);
+          if (dd != 0) {
+            const double av = bestA - 0.5 * num / dd;
+            if (av > 0 && av <= amax) {
+              const double fv = f(p + av * d);
+              if (fv > bestF) bestF = fv, bestA = av;
+            }
+          }
+        }
+        if (f0 > bestF) bestF = f0, bestA = a0;
+        if (f2 > bestF) bestF = f2, bestA = a2;
+      }
+    }
+    p += bestA * d;
+    fp = bestF;
+    const Eigen::Vector2d gn = grad(p);
+    const double beta = std::max(0.0, gn.dot(gn - g) / std::max(g.squaredNorm(), 1e-300));  // Polak-Ribiere+
+    d = gn + beta * d;
+    if (d.dot(gn) <= 0) d = gn;  // not an ascent direction: restart with the gradient
+    g = gn;
+    if (g.norm() < 1e-8) break;
+  }
+}
 
 }  // namespace
 
@@ -166,6 +344,14 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   if (!(opt.tolerance >= 0)) throw InputError("tolerance must not be negative");
   if (!(opt.featureAngleDeg > 0 && opt.featureAngleDeg <= 180))
     throw InputError("feature angle must be in (0, 180] degrees");
+  if (!(opt.worstGuard >= 0 && opt.worstGuard <= 1)) throw InputError("worst-element guard must be in [0, 1]");
+  if (!(opt.minPassBelow >= 0 && opt.minPassBelow <= 1))
+    throw InputError("final worst-element pass threshold must be in [0, 1]");
+  if (opt.minPassSweeps < 0) throw InputError("final worst-element pass sweeps must not be negative");
+  if (!(opt.singularAngleDeg > 0 && opt.singularAngleDeg <= 180))
+    throw InputError("singular angle must be in (0, 180] degrees");
+  if (opt.method == Method::ConjugateGradient && (opt.cgIterations < 1 || opt.cgIterations > 10000))
+    throw InputError("conjugate gradient iterations must be in [1, 10000], got " + std::to_string(opt.cgIterations));
 
   MeshRequirements req;
   req.faces = true;
@@ -195,7 +381,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   res.quads = em.quads();
 
   // fixed nodes: boundary, feature, unreferenced, user
-  std::vector<char> fixed(nv, 0), boundary(nv, 0), feature(nv, 0);
+  std::vector<char> fixed(nv, 0), boundary(nv, 0), feature(nv, 0), singular(nv, 0);
   {
     std::map<std::pair<int, int>, std::vector<int>> edgeFaces;
     for (int f = 0; f < int(tm.F.size()); ++f)
@@ -225,13 +411,34 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
           feature[std::size_t(edge.first)] = feature[std::size_t(edge.second)] = 1;
       }
     }
+    // singular nodes: the normal cone of the node's faces is wider than the singular angle
+    if (opt.singularAngleDeg < 180) {
+      std::vector<std::vector<int>> vF(nv);
+      for (int f = 0; f < int(tm.F.size()); ++f)
+        for (int k = 0; k < 3; ++k) vF[std::size_t(tm.F[std::size_t(f)][std::size_t(k)])].push_back(f);
+      const double cosSing = std::cos(opt.singularAngleDeg * M_PI / 180.0);
+      for (std::size_t i = 0; i < nv; ++i) {
+        std::vector<Vec3> ns;
+        for (int f : vF[i]) {
+          const Vec3 nf = normal(f);
+          if (nf.squaredNorm() > 0) ns.push_back(nf);
+        }
+        for (std::size_t a = 0; a < ns.size() && !singular[i]; ++a)
+          for (std::size_t b = a + 1; b < ns.size(); ++b)
+            if (ns[a].dot(ns[b]) < cosSing) {
+              singular[i] = 1;
+              break;
+            }
+      }
+    }
   }
   for (std::size_t i = 0; i < nv; ++i) {
     const bool user = !userFixed.empty() && userFixed[std::size_t(toM[i])];
     if (boundary[i]) ++res.boundaryNodes;
     else if (feature[i]) ++res.featureNodes;
+    else if (singular[i]) ++res.singularNodes;
     else if (user) ++res.userFixedNodes;
-    fixed[i] = boundary[i] || feature[i] || user || M.vE[i].empty();
+    fixed[i] = boundary[i] || feature[i] || singular[i] || user || M.vE[i].empty();
   }
   std::vector<int> freeNodes;
   for (std::size_t i = 0; i < nv; ++i)
@@ -240,8 +447,9 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   if (freeNodes.empty())
     throw InputError("no free node to smooth: all " + std::to_string(nv) + " vertices are fixed (" +
                      std::to_string(res.boundaryNodes) + " boundary, " + std::to_string(res.featureNodes) +
-                     " on feature edges, " + std::to_string(res.userFixedNodes) +
-                     " by the selection); raise the feature angle or change the selection mode");
+                     " on feature edges, " + std::to_string(res.singularNodes) + " singular, " +
+                     std::to_string(res.userFixedNodes) +
+                     " by the selection); raise the feature or singular angle or change the selection mode");
 
   res.before = stats(M);
 
@@ -283,94 +491,66 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   mo.maxRestarts = opt.restarts;
   mo.maxGenerations = opt.generations;
   mo.selection = opt.selection;
-  const std::vector<mga::Range> ranges{{0.0, 1.0}, {0.0, 0.5}};
-  const std::vector<double> seedPoint{0.0, 0.0};
 
   double mean = res.before.mean;
   std::vector<double> projDist(nv, 0.0);
-  for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
+  std::vector<std::size_t> evaluations(nv, 0);
+  // one sweep over the free nodes; maxMin: only nodes whose worst element is below opt.minPassBelow,
+  // maximising that worst element
+  auto sweepOnce = [&](int sweep, bool maxMin) {
     const std::uint64_t sweepSeed = mga::itemSeed(opt.seed, std::uint64_t(sweep));
+    const double guardLevel = opt.worstGuard;
     for (const auto& cls : classes) {
 #pragma omp parallel for schedule(dynamic, 8)
       for (int ci = 0; ci < int(cls.size()); ++ci) {
         const int n = cls[std::size_t(ci)];
         const Vec3 x0 = M.X[std::size_t(n)];
         const Loc l0 = loc[std::size_t(n)];
-        Vec3 n0 = S.at(l0.face, Vec3(1 - l0.s - l0.t, l0.s, l0.t)).normal;
+        const Vec3 n0 = S.at(l0.face, Vec3(1 - l0.s - l0.t, l0.s, l0.t)).normal;
         double curMin = 0;
-        double bestFit = fitnessAt(M, n, x0, n0, -1.0, &curMin);
-        // the node's worst element may not drop below min(its current value, kMinQualityGuard)
-        const double guard = std::min(curMin, kMinQualityGuard);
-        if (bestFit >= 0) bestFit = fitnessAt(M, n, x0, n0, guard);
-        Vec3 bestX = x0;
-        Loc bestLoc = l0;
-        double bestDist = 0;
-        const std::uint64_t nodeSeed = mga::itemSeed(sweepSeed, std::uint64_t(toM[std::size_t(n)]));
-        int tri = 0;
-        for (int ei : M.vE[std::size_t(n)]) {
-          const Element& e = M.E[std::size_t(ei)];
-          int k = 0;
-          while (e.v[k] != n) ++k;
-          // the triangles of the element around the node: V1 = node, (V2, V3) in boundary order
-          std::array<std::pair<int, int>, 2> fan;
-          int nfan = 1;
-          if (e.nv == 3) {
-            fan[0] = {e.v[(k + 1) % 3], e.v[(k + 2) % 3]};
-          } else {
-            fan[0] = {e.v[(k + 1) % 4], e.v[(k + 2) % 4]};
-            fan[1] = {e.v[(k + 2) % 4], e.v[(k + 3) % 4]};
-            nfan = 2;
-          }
-          for (int fi = 0; fi < nfan; ++fi, ++tri) {
-            const Vec3 V2 = M.X[std::size_t(fan[std::size_t(fi)].first)];
-            const Vec3 V3 = M.X[std::size_t(fan[std::size_t(fi)].second)];
-            auto place = [&](const std::vector<double>& r, Vec3& P, Vec3& N, Loc& L) {
-              const double r1 = r[0], r2 = r[1];
-              if (r2 <= 0) {
-                P = x0;
-                N = n0;
-                L = l0;
-                return;
-              }
-              const Vec3 q = (1 - r2) * x0 + r2 * (1 - r1) * V2 + r1 * r2 * V3;
-              L = proj.project(q, l0, P, N);
-            };
-            auto fitness = [&](const std::vector<double>& r) {
-              Vec3 P, N;
-              Loc L;
-              place(r, P, N, L);
-              return fitnessAt(M, n, P, N, guard);
-            };
-            mga::Options o = mo;
-            o.seed = mga::itemSeed(nodeSeed, std::uint64_t(tri));
-            const mga::Result r = mga::optimize(ranges, fitness, o, &seedPoint);
-            if (r.fitness > bestFit) {
-              Vec3 P, N;
-              Loc L;
-              place(r.x, P, N, L);
-              bestFit = r.fitness;
-              bestX = P;
-              bestLoc = L;
-              bestDist = (P - ((1 - r.x[1]) * x0 + r.x[1] * (1 - r.x[0]) * V2 + r.x[0] * r.x[1] * V3)).norm();
-            }
-          }
-        }
+        const double cap = maxMin ? opt.minPassBelow : 0.0;
+        double fit0 = fitnessAt(M, n, x0, n0, -1.0, cap, &curMin);
+        if (maxMin && !(curMin < opt.minPassBelow)) continue;
+        // the node's worst element may not drop below min(its current value, the guard level)
+        const double guard = std::min(curMin, guardLevel);
+        if (fit0 >= 0) fit0 = fitnessAt(M, n, x0, n0, guard, cap);
+        NodeSearch ns{M, proj, n, x0, n0, l0, guard, cap, fit0, fit0, x0, l0};
+        if (opt.method == Method::MicroGA)
+          searchMga(ns, mo, mga::itemSeed(sweepSeed, std::uint64_t(toM[std::size_t(n)])));
+        else
+          searchGradient(ns, opt.cgIterations);
+        evaluations[std::size_t(n)] += ns.evaluations;
         // the node moves after its own search: neighbours of the same colour do not see it, and
         // no node of this colour reads it (they share no element)
-        M.X[std::size_t(n)] = bestX;
-        loc[std::size_t(n)] = bestLoc;
-        projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], bestDist);
+        M.X[std::size_t(n)] = ns.bestX;
+        loc[std::size_t(n)] = ns.bestLoc;
+        projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], ns.bestDist);
       }
     }
+  };
+  bool stopped = false;
+  for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
+    sweepOnce(sweep, false);
     res.sweeps = sweep + 1;
     const double newMean = stats(M).mean;
     const double gain = newMean - mean;
     mean = newMean;
-    if (opt.progress && !opt.progress(sweep + 1, mean)) break;
+    if (opt.progress && !opt.progress(sweep + 1, mean)) {
+      stopped = true;
+      break;
+    }
     if (gain < opt.tolerance) break;
   }
+  if (opt.minPassBelow > 0 && !stopped)
+    for (int k = 0; k < opt.minPassSweeps; ++k) {
+      const double before = stats(M).min;
+      sweepOnce(opt.maxSweeps + k, true);
+      ++res.minPassSweeps;
+      if (stats(M).min <= before) break;
+    }
 
   res.after = stats(M);
+  res.evaluations = std::accumulate(evaluations.begin(), evaluations.end(), std::size_t(0));
   res.maxProjectionDistance = *std::max_element(projDist.begin(), projDist.end());
   res.positions.resize(m.vert.size());
   for (std::size_t i = 0; i < m.vert.size(); ++i)

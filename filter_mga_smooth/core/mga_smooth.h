@@ -13,13 +13,28 @@
 // worse and a valid configuration never folds. The best over the adjacent elements is kept.
 // Guard on the worst element (not in the thesis, which maximizes the plain sum): a candidate is also
 // rejected if the worst of the node's elements would drop below min(its current value,
-// kMinQualityGuard), so the sum cannot buy a better mean with one very poor element; the mesh minimum
-// therefore never drops below min(initial minimum, kMinQualityGuard).
+// Options::worstGuard), so the sum cannot buy a better mean with one very poor element; the mesh minimum
+// therefore never drops below min(initial minimum, worstGuard). worstGuard = 0: the thesis' plain sum.
+// Optional final pass (not in the thesis; off by default): after the sweeps, up to minPassSweeps sweeps
+// over the nodes whose worst element is below minPassBelow, each maximising that worst element (ties
+// broken by the sum), with the same search, projection and fold rules.
 // Sweeps repeat until the mean quality improves by less than the tolerance or the sweep cap is reached.
 //
 // Fixed nodes: boundary nodes; feature nodes (every node on a sharp edge, i.e. an edge whose dihedral
 // angle - the angle between the two faces' normals - exceeds the feature angle; faux edges inside quads
-// are not feature edges); nodes not in any element; and the user's fixed set.
+// are not feature edges); singular nodes of large curvature variation (thesis 4.3: "singular points ...
+// which contain large curvature variation need be identified and fixed"): the normal cone of the node's
+// faces - the largest angle between the normals of any two faces around the node - exceeds the singular
+// angle, e.g. the apex of a cone or a spike, where no single edge is sharp but the surface turns a lot
+// within one ring; nodes not in any element; and the user's fixed set.
+//
+// Method::ConjugateGradient (the baseline of thesis Table 4-1, after Garimella et al.): the same node
+// loop, fixed nodes, colouring, projection and fitness, but each node is moved by Polak-Ribiere conjugate
+// gradient ascent of the fitness in the node's local parametric coordinates (u, v) - the tangent plane
+// of the C1 surface at the node, scaled by the mean length of the node's edges - with numerical
+// (central difference) gradients and a line search (halving steps from half an edge length, then one
+// parabolic refinement); every trial point is projected onto the C1 surface, and a step is taken only
+// if it raises the fitness, so the same no-fold and worst-element guarantees hold.
 //
 // Parallel: nodes are greedily coloured (in index order) so that nodes of one colour share no element;
 // each colour is processed in parallel with OpenMP, with per-node seeds itemSeed(itemSeed(seed, sweep),
@@ -37,9 +52,15 @@
 
 namespace pectus::smooth {
 
-constexpr double kMinQualityGuard = 0.5;
+constexpr double kMinQualityGuard = 0.35;  ///< default guard (bench/mga_smooth.py: 0.5 costs mean, 0.3 min)
+
+enum class Method {
+  MicroGA,            ///< thesis ch. 4.2: micro-GA inside every adjacent element
+  ConjugateGradient,  ///< baseline of thesis Table 4-1: Polak-Ribiere CG in the node's tangent plane
+};
 
 struct Options {
+  Method method = Method::MicroGA;
   ElementKind kind = ElementKind::Triangles;
   int maxSweeps = 10;
   double tolerance = 1e-4;      ///< stop when the mean quality improves by less than this in a sweep
@@ -49,6 +70,11 @@ struct Options {
   int population = 5;
   mga::Selection selection = mga::Selection::Roulette;
   double featureAngleDeg = 60;  ///< dihedral angle above which an edge is sharp (180: no feature edges)
+  double worstGuard = kMinQualityGuard;  ///< see above; 0 = the thesis' plain sum
+  double minPassBelow = 0;      ///< final max-min pass for nodes whose worst element is below this (0: off)
+  int minPassSweeps = 3;        ///< at most this many final max-min sweeps (stops when the minimum stalls)
+  double singularAngleDeg = 90; ///< normal-cone angle of a node's faces above which it is singular (180: none)
+  int cgIterations = 10;        ///< ConjugateGradient: CG iterations per node and sweep
   std::uint64_t seed = 1;
   /// called after every sweep with (sweep, mean quality); return false to stop
   std::function<bool(int, double)> progress;
@@ -59,17 +85,20 @@ struct Result {
   QualityStats before, after;    ///< over elements: alpha (triangles) or beta (quads; lone triangles alpha)
   std::vector<double> perFace;   ///< element quality after, per m.face index (deleted faces: 0)
   std::size_t elements = 0, quads = 0;
-  std::size_t freeNodes = 0, boundaryNodes = 0, featureNodes = 0, userFixedNodes = 0;
+  std::size_t freeNodes = 0, boundaryNodes = 0, featureNodes = 0, singularNodes = 0, userFixedNodes = 0;
+  std::size_t evaluations = 0;       ///< fitness evaluations (both methods)
   std::size_t nodesMoved = 0;
   int sweeps = 0;
+  int minPassSweeps = 0;             ///< final max-min sweeps run
   int colours = 0;
   double maxProjectionDistance = 0;  ///< largest candidate-to-surface distance of an accepted move
   double seconds = 0;
 };
 
-/// Nodes are the live vertices of `m`. `userFixed` (per m.vert index, empty = none): 1 = keep fixed.
+/// Smooths with opt.method. Nodes are the live vertices of `m`. `userFixed` (per m.vert index, empty = none): 1 = keep fixed.
 /// Throws InputError for bad parameters, a mesh without faces, NaN coordinates, non-manifold input
 /// (edge or vertex), invalid quads, or a mesh with no free node.
+/// Fixed-node classes are counted once, in the order boundary, feature, singular, user.
 Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& userFixed = {});
 
 }  // namespace pectus::smooth

@@ -151,9 +151,11 @@ TEST(MgaSmooth, SaddleTriangles) {
               "%d sweeps, %d colours, max |z - saddle| %.5f, %.2f s\n",
               t.V.size(), t.F.size(), r.before.mean, r.after.mean, r.before.min, r.after.min, r.nodesMoved, r.sweeps,
               r.colours, dev, r.seconds);
-  EXPECT_GT(r.after.mean, 0.85);
+  EXPECT_GT(r.after.mean, 0.865);  // measured 0.868 (seed 11, 15 sweeps, guard 0.35)
   EXPECT_GT(r.after.min, r.before.min);
-  EXPECT_GT(r.after.min, 0.25);  // measured 0.30 (seed 11, 15 sweeps); the issue target 0.40 is not reached yet
+  // measured 0.3133: the bound of this mesh, two corner triangles whose three nodes are boundary nodes
+  // (the issue's 0.40 cannot be reached while the boundary stays fixed; bench/saddle_bound.py)
+  EXPECT_GT(r.after.min, 0.313);
   EXPECT_LT(dev, 0.01);
 }
 
@@ -162,18 +164,27 @@ TEST(MgaSmooth, QuadGrid) {
   const TriMesh t = grid(10, 0.3, 5, &quads);
   const auto mp = toMesh(t, true);
   const CMeshO& m = *mp;
-  sm::Options o = fastOptions();
-  o.kind = pectus::ElementKind::Quads;
-  const auto r = sm::smoothMesh(m, o);
-  std::printf("quad grid: beta mean %.4f -> %.4f, min %.4f -> %.4f, %zu moved, %.2f s\n", r.before.mean, r.after.mean,
-              r.before.min, r.after.min, r.nodesMoved, r.seconds);
-  EXPECT_EQ(r.quads, 81u);
-  EXPECT_EQ(r.elements, 81u);
-  EXPECT_GT(r.after.mean, r.before.mean + 0.02);
-  EXPECT_GT(r.after.min, r.before.min + 0.05);
-  // both triangles of a quad carry its beta
-  for (std::size_t f = 0; f + 1 < r.perFace.size(); f += 2) EXPECT_EQ(r.perFace[f], r.perFace[f + 1]);
-  for (const auto& p : r.positions) EXPECT_LT(std::abs(p.z()), 1e-9);
+  for (auto method : {sm::Method::MicroGA, sm::Method::ConjugateGradient}) {
+    sm::Options o = fastOptions();
+    o.kind = pectus::ElementKind::Quads;
+    o.method = method;
+    const auto r = sm::smoothMesh(m, o);
+    std::printf("quad grid (%s): beta mean %.4f -> %.4f, min %.4f -> %.4f, %zu moved, %.2f s\n",
+                method == sm::Method::MicroGA ? "MGA" : "CG", r.before.mean, r.after.mean, r.before.min, r.after.min,
+                r.nodesMoved, r.seconds);
+    EXPECT_EQ(r.quads, 81u);
+    EXPECT_EQ(r.elements, 81u);
+    EXPECT_GT(r.after.mean, 0.99);  // the ideal is a square grid (beta 1)
+    EXPECT_GT(r.after.min, r.before.min + 0.2);
+    // both triangles of a quad carry its beta
+    for (std::size_t f = 0; f + 1 < r.perFace.size(); f += 2) EXPECT_EQ(r.perFace[f], r.perFace[f + 1]);
+    for (int j = 0; j < 10; ++j)
+      for (int i = 0; i < 10; ++i) {
+        const auto v = std::size_t(j * 10 + i);
+        EXPECT_LT(std::abs(r.positions[v].z()), 1e-9);
+        if (i == 0 || j == 0 || i == 9 || j == 9) EXPECT_EQ(r.positions[v], t.V[v]);
+      }
+  }
 }
 
 TEST(MgaSmooth, SameResultForOneAndTwoThreads) {
@@ -241,6 +252,161 @@ TEST(MgaSmooth, NeverFoldsAVeryBadMesh) {
   EXPECT_GE(r.after.min, r.before.min);
 }
 
+double maxSaddleDeviation(const std::vector<Vec3>& P) {
+  double dev = 0;
+  for (const auto& p : P) dev = std::max(dev, std::abs(p.z() - saddle(p.x(), p.y())));
+  return dev;
+}
+
+TEST(GradientSmooth, SaddleTrianglesVersusMga) {
+  // the thesis' Table 4-1 comparison on one input: both improve, CG needs fewer fitness evaluations
+  const auto mp = toMesh(saddleMesh(3));
+  const CMeshO& m = *mp;
+  sm::Options o;
+  o.maxSweeps = 15;
+  o.seed = 11;
+  o.method = sm::Method::ConjugateGradient;
+  const auto cg = sm::smoothMesh(m, o);
+  o.method = sm::Method::MicroGA;
+  o.maxSweeps = 3;
+  const auto ga = sm::smoothMesh(m, o);
+  const double dev = maxSaddleDeviation(cg.positions);
+  std::printf("saddle CG: alpha mean %.4f -> %.4f, min %.4f -> %.4f, %zu moved, %d sweeps, %zu evaluations "
+              "(MGA, 3 sweeps: %zu), max |z - saddle| %.5f, %.2f s\n",
+              cg.before.mean, cg.after.mean, cg.before.min, cg.after.min, cg.nodesMoved, cg.sweeps, cg.evaluations,
+              ga.evaluations, dev, cg.seconds);
+  EXPECT_GT(cg.after.mean, 0.84);
+  EXPECT_GT(cg.after.min, cg.before.min);
+  EXPECT_GT(cg.after.min, 0.2);
+  EXPECT_LT(dev, 0.01);
+  EXPECT_GT(cg.nodesMoved, 400u);
+  EXPECT_LT(cg.evaluations * 3, ga.evaluations * std::size_t(cg.sweeps));  // per sweep, under a third
+}
+
+TEST(GradientSmooth, GuardAndFinalWorstElementPass) {
+  // the guard trades mean for minimum; the final pass lifts the minimum to the bound of this mesh, the
+  // triangles whose three nodes are all boundary nodes (alpha 0.3133; printed by bench/saddle_bound.py)
+  const auto mp = toMesh(saddleMesh(3));
+  const CMeshO& m = *mp;
+  sm::Options o;
+  o.method = sm::Method::ConjugateGradient;
+  o.maxSweeps = 30;
+  o.worstGuard = 0;  // the thesis' plain sum
+  const auto plain = sm::smoothMesh(m, o);
+  o.worstGuard = 0.3;
+  o.minPassBelow = 0.32;
+  const auto pass = sm::smoothMesh(m, o);
+  std::printf("saddle CG: plain sum mean %.4f min %.4f; guard 0.3 + final pass below 0.32: mean %.4f min %.4f "
+              "(%d + %d sweeps)\n", plain.after.mean, plain.after.min, pass.after.mean, pass.after.min, pass.sweeps,
+              pass.minPassSweeps);
+  EXPECT_GT(plain.after.mean, 0.875);
+  EXPECT_LT(plain.after.min, 0.1);  // the plain sum sacrifices single elements
+  EXPECT_GT(pass.minPassSweeps, 0);
+  EXPECT_GT(pass.after.min, 0.313);
+  EXPECT_GT(pass.after.mean, 0.865);
+  o.minPassBelow = 1.5;
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o.minPassBelow = 0;
+  o.worstGuard = -0.1;
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+}
+
+TEST(GradientSmooth, QuadSaddleTarget) {
+  // issue 5's quad target (mean beta >= 0.85, min >= 0.40) on a jittered 25 x 25 quad grid on the saddle,
+  // with guard 0.4 and the final worst-element pass below 0.45 (bench/mga_smooth.py has the same row)
+  std::vector<std::array<int, 4>> quads;
+  TriMesh t = grid(25, 0.3, 5, &quads);
+  for (auto& p : t.V) {
+    p.x() = -5 + 10 * p.x() / 24;
+    p.y() = -5 + 10 * p.y() / 24;
+    p.z() = saddle(p.x(), p.y());
+  }
+  const auto mp = toMesh(t, true);
+  sm::Options o;
+  o.kind = pectus::ElementKind::Quads;
+  o.method = sm::Method::ConjugateGradient;
+  o.worstGuard = 0.4;
+  o.minPassBelow = 0.45;
+  const auto r = sm::smoothMesh(*mp, o);
+  const double dev = maxSaddleDeviation(r.positions);
+  std::printf("quad saddle CG: beta mean %.4f -> %.4f, min %.4f -> %.4f, max |z - saddle| %.5f, %d + %d sweeps\n",
+              r.before.mean, r.after.mean, r.before.min, r.after.min, dev, r.sweeps, r.minPassSweeps);
+  EXPECT_EQ(r.quads, 576u);
+  EXPECT_GE(r.after.mean, 0.85);
+  EXPECT_GE(r.after.min, 0.40);
+  EXPECT_LT(dev, 0.004);
+}
+
+TEST(GradientSmooth, NeverFoldsAndIsThreadIndependent) {
+  const TriMesh t = grid(9, 0.4, 13);
+  const auto mp = toMesh(t);
+  const CMeshO& m = *mp;
+  sm::Options o = fastOptions();
+  o.method = sm::Method::ConjugateGradient;
+  omp_set_num_threads(1);
+  const auto r1 = sm::smoothMesh(m, o);
+  omp_set_num_threads(2);
+  const auto r = sm::smoothMesh(m, o);
+  for (const auto& f : t.F) {
+    const Vec3 a = r.positions[std::size_t(f[0])], b = r.positions[std::size_t(f[1])], c = r.positions[std::size_t(f[2])];
+    EXPECT_GT((b - a).cross(c - a).z(), 0);
+  }
+  EXPECT_GT(r.after.min, r.before.min + 0.1);
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < r.positions.size(); ++i) differ += r.positions[i] != r1.positions[i];
+  EXPECT_EQ(differ, 0u);
+}
+
+/// a cone (apex height `height` over a ring of 9 nodes at radius 1, jittered in angle) on a flat
+/// annulus out to radius 2 (boundary): the apex is the only node with a wide normal cone
+TriMesh cone(double height) {
+  TriMesh t;
+  t.V.emplace_back(0.1, -0.05, height);
+  const int n = 9;
+  for (int ring = 1; ring <= 2; ++ring)
+    for (int i = 0; i < n; ++i) {
+      const double a = 2 * M_PI * (i + (ring == 1 ? 0.25 * std::sin(3.0 * i) : 0.5)) / n;
+      t.V.emplace_back(ring * std::cos(a), ring * std::sin(a), 0);
+    }
+  for (int i = 0; i < n; ++i) {
+    const int a = 1 + i, b = 1 + (i + 1) % n, A = 1 + n + i, B = 1 + n + (i + 1) % n;
+    t.F.push_back({0, a, b});
+    t.F.push_back({a, A, b});
+    t.F.push_back({b, A, B});
+  }
+  return t;
+}
+
+TEST(MgaSmooth, SingularNodesStay) {
+  const TriMesh t = cone(0.6);  // faces around the apex tilt by about 31 degrees: normal cone about 62
+  const auto mp = toMesh(t);
+  const CMeshO& m = *mp;
+  const auto in = positions(m);
+  for (auto method : {sm::Method::MicroGA, sm::Method::ConjugateGradient}) {
+    sm::Options o = fastOptions();
+    o.method = method;
+    o.singularAngleDeg = 50;
+    const auto r = sm::smoothMesh(m, o);
+    EXPECT_EQ(r.singularNodes, 1u);
+    EXPECT_EQ(r.featureNodes, 0u);
+    EXPECT_EQ(r.boundaryNodes, 9u);
+    EXPECT_EQ(r.freeNodes, 9u);
+    EXPECT_EQ(r.positions[0], in[0]);
+    // with the singular test off the apex is free and moves
+    o.singularAngleDeg = 180;
+    const auto r2 = sm::smoothMesh(m, o);
+    EXPECT_EQ(r2.singularNodes, 0u);
+    EXPECT_EQ(r2.freeNodes, 10u);
+    EXPECT_GT((r2.positions[0] - in[0]).norm(), 1e-3);
+    // the default (90 degrees) keeps this gentle cone free, and fixes a steep one (normal cone ~ 127)
+    EXPECT_EQ(sm::smoothMesh(m, fastOptions()).singularNodes, 0u);
+    const auto steep = toMesh(cone(2.0));
+    sm::Options d = fastOptions();
+    d.featureAngleDeg = 180;
+    EXPECT_EQ(sm::smoothMesh(*steep, d).singularNodes, 1u);
+  }
+}
+
 TEST(MgaSmooth, BadInput) {
   const auto mp = toMesh(grid(5, 0.2, 1));
   const CMeshO& m = *mp;
@@ -253,6 +419,22 @@ TEST(MgaSmooth, BadInput) {
   o = sm::Options();
   o.maxSweeps = 0;
   EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o = sm::Options();
+  o.singularAngleDeg = 0;
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o.singularAngleDeg = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o = sm::Options();
+  o.method = sm::Method::ConjugateGradient;
+  o.cgIterations = 0;
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o.cgIterations = 10;
+  o.featureAngleDeg = -1;
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
+  o = sm::Options();
+  o.method = sm::Method::ConjugateGradient;
+  o.tolerance = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(sm::smoothMesh(m, o), pectus::InputError);
 
   // no free node: a single triangle (all boundary)
   TriMesh one;
@@ -264,9 +446,16 @@ TEST(MgaSmooth, BadInput) {
   } catch (const pectus::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("no free node"), std::string::npos) << e.what();
   }
-  // every node fixed by the selection
+  // every node fixed by the selection (both methods)
   std::vector<char> all(m.vert.size(), 1);
   EXPECT_THROW(sm::smoothMesh(m, sm::Options(), all), pectus::InputError);
+  sm::Options cgo;
+  cgo.method = sm::Method::ConjugateGradient;
+  EXPECT_THROW(sm::smoothMesh(m, cgo, all), pectus::InputError);
+  // non-manifold and NaN input with the gradient method
+  TriMesh nan2 = grid(5, 0.2, 1);
+  nan2.V[7].y() = std::numeric_limits<double>::quiet_NaN();
+  EXPECT_THROW(sm::smoothMesh(*toMesh(nan2), cgo), pectus::InputError);
 
   // NaN coordinate
   TriMesh nan = grid(5, 0.2, 1);
