@@ -139,9 +139,7 @@ void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
 
   MeshModel& mm = ctx.addLayer("pectus rib cage");
   mm.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY);
-  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(mm.cm, cage);
-  // Append copies colour and quality but not the custom attributes: write the labels again
-  if (auto l = pectus::readFaceLabels(cage)) pectus::writeFaceLabels(mm.cm, l->tissue, l->part);
+  pectus::copyLabelledMesh(mm.cm, cage);
   vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(mm.cm);
   vcg::tri::UpdateBounding<CMeshO>::Box(mm.cm);
 
@@ -297,12 +295,12 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   const auto& nodal = stressField ? a.nodalStress : a.nodalStrain;
   MeshModel& res = ctx.addLayer("nuss fe result");
   res.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR);
-  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(res.cm, cur.cm);
-  if (auto l = pectus::readFaceLabels(cur.cm)) pectus::writeFaceLabels(res.cm, l->tissue, l->part);
-  for (size_t i = 0; i < res.cm.vert.size() && i < cage.nodeOfVertex.size(); ++i) {
-    auto& v = res.cm.vert[i];
+  pectus::copyLabelledMesh(res.cm, cur.cm);
+  // the copy holds the live vertices of cur in order; cur's vertex i is FE node nodeOfVertex[i]
+  for (size_t i = 0, k = 0; i < cur.cm.vert.size(); ++i) {
+    if (cur.cm.vert[i].IsD()) continue;
+    auto& v = res.cm.vert[k++];
     const int n = cage.nodeOfVertex[i];
-    if (v.IsD() || n < 0) continue;
     const Eigen::Vector3d d = a.result.displacement(n);
     v.P() += Point3m(Scalarm(d.x()), Scalarm(d.y()), Scalarm(d.z()));
     v.Q() = Scalarm(nodal[n]);

@@ -1,6 +1,7 @@
 #include "pectus/labels.h"
 
 #include <vcg/complex/allocate.h>
+#include <vcg/complex/append.h>
 
 namespace pectus {
 
@@ -28,6 +29,16 @@ void writeFaceLabels(CMeshO& m, const std::vector<int>& tissue, const std::vecto
     m.face[i].C() = vcg::Color4b(c.r, c.g, c.b, 255);
     m.face[i].Q() = float(t * 1000 + p);
   }
+}
+
+void copyLabelledMesh(CMeshO& dst, CMeshO& src) {
+  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(dst, src);
+  const auto l = readFaceLabels(src);
+  if (!l) return;
+  std::vector<int> tissue, part;
+  for (std::size_t i = 0; i < src.face.size(); ++i)
+    if (!src.face[i].IsD()) tissue.push_back(l->tissue[i]), part.push_back(l->part[i]);
+  writeFaceLabels(dst, tissue, part);
 }
 
 std::optional<FaceLabels> readFaceLabels(const CMeshO& m) {

@@ -137,13 +137,6 @@ Vector3d Analysis::displacementAt(const Vector3d& p) const {
 
 namespace {
 
-struct Setup {
-  std::vector<int> fixedNodes, sternumNodes;
-  std::vector<std::vector<int>> supportNodes;
-  std::vector<std::string> supportNames;
-  Vector3d dir;
-};
-
 // surface vertices (= mesh nodes 0..nv-1) of faces with a given predicate, within r of c
 std::vector<int> surfaceNodesNear(const CageSurface& cage, const Vector3d& c, double r,
                                   const std::function<bool(size_t)>& facePred) {
@@ -173,12 +166,12 @@ int nearestVertexOfPart(const CageSurface& cage, int part, const Vector3d& p, in
   return best;
 }
 
-Setup place(const CageSurface& cage, const fe::TetMesh& mesh, const std::vector<Landmark>& lms, const Placement& pl) {
-  Setup s;
+// the fixed nodes, the Fe nodes and the four Fsr patches, into s (s.mesh: the tet mesh of cage)
+void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl, Analysis& s) {
+  const fe::TetMesh& mesh = s.mesh;
   if (!(pl.jointRadius > 0 && pl.sternumLoadRadius > 0 && pl.ribSupportRadius > 0))
     throw InputError("The joint, sternum load and rib support radii must be positive (mm).");
   if (pl.direction.norm() < 1e-12 || !pl.direction.allFinite()) throw InputError("The force direction must be a non-zero vector.");
-  s.dir = pl.direction.normalized();
   // fixed: all mesh nodes (surface and interior) near a costovertebral joint landmark
   std::vector<char> fixed(mesh.nodes.size(), 0);
   int joints = 0;
@@ -236,7 +229,6 @@ Setup place(const CageSurface& cage, const fe::TetMesh& mesh, const std::vector<
       s.supportNames.push_back(name);
     }
   }
-  return s;
 }
 
 // connected components of the tet mesh; every one must hold a fixed node
@@ -257,26 +249,17 @@ int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, co
   return static_cast<int>(compTet.size());
 }
 
-void addLoads(fe::Problem& p, const Setup& s, double fe) {
+void addLoads(fe::Problem& p, const Analysis& a, const Vector3d& dir, double fe) {
   p.force.assign(p.mesh->nodes.size(), Vector3d::Zero());
-  for (int n : s.sternumNodes) p.force[n] += s.dir * (fe / s.sternumNodes.size());
-  for (const auto& nodes : s.supportNodes)
-    for (int n : nodes) p.force[n] -= s.dir * (fe / 4.0 / nodes.size());
+  for (int n : a.sternumNodes) p.force[n] += dir * (fe / a.sternumNodes.size());
+  for (const auto& nodes : a.supportNodes)
+    for (int n : nodes) p.force[n] -= dir * (fe / 4.0 / nodes.size());
 }
 
-double elevationOf(const Eigen::VectorXd& u, const Setup& s) {
+double elevationOf(const Eigen::VectorXd& u, const Analysis& a, const Vector3d& dir) {
   double e = 0;
-  for (int n : s.sternumNodes) e += s.dir.dot(Vector3d(u.segment<3>(3 * n)));
-  return e / s.sternumNodes.size();
-}
-
-Setup setupOf(const Analysis& a) {
-  Setup s;
-  s.fixedNodes = a.fixedNodes;
-  s.sternumNodes = a.sternumNodes;
-  s.supportNodes = a.supportNodes;
-  s.supportNames = a.supportNames;
-  return s;
+  for (int n : a.sternumNodes) e += dir.dot(Vector3d(u.segment<3>(3 * n)));
+  return e / a.sternumNodes.size();
 }
 
 }  // namespace
@@ -286,9 +269,7 @@ fe::Problem problemAt(const Analysis& a, const Options& opt, double force) {
   p.mesh = &a.mesh;
   p.materials = fe::thesisMaterials(opt.nuBone, opt.nuCartilage);
   for (int n : a.fixedNodes) p.fixNode(n);
-  Setup s = setupOf(a);
-  s.dir = opt.place.direction.normalized();
-  addLoads(p, s, force);
+  addLoads(p, a, opt.place.direction.normalized(), force);
   return p;
 }
 
@@ -305,27 +286,15 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
 
   Analysis a;
   auto t0 = Clock::now();
-  progress(2, "Checking the surface");
-  fe::checkSurfaceForTetgen(cage.surface);
-  progress(5, "TetGen");
-  a.mesh = fe::tetrahedralize(cage.surface, opt.mesh);
-  {
-    std::vector<Vector3d> cent(a.mesh.numTets());
-    for (int t = 0; t < a.mesh.numTets(); ++t) {
-      const auto& T = a.mesh.tets[t];
-      cent[t] = (a.mesh.nodes[T[0]] + a.mesh.nodes[T[1]] + a.mesh.nodes[T[2]] + a.mesh.nodes[T[3]]) / 4;
-    }
-    const auto nf = fe::nearestFaces(cage.surface, cent);
-    a.tetPart.resize(nf.size());
-    for (size_t t = 0; t < nf.size(); ++t) a.tetPart[t] = cage.facePart[nf[t]];
-  }
+  progress(5, "TetGen (after checking the surface)");
+  std::vector<int> tetFace;
+  a.mesh = fe::tetrahedralize(cage.surface, opt.mesh, &tetFace);
+  a.tetPart.resize(tetFace.size());
+  for (size_t t = 0; t < tetFace.size(); ++t) a.tetPart[t] = cage.facePart[tetFace[t]];
   a.secondsMesh = since(t0);
 
-  Setup s = place(cage, a.mesh, lms, opt.place);
-  a.fixedNodes = s.fixedNodes;
-  a.sternumNodes = s.sternumNodes;
-  a.supportNodes = s.supportNodes;
-  a.supportNames = s.supportNames;
+  place(cage, lms, opt.place, a);
+  const Vector3d dir = opt.place.direction.normalized();
   a.components = checkComponents(a.mesh, a.tetPart, a.fixedNodes);
 
   t0 = Clock::now();
@@ -333,7 +302,7 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
   fe::Problem prob = problemAt(a, opt, 1.0);  // unit Fe; the solves scale it
   fe::Solver solver(prob);
   const fe::Result lin1 = solver.solveLinear(1.0);
-  a.linearCompliance = elevationOf(lin1.u, s);
+  a.linearCompliance = elevationOf(lin1.u, a, dir);
   if (!(a.linearCompliance > 0))
     throw InputError("The sternum does not move along the force direction under the elevating force (compliance " +
                      std::to_string(a.linearCompliance) + " mm/N): check the direction and the load placement.");
@@ -345,7 +314,7 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
       if (curve) {
         curve->assign(1, {0.0, 0.0});
         for (double f = opt.curveStep; f < F - 1e-9; f += opt.curveStep) curve->push_back({f, a.linearCompliance * f});
-        curve->push_back({F, elevationOf(r.u, s)});
+        curve->push_back({F, elevationOf(r.u, a, dir)});
       }
       return r;
     }
@@ -355,7 +324,7 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
     no.loadSteps = std::max(no.loadSteps, static_cast<int>(std::ceil(F / opt.curveStep)));
     std::vector<std::pair<double, double>> pts{{0.0, 0.0}};
     no.onIncrement = [&](double lam, const Eigen::VectorXd& u) {
-      pts.push_back({lam * F, elevationOf(u, s)});
+      pts.push_back({lam * F, elevationOf(u, a, dir)});
       if (observe) observe(pts.back().first, pts.back().second);
     };
     fe::Result r = solver.solveNonlinear(no, F);
@@ -379,7 +348,7 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
       progress(std::min(90, 20 + 15 * k++), "Calibrating the force: Fe = " + mm(F) + " N");
       last = solveAt(F, &lastCurve, observe);
       a.force = F;
-      return elevationOf(last.u, s);
+      return elevationOf(last.u, a, dir);
     };
     a.calibration = fe::calibrateForce(disp, opt.targetElevation, co);
     if (std::abs(a.force - a.calibration->force) > 1e-9 * a.calibration->force) {  // last evaluation not the answer
@@ -393,7 +362,7 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
     a.force = opt.force;
     a.result = solveAt(opt.force, &a.curve, {});
   }
-  a.elevation = elevationOf(a.result.u, s);
+  a.elevation = elevationOf(a.result.u, a, dir);
   a.secondsSolve = since(t0);
 
   progress(95, "Stress and strain");
@@ -421,8 +390,7 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
     Location L;
     if (t < 0) return L;
     L.tet = t;
-    const auto& T = a.mesh.tets[t];
-    L.p = (a.mesh.nodes[T[0]] + a.mesh.nodes[T[1]] + a.mesh.nodes[T[2]] + a.mesh.nodes[T[3]]) / 4;
+    L.p = a.mesh.centroid(t);
     L.tissue = a.mesh.tissue[t];
     L.part = a.tetPart[t];
     if (auto j = findLandmark(lms, L.part)) L.distanceToJoint = (*j - L.p).norm();
@@ -437,26 +405,22 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
 std::vector<PathSample> strainAlongRib(const Analysis& a, int side, int rib, double binWidth) {
   if (!(binWidth > 0)) throw InputError("The rib path bin width must be positive (mm).");
   const int part = ribPart(side, rib);
-  auto centroid = [&](int t) {
-    const auto& T = a.mesh.tets[t];
-    return Vector3d((a.mesh.nodes[T[0]] + a.mesh.nodes[T[1]] + a.mesh.nodes[T[2]] + a.mesh.nodes[T[3]]) / 4);
-  };
   // midline: mean x of the sternum tets; the rib's sternal end: its most medial tet
   double xs = 0;
   int ns = 0;
   int medial = -1;
   const double sgn = side == 1 ? -1.0 : 1.0;  // right = -x
   for (int t = 0; t < a.mesh.numTets(); ++t) {
-    if (a.mesh.tissue[t] == int(Tissue::Sternum)) xs += centroid(t).x(), ++ns;
-    if (a.tetPart[t] == part && (medial < 0 || sgn * centroid(t).x() < sgn * centroid(medial).x())) medial = t;
+    if (a.mesh.tissue[t] == int(Tissue::Sternum)) xs += a.mesh.centroid(t).x(), ++ns;
+    if (a.tetPart[t] == part && (medial < 0 || sgn * a.mesh.centroid(t).x() < sgn * a.mesh.centroid(medial).x())) medial = t;
   }
   if (medial < 0) throw InputError("The model has no " + partName(int(Tissue::Bone), part) + ".");
   if (ns) xs /= ns;
-  const double zj = centroid(medial).z();
+  const double zj = a.mesh.centroid(medial).z();
   std::map<int, PathSample> bins;
   std::map<int, std::array<int, 4>> counts;  // tets per tissue in each bin: the bin's tissue is the majority
   for (int t = 0; t < a.mesh.numTets(); ++t) {
-    const Vector3d c = centroid(t);
+    const Vector3d c = a.mesh.centroid(t);
     const bool onPart = a.tetPart[t] == part;
     const bool sternumHere = a.mesh.tissue[t] == int(Tissue::Sternum) && std::abs(c.z() - zj) <= 5.0 && sgn * (c.x() - xs) >= 0;
     if (!onPart && !sternumHere) continue;

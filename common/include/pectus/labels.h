@@ -60,6 +60,10 @@ constexpr const char* kPartAttr = "pectus_part";
 /// Writes the labels as attributes, face colour and face quality (enables face colour/quality on m).
 void writeFaceLabels(CMeshO& m, const std::vector<int>& tissue, const std::vector<int>& part);
 
+/// dst = the live part of src (vcg MeshCopy: deleted elements dropped, order kept) with src's face labels
+/// (MeshCopy does not copy named attributes): the i-th live face of src is face i of dst.
+void copyLabelledMesh(CMeshO& dst, CMeshO& src);
+
 /// Per-face labels of m (size m.face.size()): from the attributes, else from the face colour
 /// palette and face quality code. std::nullopt if neither is there or a live face has no label.
 struct FaceLabels { std::vector<int> tissue, part; std::string source; };

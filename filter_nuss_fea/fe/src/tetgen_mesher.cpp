@@ -252,7 +252,7 @@ std::vector<int> nearestFaces(const SurfaceMesh& s, const std::vector<Vector3d>&
   return out;
 }
 
-TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt) {
+TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<int>* tetFace) {
   checkSurfaceForTetgen(s);
   if (opt.order != 1 && opt.order != 2) throw InputError("Element order must be 1 (TET4) or 2 (TET10).");
   tetgenio in, out;
@@ -302,11 +302,12 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt) {
     for (int k = 0; k < 4; ++k) e[k] = out.tetrahedronlist[t * out.numberofcorners + k];
     m.tets[t] = e;
     if (m.tetVolume(t) < 0) std::swap(m.tets[t][1], m.tets[t][2]);
-    centroids[t] = (m.nodes[e[0]] + m.nodes[e[1]] + m.nodes[e[2]] + m.nodes[e[3]]) / 4;
+    centroids[t] = m.centroid(t);
   }
   const std::vector<int> nf = nearestFaces(s, centroids);
   m.tissue.resize(m.tets.size());
   for (size_t t = 0; t < m.tets.size(); ++t) m.tissue[t] = s.faceTissue[nf[t]];
+  if (tetFace) *tetFace = nf;
   return opt.order == 2 ? toQuadratic(m) : m;
 }
 

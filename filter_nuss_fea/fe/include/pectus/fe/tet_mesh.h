@@ -21,6 +21,10 @@ struct TetMesh {
   int numTets() const { return static_cast<int>(tets.size()); }
   int numNodes() const { return static_cast<int>(nodes.size()); }
   double tetVolume(int t) const;  ///< signed volume of the corner tet (positive when well oriented)
+  Eigen::Vector3d centroid(int t) const {  ///< of the four corners
+    const auto& T = tets[t];
+    return (nodes[T[0]] + nodes[T[1]] + nodes[T[2]] + nodes[T[3]]) / 4;
+  }
 };
 
 /// Edges of a tet in the C3D10 mid-node order

@@ -34,8 +34,9 @@ void checkSurfaceForTetgen(const SurfaceMesh& s);
 /// self-intersecting input). Each tet is labelled with the tissue of the surface face nearest to its
 /// centroid (region points are not needed, so a single closed surface whose faces carry the labels —
 /// as the rib cage generator writes it — works; for thin parts the nearest face is the part's own
-/// surface). Input vertices keep their indices: surface vertex i is mesh node i.
-TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt = {});
+/// surface). Input vertices keep their indices: surface vertex i is mesh node i. `tetFace`, if given,
+/// receives that nearest surface face per tet (e.g. to carry further face labels onto the tets).
+TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt = {}, std::vector<int>* tetFace = nullptr);
 
 /// Index of the face of s nearest to each query point (uniform grid search).
 std::vector<int> nearestFaces(const SurfaceMesh& s, const std::vector<Eigen::Vector3d>& points);
