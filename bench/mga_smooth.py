@@ -34,6 +34,7 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "python"))
 import pectus_mlx as mlx  # noqa: E402
 import pectus_meshes  # noqa: E402  (the main job's saddle grid)
+from pectus_meshes import read_off, write_off  # noqa: E402
 
 
 def saddle(x, y):
@@ -81,20 +82,8 @@ def saddle_quads(n=25, jitter=0.3, seed=5):
     return V, F
 
 
-def write_off(path, V, F):
-    with open(path, "w") as fh:
-        fh.write(f"OFF\n{len(V)} {len(F)} 0\n")
-        fh.writelines(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g}\n" for p in V)
-        fh.writelines(f"{len(f)} " + " ".join(map(str, f)) + "\n" for f in F)
-    return path
 
 
-def read_off(path):
-    tok = open(path).read().split()
-    assert tok[0].startswith("OFF"), path
-    nv = int(tok[1])
-    V = np.array(tok[4:4 + 3 * nv], float).reshape(nv, 3)
-    return V
 
 
 def triangulate(F):
@@ -240,7 +229,7 @@ def main():
                         raise RuntimeError(p.stdout[-300:])
                 else:
                     secs = float(re.search(r"seconds (\S+)", b.tool_out(how[2], how[1], out, "10")).group(1))
-                W = read_off(out)
+                W = read_off(out)[0]
                 if W.shape != V.shape:
                     raise RuntimeError(f"vertex count changed {V.shape} -> {W.shape}")
                 q = b.tool_out("quality", elems, out).split()

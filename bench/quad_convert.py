@@ -30,38 +30,14 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "python"))
 import pectus_mlx as mlx  # noqa: E402
-from pectus_meshes import saddle_mesh, write_ply  # noqa: E402
+from pectus_meshes import beta, read_off, saddle_mesh, write_ply  # noqa: E402
 
 CGAL_DATA = "/usr/share/doc/libcgal-dev/data.tar.gz"
 EX = os.path.join(ROOT, "filter_quad_convert", "examples")
 
 
-def beta(p):
-    n = np.cross(p[2] - p[0], p[3] - p[1])
-    ln = np.linalg.norm(n)
-    if ln == 0:
-        return 0.0
-    n = n / ln
-    s = 0.0
-    for k in range(4):
-        e1, e2 = p[(k + 1) % 4] - p[k], p[(k + 3) % 4] - p[k]
-        a = np.dot(np.cross(e1, e2), n)
-        if a <= 0:
-            return 0.0
-        s += (e1 @ e1 + e2 @ e2) / a
-    return 8.0 / s
 
 
-def read_off(path):
-    tok = open(path).read().split()
-    nv, nf = int(tok[1]), int(tok[2])
-    V = np.array(tok[4:4 + 3 * nv], float).reshape(nv, 3)
-    pos, F = 4 + 3 * nv, []
-    for _ in range(nf):
-        k = int(tok[pos])
-        F.append([int(x) for x in tok[pos + 1:pos + 1 + k]])
-        pos += 1 + k
-    return V, F
 
 
 def read_msh22(path):

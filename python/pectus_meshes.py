@@ -1,4 +1,6 @@
-"""Test and benchmark meshes the project builds itself (standard library + numpy)."""
+"""Meshes for tests and benchmarks (numpy): the ones the project builds itself, plain OFF/PLY reading and
+writing, and reference implementations of the element qualities (thesis eqs. 3-20, 3-22/3-23) that the
+tests and benchmarks check the C++ filters against."""
 from __future__ import annotations
 
 import numpy as np
@@ -26,9 +28,62 @@ def saddle_mesh(n_side: int = 25, jitter: float = 0.3, seed: int = 7):
     return np.array(V), F
 
 
-def write_ply(path, V, F):
+def write_ply(path: str, V, F):
+    """ascii PLY, polygons of any size"""
     with open(path, "w") as fh:
-        fh.write(f"ply\nformat ascii 1.0\nelement vertex {len(V)}\nproperty float x\nproperty float y\n"
-                 f"property float z\nelement face {len(F)}\nproperty list uchar int vertex_indices\nend_header\n")
-        fh.writelines(f"{p[0]:.7g} {p[1]:.7g} {p[2]:.7g}\n" for p in V)
-        fh.writelines(f"{len(f)} " + " ".join(map(str, f)) + "\n" for f in F)
+        fh.write(f"ply\nformat ascii 1.0\nelement vertex {len(V)}\nproperty float x\nproperty float y\nproperty float z\n"
+                 f"element face {len(F)}\nproperty list uchar int vertex_indices\nend_header\n")
+        for p in V:
+            fh.write(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g}\n")
+        for f in F:
+            fh.write(f"{len(f)} " + " ".join(str(int(i)) for i in f) + "\n")
+    return path
+
+
+def write_off(path: str, V, F):
+    """OFF, polygons of any size (MeshLab reads quads back with faux edges)"""
+    with open(path, "w") as fh:
+        fh.write(f"OFF\n{len(V)} {len(F)} 0\n")
+        for p in V:
+            fh.write(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g}\n")
+        for f in F:
+            fh.write(f"{len(f)} " + " ".join(str(int(i)) for i in f) + "\n")
+    return path
+
+
+def read_off(path: str):
+    """(V, F) of an ascii OFF file; F keeps each polygon's size"""
+    tok = open(path).read().split()
+    assert tok[0].startswith("OFF"), path
+    nv, nf = int(tok[1]), int(tok[2])
+    V = np.array(tok[4:4 + 3 * nv], float).reshape(nv, 3)
+    pos, F = 4 + 3 * nv, []
+    for _ in range(nf):
+        k = int(tok[pos])
+        F.append([int(x) for x in tok[pos + 1:pos + 1 + k]])
+        pos += 1 + k
+    return V, F
+
+
+def alpha(a, b, c):
+    """triangle quality alpha (thesis eq. 3-20), as pectus::triangleAlpha"""
+    return 2 * np.sqrt(3) * np.linalg.norm(np.cross(b - a, c - a)) / (
+        np.sum((b - a) ** 2) + np.sum((c - b) ** 2) + np.sum((a - c) ** 2))
+
+
+def beta(p):
+    """Knupp's quad shape quality along the quad's own normal (diagonals' cross), as pectus::quadBeta;
+    0 for a quad with a reflex, folded or degenerate corner"""
+    n = np.cross(p[2] - p[0], p[3] - p[1])
+    ln = np.linalg.norm(n)
+    if ln == 0:
+        return 0.0
+    n = n / ln
+    s = 0.0
+    for k in range(4):
+        e1, e2 = p[(k + 1) % 4] - p[k], p[(k + 3) % 4] - p[k]
+        a = np.dot(np.cross(e1, e2), n)
+        if a <= 0:
+            return 0.0
+        s += (e1 @ e1 + e2 @ e2) / a
+    return 8.0 / s

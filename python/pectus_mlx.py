@@ -13,6 +13,7 @@ meshlabserver aborts when a parameter is missing or mistyped, so every parameter
 from __future__ import annotations
 
 import os
+import re
 import shutil
 import subprocess
 import tempfile
@@ -189,6 +190,20 @@ class Result:
                 parts = line[5:].split(" ", 1)
                 out.append(parts[1] if len(parts) == 2 and parts[0].isdigit() else line[5:])
         return out
+
+
+def grab(log: Iterable[str], pattern: str, cast=float):
+    """cast(group 1) of the first Log line matching the regular expression, or None"""
+    for line in log:
+        m = re.search(pattern, line)
+        if m:
+            return cast(m.group(1))
+    return None
+
+
+def grab_all(log: Iterable[str], pattern: str) -> list:
+    """float(group 1) of every Log line matching the regular expression"""
+    return [float(m.group(1)) for m in (re.search(pattern, l) for l in log) if m]
 
 
 def find_meshlabserver(prefix: str | None = None) -> str:

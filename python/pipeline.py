@@ -28,6 +28,7 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import pectus_mlx as mlx  # noqa: E402
+from pectus_mlx import grab, grab_all  # noqa: E402
 
 EX = {
     "ribcage": os.path.join(ROOT, "filter_nuss_fea", "examples", "create_ribcage.mlx"),
@@ -74,16 +75,8 @@ def build_script(outdir: str, age: float, haller: float, elevation: float, quick
     return mlx.Script([gen, quality, mga, quality_after] + analysis_filters(outdir, elevation, quick, CAGE, LANDMARKS))
 
 
-def grab(log: list[str], pattern: str, cast=float):
-    for line in log:
-        m = re.search(pattern, line)
-        if m:
-            return cast(m.group(1))
-    return None
 
 
-def grab_all(log: list[str], pattern: str):
-    return [float(m.group(1)) for m in (re.search(pattern, l) for l in log) if m]
 
 
 def parse(log: list[str]) -> dict:

@@ -10,6 +10,7 @@ import tempfile
 import numpy as np
 
 import pectus_mlx as mlx
+from pectus_meshes import write_off, write_ply  # noqa: F401  (the tests import them from here)
 
 SOURCE = os.environ.get("PECTUS_SOURCE", os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..")))
 PREFIX = os.environ.get("PECTUS_PREFIX", os.path.join(SOURCE, "build", "prefix"))
@@ -115,25 +116,8 @@ def read_ply(path: str) -> dict:
     return out
 
 
-def write_off(path: str, V, F):
-    with open(path, "w") as fh:
-        fh.write(f"OFF\n{len(V)} {len(F)} 0\n")
-        for p in V:
-            fh.write(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g}\n")
-        for f in F:
-            fh.write(f"{len(f)} " + " ".join(str(int(i)) for i in f) + "\n")
-    return path
 
 
-def write_ply(path: str, V, F):
-    with open(path, "w") as fh:
-        fh.write(f"ply\nformat ascii 1.0\nelement vertex {len(V)}\nproperty float x\nproperty float y\nproperty float z\n"
-                 f"element face {len(F)}\nproperty list uchar int vertex_indices\nend_header\n")
-        for p in V:
-            fh.write(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g}\n")
-        for f in F:
-            fh.write(f"{len(f)} " + " ".join(str(int(i)) for i in f) + "\n")
-    return path
 
 
 def grid(n: int, quads: bool, jitter: float = 0.0, seed: int = 1, z=None):

@@ -4,6 +4,7 @@ import os
 
 import numpy as np
 
+from pectus_meshes import alpha
 from harness import SOURCE, check, finish, grid, read_ply, run, workdir, write_off, write_ply
 
 NAME = "Compute Element Quality (Triangle Alpha / Quad Beta)"
@@ -19,9 +20,6 @@ def script(element_type: int, colorize: bool = True) -> str:
     return path
 
 
-def alpha(a, b, c):
-    return 2 * math.sqrt(3) * np.linalg.norm(np.cross(b - a, c - a)) / (
-        np.sum((b - a) ** 2) + np.sum((c - b) ** 2) + np.sum((a - c) ** 2))
 
 
 # 1. jittered triangle grid: per-face alpha written as face quality, matches Python's alpha

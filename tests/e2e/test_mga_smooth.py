@@ -1,11 +1,11 @@
 """End to end: 'MGA Surface Mesh Smoothing' and 'Gradient Surface Mesh Smoothing (Baseline)' through the
 real meshlabserver, each from its example script."""
-import math
 import os
 import re
 
 import numpy as np
 
+from pectus_meshes import alpha
 from harness import SOURCE, check, finish, grid, read_ply, run, workdir, write_off, write_ply
 
 EXAMPLES = {"MGA": os.path.join(SOURCE, "filter_mga_smooth", "examples", "mga_smooth.mlx"),
@@ -24,9 +24,6 @@ def script(name: str, example: str = "MGA", **values) -> str:
     return path
 
 
-def alpha(a, b, c):
-    return 2 * math.sqrt(3) * np.linalg.norm(np.cross(b - a, c - a)) / (
-        np.sum((b - a) ** 2) + np.sum((c - b) ** 2) + np.sum((a - c) ** 2))
 
 
 def log_numbers(log, what):

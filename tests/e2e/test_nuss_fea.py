@@ -13,6 +13,7 @@ import numpy as np
 
 import harness as h
 import pectus_mlx as mlx
+from pectus_mlx import grab_all as grab
 from harness import check
 from pectus_filters import create_ribcage, nuss_fea
 
@@ -21,8 +22,6 @@ GEN = create_ribcage(edgeLength=5.0)
 FAST = dict(analysis=1, order=1, tetQuality=0.0)  # linear TET4, no TetGen refinement: seconds
 
 
-def grab(log, pattern):
-    return [float(m.group(1)) for m in (re.search(pattern, l) for l in log) if m]
 
 
 cage, lms = os.path.join(W, "cage.ply"), os.path.join(W, "cage_landmarks.ply")

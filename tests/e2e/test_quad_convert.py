@@ -9,7 +9,7 @@ import numpy as np
 from harness import SOURCE, check, finish, grid, read_ply, run, workdir, write_off, write_ply
 
 sys.path.insert(0, os.path.join(SOURCE, "python"))
-from pectus_meshes import saddle_mesh  # noqa: E402  (the project's jittered saddle, thesis eq. 3-25)
+from pectus_meshes import beta, saddle_mesh  # noqa: E402  (the project's jittered saddle, thesis eq. 3-25)
 
 EX = os.path.join(SOURCE, "filter_quad_convert", "examples")
 d = workdir("quad")
@@ -42,18 +42,6 @@ def read_poly_off(path):
     return V, F
 
 
-def beta(p):
-    """Knupp's quad shape quality along the quad's own normal (as pectus::quadBeta)"""
-    n = np.cross(p[2] - p[0], p[3] - p[1])
-    n = n / np.linalg.norm(n)
-    s = 0.0
-    for k in range(4):
-        e1, e2 = p[(k + 1) % 4] - p[k], p[(k + 3) % 4] - p[k]
-        a = np.dot(np.cross(e1, e2), n)
-        if a <= 0:
-            return 0.0
-        s += (e1 @ e1 + e2 @ e2) / a
-    return 8.0 / s
 
 
 def quad_betas(V, F):

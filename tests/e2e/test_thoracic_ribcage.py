@@ -3,12 +3,12 @@ thoracic volume filters on its cage and landmarks layers (labels.h codes), then 
 comparison against a copy of the cage whose anterior wall is lifted around the funnel (a stand-in
 for the FE correction): positive volume change by both methods, smaller Haller index."""
 import os
-import re
 
 import numpy as np
 
 import harness as h
 import pectus_mlx as mlx
+from pectus_mlx import grab_all as grab
 from harness import check
 
 W = h.workdir("thoracic-ribcage")
@@ -40,8 +40,6 @@ def filters(compare=False, before=0, landmarks=1):
                        rays=mlx.Int(720))]
 
 
-def grab(log, pattern):
-    return [float(m.group(1)) for m in (re.search(pattern, l) for l in log) if m]
 
 
 cage, lms = os.path.join(W, "cage.ply"), os.path.join(W, "cage_landmarks.ply")

@@ -4,12 +4,12 @@ volumes of closed meshes equal MeshLab's 'Compute Geometric Measures' to 1e-6; r
 landmark layer (labels.h codes); before/after change; bad input refused with a message and rollback."""
 import math
 import os
-import re
 
 import numpy as np
 
 import harness as h
 import pectus_mlx as mlx
+from pectus_mlx import grab_all as grab
 from harness import check
 
 W = h.workdir("thoracic")
@@ -98,13 +98,6 @@ def index_filter(compare=False, before=0, level=0, landmarks=0, z0=0.0, z1=200.0
                       landmarkLayer=mlx.Mesh(landmarks), zLow=mlx.Float(z0), zHigh=mlx.Float(z1), rays=mlx.Int(720))
 
 
-def grab(log, pattern):
-    out = []
-    for line in log:
-        m = re.search(pattern, line)
-        if m:
-            out.append(float(m.group(1)))
-    return out
 
 
 def rel(v, e):
