@@ -7,7 +7,7 @@ rib cage with tissue labels as face colour + face quality, e.g. from 'Create Pec
 with -m fc fq, or from a segmentation tool relabelled so) and CASE_landmarks.ply (landmark points, code in
 the vertex quality; labels.h).
 
-    python3 python/cohort.py demo DIR              # five synthetic patients shaped like the thesis' Table 6-1
+    python3 python/cohort.py demo DIR [--edge MM] [--cases N]   # synthetic patients shaped like the thesis' Table 6-1
     python3 python/cohort.py run DIR CASE OUTDIR   # one patient -> OUTDIR/CASE/ (what GNU parallel / an array job calls)
     python3 python/cohort.py collect DIR OUTDIR    # OUTDIR/cohort_summary.csv from every OUTDIR/*/summary.csv
     scripts/cohort.sh DIR [OUTDIR] [--quick]       # all of it in parallel (GNU parallel); cluster: scripts/cohort_array.sh
@@ -33,14 +33,15 @@ def patients(folder: str) -> list[dict]:
         return list(csv.DictReader(fh))
 
 
-def demo(folder: str, edge: float = 5.0) -> int:
+def demo(folder: str, edge: float = 5.0, cases: int = len(THESIS)) -> int:
     os.makedirs(folder, exist_ok=True)
+    chosen = THESIS[:max(1, min(cases, len(THESIS)))]
     with open(os.path.join(folder, "patients.csv"), "w", newline="") as fh:
         w = csv.writer(fh)
         w.writerow(["case", "sex", "age", "elevation_mm"])
-        for case, sex, age, haller, elev in THESIS:
+        for case, sex, age, haller, elev in chosen:
             w.writerow([case, sex, age, elev])
-    for case, sex, age, haller, elev in THESIS:
+    for case, sex, age, haller, elev in chosen:
         gen = pipeline.example("ribcage", "Create Pectus Excavatum Rib Cage").set(age=age, hallerIndex=haller, edgeLength=edge)
         res = mlx.run([], mlx.Script([gen]), [(os.path.join(folder, f"{case}.ply"), "fc fq", 0),
                                              (os.path.join(folder, f"{case}_landmarks.ply"), "vq", 1)])
@@ -67,7 +68,15 @@ def run_one(folder: str, case: str, outdir: str, quick: bool = False) -> int:
     with open(os.path.join(out, "meshlabserver.log"), "w") as fh:
         fh.write(res.stdout)
     r = pipeline.parse(res.log)
-    pipeline.write_summary(os.path.join(out, "summary.csv"), r, row["sex"], float(row["age"]), elev, case)
+    summary = os.path.join(out, "summary.csv")
+    if res.rc == 0:
+        pipeline.write_summary(summary, r, row["sex"], float(row["age"]), elev, case)
+    else:  # no summary row for a failed case (collect reports it); the reason is in meshlabserver.log
+        if os.path.exists(summary):
+            os.remove(summary)
+        for line in res.log:
+            if "failed" in line:
+                print(f"{case}: {line}", file=sys.stderr)
     print(f"{case}: rc {res.rc}, Fe {r['force']} N, elevation {r['elevation']} mm, slice {r['slice_change_pct']} %, "
           f"envelope {r['envelope_change_pct']} %", flush=True)
     return 0 if res.rc == 0 else 1
@@ -101,11 +110,21 @@ def collect(folder: str, outdir: str) -> int:
     return 0 if rows else 1
 
 
+def _option(args: list[str], name: str, default: str) -> tuple[list[str], str]:
+    """Removes '--name VALUE' from args; returns (rest, value)."""
+    if name in args:
+        i = args.index(name)
+        return args[:i] + args[i + 2:], args[i + 1]
+    return args, default
+
+
 def main(argv: list[str]) -> int:
     quick = "--quick" in argv
     a = [x for x in argv[1:] if x != "--quick"]
+    a, edge = _option(a, "--edge", "5.0")
+    a, cases = _option(a, "--cases", str(len(THESIS)))
     if len(a) >= 2 and a[0] == "demo":
-        return demo(a[1])
+        return demo(a[1], float(edge), int(cases))
     if len(a) >= 4 and a[0] == "run":
         return run_one(a[1], a[2], a[3], quick)
     if len(a) >= 3 and a[0] == "collect":

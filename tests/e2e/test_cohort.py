@@ -1,0 +1,48 @@
+"""Cohort scripts (issue 9, item 4): a two-patient demo cohort at a coarse edge length runs through
+scripts/cohort.sh (GNU parallel) in quick mode; cohort_summary.csv has one row per patient, each reaching
+its own target elevation, rows equal to the per-case summaries; the job-array script run for task 2 alone
+gives the same calibrated force as the parallel run."""
+import csv
+import os
+import subprocess
+
+from harness import PREFIX, SOURCE, check, finish, workdir
+
+d = workdir("cohort")
+cohort, out, out_array = os.path.join(d, "cohort"), os.path.join(d, "out"), os.path.join(d, "out_array")
+env = dict(os.environ, PECTUS_PREFIX=PREFIX, PECTUS_JOBS="1")
+p = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "python", "cohort.py"), "demo", cohort, "--edge", "6",
+                    "--cases", "2"], env=env, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=600)
+check(p.returncode == 0, "demo cohort written", p.stdout[-2000:])
+patients = list(csv.DictReader(open(os.path.join(cohort, "patients.csv"))))
+check([r["case"] for r in patients] == ["case1", "case2"], "demo --cases 2 lists two patients")
+
+p = subprocess.run(["sh", os.path.join(SOURCE, "scripts", "cohort.sh"), cohort, out, "--quick"], env=env,
+                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=1200)
+print(p.stdout[-3000:])
+check(p.returncode == 0, "cohort.sh exits 0", p.stdout[-2000:])
+path = os.path.join(out, "cohort_summary.csv")
+rows = list(csv.DictReader(open(path))) if os.path.exists(path) else []
+check(len(rows) == 2, f"cohort_summary.csv has 2 rows ({len(rows)})")
+for row, pat in zip(rows, patients):
+    case = pat["case"]
+    check(row["case"] == case, f"row order follows patients.csv ({row['case']})")
+    target = float(pat["elevation_mm"])
+    check(abs(float(row["elevation"]) - target) <= 0.1, f"{case}: elevation {row['elevation']} mm = target {target} mm")
+    check(0 < float(row["force"]) < 500, f"{case}: calibrated force {row['force']} N is positive and finite")
+    one = list(csv.DictReader(open(os.path.join(out, case, "summary.csv"))))
+    check(len(one) == 1 and one[0] == row, f"{case}: cohort row equals the case's summary.csv")
+if len(rows) == 2:
+    check(rows[0]["force"] != rows[1]["force"], "the two patients need different forces")
+
+env_array = dict(env, TASK="2")
+p = subprocess.run(["sh", os.path.join(SOURCE, "scripts", "cohort_array.sh"), cohort, out_array, "--quick"], env=env_array,
+                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=1200)
+check(p.returncode == 0, "cohort_array.sh task 2 exits 0", p.stdout[-2000:])
+arr = os.path.join(out_array, "case2", "summary.csv")
+check(not os.path.exists(os.path.join(out_array, "case1")), "array task 2 ran only case2")
+if os.path.exists(arr) and len(rows) == 2:
+    a = list(csv.DictReader(open(arr)))[0]
+    check(abs(float(a["force"]) - float(rows[1]["force"])) <= 1e-6 * max(1.0, float(a["force"])),
+          f"array job force {a['force']} N = parallel run {rows[1]['force']} N")
+finish()
