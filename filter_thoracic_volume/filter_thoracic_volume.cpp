@@ -256,6 +256,11 @@ void FilterThoracicVolumePlugin::runSlice(FilterContext& ctx) {
             " to " + fmt(c.range.zHi, 2) + " mm, pixel " + fmt(r.pixel, 3) + " mm, polygon volume " +
             cm3(r.polygonVolume) + ", empty slices " + std::to_string(r.emptySlices) + ", min ray coverage " +
             fmt(100 * r.minCoverage, 1) + " %, " + fmt(seconds(t0), 3) + " s)");
+    if (!(r.volume > 0))
+      throw InputError("layer '" + lab(mm) + "' encloses no area in any of the " + std::to_string(r.slices) +
+                       " slices from z = " + fmt(c.range.zLo, 2) + " to " + fmt(c.range.zHi, 2) + " mm (" +
+                       std::to_string(r.emptySlices) + " empty): it does not surround that range; check the heights "
+                       "or the layer");
     return r.volume;
   };
   if (c.before) {
