@@ -242,6 +242,18 @@ void FilterThoracicVolumePlugin::run(int id, FilterContext& ctx) {
   }
 }
 
+namespace {
+/// refuses a layer that encloses nothing between the heights (a single triangle, a patch beside the range):
+/// the slice result of that layer, or a coarse slice probe for the envelope
+void requireEnclosure(const vol::SliceResult& r, const std::string& layer, const vol::Range& range) {
+  if (r.volume > 0) return;
+  throw InputError("layer '" + layer + "' encloses no area in any of the " + std::to_string(r.slices) +
+                   " slices from z = " + fmt(range.zLo, 2) + " to " + fmt(range.zHi, 2) + " mm (" +
+                   std::to_string(r.emptySlices) + " empty): it does not surround that range; check the heights "
+                   "or the layer");
+}
+}  // namespace
+
 void FilterThoracicVolumePlugin::runSlice(FilterContext& ctx) {
   vol::SliceParams p;
   p.spacing = ctx.floatIn("spacing", 0.01, 1000);
@@ -256,11 +268,7 @@ void FilterThoracicVolumePlugin::runSlice(FilterContext& ctx) {
             " to " + fmt(c.range.zHi, 2) + " mm, pixel " + fmt(r.pixel, 3) + " mm, polygon volume " +
             cm3(r.polygonVolume) + ", empty slices " + std::to_string(r.emptySlices) + ", min ray coverage " +
             fmt(100 * r.minCoverage, 1) + " %, " + fmt(seconds(t0), 3) + " s)");
-    if (!(r.volume > 0))
-      throw InputError("layer '" + lab(mm) + "' encloses no area in any of the " + std::to_string(r.slices) +
-                       " slices from z = " + fmt(c.range.zLo, 2) + " to " + fmt(c.range.zHi, 2) + " mm (" +
-                       std::to_string(r.emptySlices) + " empty): it does not surround that range; check the heights "
-                       "or the layer");
+    requireEnclosure(r, lab(mm), c.range);
     return r.volume;
   };
   if (c.before) {
@@ -287,6 +295,11 @@ void FilterThoracicVolumePlugin::runEnvelope(FilterContext& ctx) {
   };
   std::vector<Out> outs;
   auto measure = [&](const vol::Soup& s, MeshModel& mm, int p0, int p1) {
+    vol::SliceParams probe;  // coarse: only whether the layer surrounds the range at all
+    probe.spacing = std::max(0.01, (c.range.zHi - c.range.zLo) / 8);
+    probe.resolution = 64;
+    probe.rays = 64;
+    requireEnclosure(vol::sliceVolume(s, c.range, probe), lab(mm), c.range);
     const auto t0 = std::chrono::steady_clock::now();
     const auto r = vol::fergusonEnvelope(s, c.range, p, [&](int pc, const char* w) { ctx.progress(p0 + (p1 - p0) * pc / 100, w); });
     const double dt = seconds(t0);

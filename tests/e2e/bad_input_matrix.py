@@ -14,13 +14,15 @@ failed filter) saving every layer before and after it. A cell is classified as
                               changed by a failed filter. A test fails on any of these.
 
     python3 tests/e2e/bad_input_matrix.py --write     # run every filter, rewrite docs/bad_input_matrix.md
-    python3 tests/e2e/bad_input_matrix.py mga         # print the cells of some filters
+    python3 tests/e2e/bad_input_matrix.py mga         # run some filters (kept in build/bad_input_results.json)
+    python3 tests/e2e/bad_input_matrix.py --write mga # rerun some, rewrite the table with the others' last run
 ctest runs one test per group (e2e_bad_input_<group>, registered by tests/CMakeLists.txt from --groups):
 it checks its cells and compares them with the committed table. Set PECTUS_PREFIX/PECTUS_BUILD when the
 build folder is not ./build."""
 from __future__ import annotations
 
 import hashlib
+import json
 import os
 import re
 import subprocess
@@ -216,9 +218,11 @@ def param_lines(f: mlx.Filter) -> str:
 
 
 class Runner:
-    def __init__(self, workdir: str | None = None, env: dict | None = None):
+    def __init__(self, workdir: str | None = None, env: dict | None = None, size: int = 1):
+        """size scales the valid open and closed meshes (1: 50 and 288 triangles)"""
         self.dir = workdir or tempfile.mkdtemp(prefix="pectus-badinput-")
         self.env = env
+        self.size = size
         self._bases: dict = {}
 
     def run(self, inputs, script, outputs, timeout=TIMEOUT, env=None):
@@ -228,10 +232,10 @@ class Runner:
     def base(self, name: str):
         if name not in self._bases:
             if name == "open":
-                V, F = saddle_mesh(6, 0.2)
+                V, F = saddle_mesh(5 * self.size + 1, 0.2)
                 self._bases[name] = (V, F, {})
             elif name == "closed":
-                V, F = closed_ellipsoid(120.0, 80.0, 100.0, 16, 10)
+                V, F = closed_ellipsoid(120.0, 80.0, 100.0, 16 * self.size, 10 * self.size)
                 self._bases[name] = (V, F, {})
             elif name == "cage":
                 self._make_cage()
@@ -353,7 +357,9 @@ class Runner:
     def filter_rows(self, key: str, part: str = "all") -> list:
         rows = []
         for i, (title, kind, over) in enumerate(cells(key, part)):
-            rows.append((title, kind, over, self.cell(key, kind, over, tag=f"{key}_{part}{i}")))
+            outcome = self.cell(key, kind, over, tag=f"{key}_{part}{i}")
+            outcome = outcome.replace(self.dir, "<tmp>").replace(BUILD, "<build>")  # the table does not depend on them
+            rows.append((title, kind, over, outcome))
             print(f"{filter_title(key)} | {title} | {rows[-1][3]}", flush=True)
         return rows
 
@@ -487,9 +493,15 @@ def main(argv):
     keys = [a for a in argv if a in FILTERS] or list(FILTERS)
     runner = Runner()
     results = {k: runner.filter_rows(k) for k in keys}
+    cache = os.path.join(BUILD, "bad_input_results.json")  # the last run of every filter, for --write KEY...
+    saved = json.load(open(cache)) if os.path.exists(cache) else {}
+    saved.update({k: [list(r) for r in v] for k, v in results.items()})
+    with open(cache, "w") as fh:
+        json.dump(saved, fh)
     if "--write" in argv:
-        if os.path.exists(TABLE) and len(keys) < len(FILTERS):  # keep the other filters' committed rows
-            raise SystemExit("--write needs every filter (no filter keys)")
+        if any(k not in saved for k in FILTERS):
+            raise SystemExit("--write: run every filter once first (no filter keys)")
+        results = {k: [tuple(r) for r in saved[k]] for k in FILTERS}
         with open(TABLE, "w", encoding="utf-8") as fh:
             fh.write(render(results))
         write_readme(results)

@@ -1,5 +1,5 @@
 """E2E (issue #10, determinism): every filter, run by meshlabserver with OMP_NUM_THREADS=1 and =2 on the
-same input and seed (the valid inputs and example parameters of the bad-input matrix; the Nuss FE
+same input and seed (the valid inputs of the bad-input matrix, 6x finer, and the example parameters; the Nuss FE
 analysis on the coarse 8 mm cage, linear TET4, calibrated to 10 mm), gives byte-identical outputs:
 every layer saved after it, every file it writes, and its Log lines with timings masked."""
 import glob
@@ -9,22 +9,24 @@ import bad_input_matrix as bim
 import pectus_mlx as mlx
 from harness import check, finish
 
-runner = bim.Runner()
+runner = bim.Runner(size=6)  # 1250 and 10k triangles: enough work for the threads to share
 W = runner.dir
 
 
 def outputs_of(key: str, threads: int):
+    """{output name: bytes} and the Log (timings and the output folder masked) of one run"""
     inputs, _, place = runner.layout(key, "valid")
-    tag = f"det_{key}_{threads}"
+    d = os.path.join(W, f"threads{threads}", key)
+    os.makedirs(d)
     f = bim.base_filter(key).set(**place)
     if "fileName" in f.params:
-        f.set(fileName=mlx.SaveFile(os.path.join(W, tag + "_file.obj"), ".obj"))
+        f.set(fileName=mlx.SaveFile(os.path.join(d, "file.obj"), ".obj"))
     if "resultBase" in f.params:
-        f.set(resultBase=mlx.SaveFile(os.path.join(W, tag + "_file.vtu"), ".vtu"))
-    layers = [(os.path.join(W, f"{tag}_layer{i}.ply"), bim.MASK, i) for i in range(len(inputs) + 3)]
+        f.set(resultBase=mlx.SaveFile(os.path.join(d, "file.vtu"), ".vtu"))
+    layers = [(os.path.join(d, f"layer{i}.ply"), bim.MASK, i) for i in range(len(inputs) + 3)]
     r = runner.run(inputs, mlx.Script([f]), layers, env={"OMP_NUM_THREADS": str(threads)}, timeout=300)
-    files = {p[len(os.path.join(W, tag)):]: open(p, "rb").read() for p in sorted(glob.glob(os.path.join(W, tag) + "_*"))}
-    log = [bim.TIMING.sub("<t>", l) for l in r.log]
+    files = {os.path.basename(p): open(p, "rb").read() for p in sorted(glob.glob(os.path.join(d, "*")))}
+    log = [bim.TIMING.sub("<t>", l).replace(d, "<dir>") for l in r.log]
     return r.rc, files, log
 
 

@@ -226,11 +226,12 @@ struct Solver::Impl {
     }
   }
 
-  // greedy colouring of the tets (in tet order, deterministic): no two tets of a colour share a node
+  // greedy colouring of the tets (in tet order, deterministic): no two tets of a colour share a node.
+  // Corners suffice: tets sharing a TET10 mid-edge node share that edge's corners.
   static std::vector<std::vector<int>> colorTets(const TetMesh& mesh) {
     std::vector<std::vector<int>> out;
     std::vector<std::vector<char>> used;  // used[c][node]: colour c has a tet at the node
-    const int nen = mesh.nodesPerTet();
+    const int nen = 4;
     for (int t = 0; t < mesh.numTets(); ++t) {
       std::size_t c = 0;
       for (; c < out.size(); ++c) {
