@@ -243,14 +243,14 @@ void FilterThoracicVolumePlugin::run(int id, FilterContext& ctx) {
 }
 
 namespace {
-/// refuses a layer that encloses nothing between the heights (a single triangle, a patch beside the range):
-/// the slice result of that layer, or a coarse slice probe for the envelope
+/// refuses a layer that does not surround the range (a single triangle, a patch beside the range): no
+/// volume, or more than half of the slices empty; from the slice result of that layer, or a coarse slice
+/// probe for the envelope
 void requireEnclosure(const vol::SliceResult& r, const std::string& layer, const vol::Range& range) {
-  if (r.volume > 0) return;
-  throw InputError("layer '" + layer + "' encloses no area in any of the " + std::to_string(r.slices) +
-                   " slices from z = " + fmt(range.zLo, 2) + " to " + fmt(range.zHi, 2) + " mm (" +
-                   std::to_string(r.emptySlices) + " empty): it does not surround that range; check the heights "
-                   "or the layer");
+  if (r.volume > 0 && 2 * r.emptySlices <= r.slices) return;
+  throw InputError("layer '" + layer + "' does not surround the range z = " + fmt(range.zLo, 2) + " to " +
+                   fmt(range.zHi, 2) + " mm: " + std::to_string(r.emptySlices) + " of " + std::to_string(r.slices) +
+                   " slices enclose no area; check the heights or the layer");
 }
 }  // namespace
 

@@ -146,7 +146,8 @@ FILTERS = {
     "ribcage": dict(mlx="filter_nuss_fea/examples/create_ribcage.mlx", base="open", set=dict(edgeLength=8.0),
                     kinds=["valid"], group="ribcage"),
     "nuss": dict(mlx="filter_nuss_fea/examples/nuss_fea.mlx", index=1, base="cage", layout="nuss",
-                 set=dict(analysis=1, order=1, tetQuality=0.0, targetElevation=10.0),
+                 set=dict(analysis=1, order=1, tetQuality=0.0, targetElevation=10.0,
+                          resultBase=mlx.SaveFile("", ".vtu")),  # no files (the example writes into the cwd)
                  kinds=CLOSED_KINDS + ["no_labels", "no_landmarks"], group="nuss", split=True),
     "tri_to_quad": dict(mlx="filter_quad_convert/examples/tri_to_quad.mlx", base="open", kinds=SURFACE_KINDS,
                         group="quad"),
