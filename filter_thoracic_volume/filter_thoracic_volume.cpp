@@ -242,6 +242,18 @@ void FilterThoracicVolumePlugin::run(int id, FilterContext& ctx) {
   }
 }
 
+namespace {
+/// refuses a layer that does not surround the range (a single triangle, a patch beside the range): no
+/// volume, or more than half of the slices empty; from the slice result of that layer, or a coarse slice
+/// probe for the envelope
+void requireEnclosure(const vol::SliceResult& r, const std::string& layer, const vol::Range& range) {
+  if (r.volume > 0 && 2 * r.emptySlices <= r.slices) return;
+  throw InputError("layer '" + layer + "' does not surround the range z = " + fmt(range.zLo, 2) + " to " +
+                   fmt(range.zHi, 2) + " mm: " + std::to_string(r.emptySlices) + " of " + std::to_string(r.slices) +
+                   " slices enclose no area; check the heights or the layer");
+}
+}  // namespace
+
 void FilterThoracicVolumePlugin::runSlice(FilterContext& ctx) {
   vol::SliceParams p;
   p.spacing = ctx.floatIn("spacing", 0.01, 1000);
@@ -256,6 +268,7 @@ void FilterThoracicVolumePlugin::runSlice(FilterContext& ctx) {
             " to " + fmt(c.range.zHi, 2) + " mm, pixel " + fmt(r.pixel, 3) + " mm, polygon volume " +
             cm3(r.polygonVolume) + ", empty slices " + std::to_string(r.emptySlices) + ", min ray coverage " +
             fmt(100 * r.minCoverage, 1) + " %, " + fmt(seconds(t0), 3) + " s)");
+    requireEnclosure(r, lab(mm), c.range);
     return r.volume;
   };
   if (c.before) {
@@ -282,6 +295,11 @@ void FilterThoracicVolumePlugin::runEnvelope(FilterContext& ctx) {
   };
   std::vector<Out> outs;
   auto measure = [&](const vol::Soup& s, MeshModel& mm, int p0, int p1) {
+    vol::SliceParams probe;  // coarse: only whether the layer surrounds the range at all
+    probe.spacing = std::max(0.01, (c.range.zHi - c.range.zLo) / 8);
+    probe.resolution = 64;
+    probe.rays = 64;
+    requireEnclosure(vol::sliceVolume(s, c.range, probe), lab(mm), c.range);
     const auto t0 = std::chrono::steady_clock::now();
     const auto r = vol::fergusonEnvelope(s, c.range, p, [&](int pc, const char* w) { ctx.progress(p0 + (p1 - p0) * pc / 100, w); });
     const double dt = seconds(t0);

@@ -28,15 +28,40 @@ def saddle_mesh(n_side: int = 25, jitter: float = 0.3, seed: int = 7):
     return np.array(V), F
 
 
-def write_ply(path: str, V, F):
-    """ascii PLY, polygons of any size"""
+def closed_ellipsoid(a, b, c, nth, nph):
+    """closed triangulated ellipsoid with semi-axes a, b, c (x, y, z) centred at the origin, outward
+    faces: nth vertices around, nph - 1 rings plus the two poles"""
+    V = [(0.0, 0.0, -c)]
+    for i in range(1, nph):
+        ph = -np.pi / 2 + np.pi * i / nph
+        for j in range(nth):
+            th = 2 * np.pi * j / nth
+            V.append((a * np.cos(ph) * np.cos(th), b * np.cos(ph) * np.sin(th), c * np.sin(ph)))
+    V.append((0.0, 0.0, c))
+    top = len(V) - 1
+    idx = lambda i, j: 1 + (i - 1) * nth + (j % nth)
+    F = [[0, idx(1, j + 1), idx(1, j)] for j in range(nth)]
+    for i in range(1, nph - 1):
+        for j in range(nth):
+            F += [[idx(i, j), idx(i, j + 1), idx(i + 1, j + 1)], [idx(i, j), idx(i + 1, j + 1), idx(i + 1, j)]]
+    F += [[top, idx(nph - 1, j), idx(nph - 1, j + 1)] for j in range(nth)]
+    return np.array(V), F
+
+
+def write_ply(path: str, V, F, vprops=None, fprops=None):
+    """ascii PLY, polygons of any size; vprops/fprops: optional per-vertex/per-face properties
+    {name: (ply type, values)}, e.g. {"quality": ("float", q), "red": ("uchar", r), ...}"""
+    vprops, fprops = vprops or {}, fprops or {}
     with open(path, "w") as fh:
         fh.write(f"ply\nformat ascii 1.0\nelement vertex {len(V)}\nproperty float x\nproperty float y\nproperty float z\n"
-                 f"element face {len(F)}\nproperty list uchar int vertex_indices\nend_header\n")
-        for p in V:
-            fh.write(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g}\n")
-        for f in F:
-            fh.write(f"{len(f)} " + " ".join(str(int(i)) for i in f) + "\n")
+                 + "".join(f"property {t} {n}\n" for n, (t, _) in vprops.items())
+                 + f"element face {len(F)}\nproperty list uchar int vertex_indices\n"
+                 + "".join(f"property {t} {n}\n" for n, (t, _) in fprops.items()) + "end_header\n")
+        for i, p in enumerate(V):
+            fh.write(f"{p[0]:.9g} {p[1]:.9g} {p[2]:.9g}" + "".join(f" {v[i]:.9g}" for _, v in vprops.values()) + "\n")
+        for i, f in enumerate(F):
+            fh.write(f"{len(f)} " + " ".join(str(int(k)) for k in f) + "".join(f" {v[i]:.9g}" for _, v in fprops.values())
+                     + "\n")
     return path
 
 

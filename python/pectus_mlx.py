@@ -15,6 +15,7 @@ from __future__ import annotations
 import os
 import re
 import shutil
+import signal
 import subprocess
 import tempfile
 from dataclasses import dataclass, field
@@ -219,9 +220,10 @@ def find_meshlabserver(prefix: str | None = None) -> str:
 
 
 def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tuple] = (),
-        prefix: str | None = None, timeout: float = 3600, cwd: str | None = None) -> Result:
-    """Run meshlabserver under xvfb-run. outputs: (path, "vc fq ...", layer_index or None).
-    Returns the exit code and everything printed (stdout + stderr)."""
+        prefix: str | None = None, timeout: float = 3600, cwd: str | None = None, env: dict | None = None) -> Result:
+    """Run meshlabserver under xvfb-run. outputs: (path, "vc fq ...", layer_index or None); env: variables
+    to set on top of the current environment (e.g. OMP_NUM_THREADS).
+    Returns the exit code and everything printed (stdout + stderr); subprocess.TimeoutExpired on a timeout."""
     exe = find_meshlabserver(prefix)
     cmd = ["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", exe]
     for i in inputs:
@@ -242,9 +244,17 @@ def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tu
     if script:
         cmd += ["-s", script]
     try:
-        p = subprocess.run(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, timeout=timeout, cwd=cwd,
-                           text=True, errors="replace")
-        return Result(p.returncode, p.stdout)
+        # own process group: on a timeout meshlabserver (a grandchild under xvfb-run) is killed too
+        with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, cwd=cwd, text=True,
+                              errors="replace", env=dict(os.environ, **env) if env else None,
+                              start_new_session=True) as p:
+            try:
+                out, _ = p.communicate(timeout=timeout)
+            except subprocess.TimeoutExpired:
+                os.killpg(p.pid, signal.SIGKILL)
+                p.communicate()
+                raise
+        return Result(p.returncode, out)
     finally:
         if tmp:
             os.unlink(tmp)

@@ -5,6 +5,7 @@
 
 #include <Eigen/Sparse>
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdint>
 #include <limits>
@@ -94,6 +95,18 @@ Topology::Topology(const TriMesh& m) {
     while (j < keys.size() && keys[j].first == keys[i].first) ++j;
     if (j - i > 2) {
       std::ostringstream s;
+      auto sorted = [&](int f) {
+        std::array<int, 3> v{m.F[f][0], m.F[f][1], m.F[f][2]};
+        std::sort(v.begin(), v.end());
+        return v;
+      };
+      for (std::size_t p = i; p < j; ++p)
+        for (std::size_t q = p + 1; q < j; ++q)
+          if (sorted(keys[p].second / 3) == sorted(keys[q].second / 3)) {
+            s << "faces " << keys[p].second / 3 << " and " << keys[q].second / 3
+              << " are duplicates (the same three vertices); remove them first (Cleaning: Remove Duplicate Faces)";
+            throw InputError(s.str());
+          }
       s << "edge (" << (keys[i].first >> 32) << ", " << (keys[i].first & 0xffffffffu) << ") is shared by "
         << (j - i) << " faces (non-manifold edge); repair the mesh first (Cleaning: Repair non Manifold Edges)";
       throw InputError(s.str());

@@ -96,4 +96,23 @@ std::optional<Eigen::Vector3d> findLandmark(const std::vector<Landmark>& lms, in
   return std::nullopt;
 }
 
+std::string faceLabelProblem(const CMeshO& m) {
+  if (!m.face.IsColorEnabled())
+    return "the faces have neither the label attributes nor colours (saved without '-m fc fq', or never labelled)";
+  std::size_t live = 0, off = 0;
+  for (const auto& f : m.face) {
+    if (f.IsD()) continue;
+    ++live;
+    bool hit = false;
+    for (int t = 1; t <= 3; ++t) {
+      const Rgb r = tissueColor(t);
+      hit = hit || (f.cC()[0] == r.r && f.cC()[1] == r.g && f.cC()[2] == r.b);
+    }
+    off += hit ? 0 : 1;
+  }
+  return std::to_string(off) + " of " + std::to_string(live) +
+         " face colours are not tissue colours (a filter that colours faces, e.g. 'Compute Element Quality' with "
+         "'Colour by quality', overwrote the labels of a saved file: label before colouring, or keep the labelled copy)";
+}
+
 }  // namespace pectus

@@ -1,5 +1,7 @@
 #include "pectus/mesh_checks.h"
 
+#include <algorithm>
+#include <array>
 #include <cmath>
 #include <sstream>
 #include <vector>
@@ -16,6 +18,7 @@ std::string MeshReport::summary() const {
   if (nonManifoldEdges) s << ", " << nonManifoldEdges << " non-manifold edges";
   if (nonManifoldVertices) s << ", " << nonManifoldVertices << " non-manifold vertices";
   if (degenerateFaces) s << ", " << degenerateFaces << " degenerate faces";
+  if (duplicateFaces) s << ", " << duplicateFaces << " duplicate faces";
   if (nonFiniteVertices) s << ", " << nonFiniteVertices << " vertices with NaN/Inf coordinates";
   return s.str();
 }
@@ -40,6 +43,18 @@ MeshReport inspectMesh(const CMeshO& m) {
   }
   for (std::size_t i = 0; i < m.vert.size(); ++i)
     if (!m.vert[i].IsD() && valence[i] == 0) ++r.unreferencedVertices;
+  {
+    std::vector<std::array<std::size_t, 3>> tri;
+    for (const auto& f : m.face) {
+      if (f.IsD()) continue;
+      std::array<std::size_t, 3> v{vcg::tri::Index(m, f.cV(0)), vcg::tri::Index(m, f.cV(1)), vcg::tri::Index(m, f.cV(2))};
+      std::sort(v.begin(), v.end());
+      tri.push_back(v);
+    }
+    std::sort(tri.begin(), tri.end());
+    for (std::size_t i = 1; i < tri.size(); ++i)
+      if (tri[i] == tri[i - 1]) ++r.duplicateFaces;
+  }
 
   const EdgeMap edges(m);
   // per vertex: count of incident boundary edges and of faces, to detect non-manifold vertices
@@ -70,6 +85,9 @@ MeshReport requireMesh(const CMeshO& m, const MeshRequirements& req, const std::
     throw InputError(L + "the layer has " + std::to_string(r.vertices) + " vertices but no faces (a point cloud); a surface mesh is needed");
   if (req.finite && r.nonFiniteVertices)
     throw InputError(L + std::to_string(r.nonFiniteVertices) + " vertices have NaN or infinite coordinates; remove them first");
+  if (req.edgeManifold && r.duplicateFaces)
+    throw InputError(L + std::to_string(r.duplicateFaces) +
+                     " duplicate faces (the same three vertices as another face); run 'Remove Duplicate Faces' first");
   if (req.edgeManifold && r.nonManifoldEdges)
     throw InputError(L + std::to_string(r.nonManifoldEdges) +
                      " non-manifold edges (shared by three or more faces); run 'Repair non Manifold Edges' first");

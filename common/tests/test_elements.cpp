@@ -129,4 +129,18 @@ TEST(MeshChecks, DetectsBadInput) {
   grid(nanm, 1, false);
   nanm.vert[0].P()[0] = std::nanf("");
   EXPECT_THROW(pectus::requireMesh(nanm, {}, "x"), pectus::InputError);
+
+  // a face repeated (vertices in another order): reported as a duplicate, before the non-manifold edges
+  CMeshO dup;
+  grid(dup, 2, false);
+  auto d = vcg::tri::Allocator<CMeshO>::AddFaces(dup, 1);
+  d->V(0) = dup.face[3].V(1); d->V(1) = dup.face[3].V(2); d->V(2) = dup.face[3].V(0);
+  r = pectus::inspectMesh(dup);
+  EXPECT_EQ(r.duplicateFaces, 1u);
+  try {
+    pectus::requireMesh(dup, man, "x");
+    ADD_FAILURE() << "no error";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("1 duplicate faces"), std::string::npos) << e.what();
+  }
 }

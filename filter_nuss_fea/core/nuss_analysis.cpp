@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include "pectus/errors.h"
+#include "pectus/mesh_checks.h"
 
 namespace pectus::nuss {
 
@@ -62,13 +63,16 @@ CageSurface cageFromMesh(const CMeshO& m) {
     throw InputError(
         "The layer has no tissue labels: every face needs a tissue (bone, cartilage or sternum) and an anatomical part, "
         "as 'Create Pectus Excavatum Rib Cage' writes them (attribute pectus_tissue/pectus_part, or the tissue face colours "
-        "with face quality = tissue*1000 + part; save PLY with face colour and quality).");
+        "with face quality = tissue*1000 + part; save PLY with face colour and quality): " + faceLabelProblem(m) + ".");
   for (size_t i = 0; i < m.vert.size(); ++i) {
     if (m.vert[i].IsD()) continue;
     const auto& p = m.vert[i].cP();
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2]))
       throw InputError("Vertex " + std::to_string(i) + " has a non-finite coordinate.");
   }
+  if (const std::size_t dup = inspectMesh(m).duplicateFaces)
+    throw InputError(std::to_string(dup) + " duplicate faces (the same three vertices as another face): remove them "
+                     "(Cleaning: Remove Duplicate Faces); a closed surface has each face once.");
   // weld micro-edges (shorter than 1e-3 x the mean edge length: marching-cubes / STL slivers that
   // TetGen cannot mesh) by collapsing them; faces that become degenerate or doubled are dropped
   std::vector<int> parent(m.vert.size());

@@ -11,6 +11,7 @@ import harness as h
 import pectus_mlx as mlx
 from pectus_mlx import grab_all as grab
 from harness import check
+from pectus_meshes import closed_ellipsoid
 
 W = h.workdir("thoracic")
 A, B, T = 130.0, 90.0, 8.0  # inner semi-axes (x, y) and rib thickness of the banded cylinder
@@ -41,24 +42,6 @@ def banded_cylinder(a, b, t, z0, z1, nth, nz, stretch_anterior=1.0):
             for j in np.nonzero(keep)[0]:
                 p, q = base + i * nth + j, base + i * nth + (j + 1) % nth
                 F += [[p, q, q + nth], [p, q + nth, p + nth]]
-    return np.array(V), F
-
-
-def closed_ellipsoid(a, b, c, nth, nph):
-    V = [(0.0, 0.0, -c)]
-    for i in range(1, nph):
-        ph = -np.pi / 2 + np.pi * i / nph
-        for j in range(nth):
-            th = 2 * np.pi * j / nth
-            V.append((a * np.cos(ph) * np.cos(th), b * np.cos(ph) * np.sin(th), c * np.sin(ph)))
-    V.append((0.0, 0.0, c))
-    top = len(V) - 1
-    idx = lambda i, j: 1 + (i - 1) * nth + (j % nth)
-    F = [[0, idx(1, j + 1), idx(1, j)] for j in range(nth)]
-    for i in range(1, nph - 1):
-        for j in range(nth):
-            F += [[idx(i, j), idx(i, j + 1), idx(i + 1, j + 1)], [idx(i, j), idx(i + 1, j + 1), idx(i + 1, j)]]
-    F += [[top, idx(nph - 1, j), idx(nph - 1, j + 1)] for j in range(nth)]
     return np.array(V), F
 
 

@@ -68,6 +68,9 @@ void copyLabelledMesh(CMeshO& dst, CMeshO& src);
 /// palette and face quality code. std::nullopt if neither is there or a live face has no label.
 struct FaceLabels { std::vector<int> tissue, part; std::string source; };
 std::optional<FaceLabels> readFaceLabels(const CMeshO& m);
+/// Why readFaceLabels finds no labels, for messages: no colour/attribute at all, or how many face
+/// colours are outside the tissue palette (a filter colouring faces, e.g. by quality, overwrote them).
+std::string faceLabelProblem(const CMeshO& m);
 
 struct Landmark { int code; Eigen::Vector3d p; };
 /// Landmarks of a landmark layer (vertex quality = code)

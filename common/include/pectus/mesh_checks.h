@@ -13,6 +13,7 @@ struct MeshReport {
   std::size_t unreferencedVertices = 0;
   std::size_t nonFiniteVertices = 0; ///< NaN or Inf coordinates
   std::size_t degenerateFaces = 0;   ///< zero area or repeated vertex
+  std::size_t duplicateFaces = 0;    ///< faces with the same three vertices as an earlier face
   std::size_t boundaryEdges = 0;     ///< edges with one face
   std::size_t nonManifoldEdges = 0;  ///< edges with three or more faces
   std::size_t nonManifoldVertices = 0; ///< vertices whose face fan is not one disk/half-disk

@@ -106,6 +106,7 @@ struct Solver::Impl {
   Eigen::SparseMatrix<double> K;               // free x free, lower triangle
   Cholmod chol;
   bool analysed = false;
+  std::vector<std::vector<int>> colors;        // tets by colour (colorTets), for the assembly
 
   int nFree = 0;
   Impl() {
@@ -152,74 +153,100 @@ struct Solver::Impl {
     fint.setZero(u.size());
     double* val = K.valuePtr();
     double* fi = fint.data();
-    const int nt = m->numTets();
-#pragma omp parallel for schedule(dynamic, 256)
-    for (int t = 0; t < nt; ++t) {
-      Eigen::Matrix<double, ND, ND> Ke = Eigen::Matrix<double, ND, ND>::Zero();
-      Eigen::Matrix<double, ND, 1> fe = Eigen::Matrix<double, ND, 1>::Zero();
-      Eigen::Matrix<double, 10, 3> G10;
-      Eigen::Matrix<double, NEN, 3> ue;
-      for (int a = 0; a < NEN; ++a) ue.row(a) = u.template segment<3>(3 * m->tets[t][a]).transpose();
-      const auto& Dm = D[t];
-      for (const Gauss& g : rule(m->order)) {
-        const double w = gradients(t, g, G10);
-        const Eigen::Matrix<double, NEN, 3> G = G10.template topRows<NEN>();
-        const Matrix3d H = ue.transpose() * G;  // du_i/dX_j
-        Matrix3d F = Matrix3d::Identity();
-        Matrix3d E;
-        if (nonlinear) {
-          F += H;
-          E = 0.5 * (H + H.transpose() + H.transpose() * H);
-        } else {
-          E = 0.5 * (H + H.transpose());
-        }
-        const Eigen::Matrix<double, 6, 1> Sv = Dm * voigt(E, true);
-        Matrix3d S;
-        S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
-        const Matrix3d P = F * S;  // first Piola (linear: sigma)
-        Eigen::Matrix<double, 6, ND> B;
-        for (int a = 0; a < NEN; ++a) {
-          const Vector3d Ga = G.row(a).transpose();
-          fe.template segment<3>(3 * a) += w * P * Ga;
-          for (int i = 0; i < 3; ++i) {
-            B(0, 3 * a + i) = F(i, 0) * Ga(0);
-            B(1, 3 * a + i) = F(i, 1) * Ga(1);
-            B(2, 3 * a + i) = F(i, 2) * Ga(2);
-            B(3, 3 * a + i) = F(i, 0) * Ga(1) + F(i, 1) * Ga(0);
-            B(4, 3 * a + i) = F(i, 1) * Ga(2) + F(i, 2) * Ga(1);
-            B(5, 3 * a + i) = F(i, 0) * Ga(2) + F(i, 2) * Ga(0);
+    if (colors.empty()) colors = colorTets(*m);
+    // Tets of one colour share no node: within a colour every entry of K and fint gets at most one
+    // contribution, so the sums are formed in colour order whatever the number of threads (byte-identical
+    // results with 1 or N threads; atomic adds would sum in thread-timing order).
+    for (const std::vector<int>& group : colors) {
+      const int ng = static_cast<int>(group.size());
+  #pragma omp parallel for schedule(dynamic, 64)
+      for (int gi = 0; gi < ng; ++gi) {
+        const int t = group[gi];
+        Eigen::Matrix<double, ND, ND> Ke = Eigen::Matrix<double, ND, ND>::Zero();
+        Eigen::Matrix<double, ND, 1> fe = Eigen::Matrix<double, ND, 1>::Zero();
+        Eigen::Matrix<double, 10, 3> G10;
+        Eigen::Matrix<double, NEN, 3> ue;
+        for (int a = 0; a < NEN; ++a) ue.row(a) = u.template segment<3>(3 * m->tets[t][a]).transpose();
+        const auto& Dm = D[t];
+        for (const Gauss& g : rule(m->order)) {
+          const double w = gradients(t, g, G10);
+          const Eigen::Matrix<double, NEN, 3> G = G10.template topRows<NEN>();
+          const Matrix3d H = ue.transpose() * G;  // du_i/dX_j
+          Matrix3d F = Matrix3d::Identity();
+          Matrix3d E;
+          if (nonlinear) {
+            F += H;
+            E = 0.5 * (H + H.transpose() + H.transpose() * H);
+          } else {
+            E = 0.5 * (H + H.transpose());
+          }
+          const Eigen::Matrix<double, 6, 1> Sv = Dm * voigt(E, true);
+          Matrix3d S;
+          S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
+          const Matrix3d P = F * S;  // first Piola (linear: sigma)
+          Eigen::Matrix<double, 6, ND> B;
+          for (int a = 0; a < NEN; ++a) {
+            const Vector3d Ga = G.row(a).transpose();
+            fe.template segment<3>(3 * a) += w * P * Ga;
+            for (int i = 0; i < 3; ++i) {
+              B(0, 3 * a + i) = F(i, 0) * Ga(0);
+              B(1, 3 * a + i) = F(i, 1) * Ga(1);
+              B(2, 3 * a + i) = F(i, 2) * Ga(2);
+              B(3, 3 * a + i) = F(i, 0) * Ga(1) + F(i, 1) * Ga(0);
+              B(4, 3 * a + i) = F(i, 1) * Ga(2) + F(i, 2) * Ga(1);
+              B(5, 3 * a + i) = F(i, 0) * Ga(2) + F(i, 2) * Ga(0);
+            }
+          }
+          const Eigen::Matrix<double, 6, ND> DB = (w * Dm) * B;
+          Ke.noalias() += B.transpose() * DB;
+          if (nonlinear) {
+            const Eigen::Matrix<double, NEN, NEN> GSG = w * G * S * G.transpose();
+            for (int a = 0; a < NEN; ++a)
+              for (int b = 0; b < NEN; ++b)
+                for (int i = 0; i < 3; ++i) Ke(3 * a + i, 3 * b + i) += GSG(a, b);
           }
         }
-        const Eigen::Matrix<double, 6, ND> DB = (w * Dm) * B;
-        Ke.noalias() += B.transpose() * DB;
-        if (nonlinear) {
-          const Eigen::Matrix<double, NEN, NEN> GSG = w * G * S * G.transpose();
-          for (int a = 0; a < NEN; ++a)
-            for (int b = 0; b < NEN; ++b)
-              for (int i = 0; i < 3; ++i) Ke(3 * a + i, 3 * b + i) += GSG(a, b);
-        }
-      }
-      int dofs[ND], fdof[ND];
-      for (int a = 0; a < NEN; ++a)
-        for (int i = 0; i < 3; ++i) dofs[3 * a + i] = 3 * m->tets[t][a] + i, fdof[3 * a + i] = freeIndex[3 * m->tets[t][a] + i];
-      for (int r = 0; r < ND; ++r) {
-#pragma omp atomic
-        fi[dofs[r]] += fe(r);
-      }
-      for (int c = 0; c < ND; ++c) {
-        const int fc = fdof[c];
-        if (fc < 0) continue;
-        const int* b = K.innerIndexPtr() + K.outerIndexPtr()[fc];
-        const int* e = K.innerIndexPtr() + K.outerIndexPtr()[fc + 1];
-        for (int r = 0; r < ND; ++r) {
-          const int fr = fdof[r];
-          if (fr < fc) continue;  // lower triangle only (and skips constrained: -1)
-          const int k = static_cast<int>(std::lower_bound(b, e, fr) - K.innerIndexPtr());
-#pragma omp atomic
-          val[k] += Ke(r, c);
+        int dofs[ND], fdof[ND];
+        for (int a = 0; a < NEN; ++a)
+          for (int i = 0; i < 3; ++i) dofs[3 * a + i] = 3 * m->tets[t][a] + i, fdof[3 * a + i] = freeIndex[3 * m->tets[t][a] + i];
+        for (int r = 0; r < ND; ++r) fi[dofs[r]] += fe(r);
+        for (int c = 0; c < ND; ++c) {
+          const int fc = fdof[c];
+          if (fc < 0) continue;
+          const int* b = K.innerIndexPtr() + K.outerIndexPtr()[fc];
+          const int* e = K.innerIndexPtr() + K.outerIndexPtr()[fc + 1];
+          for (int r = 0; r < ND; ++r) {
+            const int fr = fdof[r];
+            if (fr < fc) continue;  // lower triangle only (and skips constrained: -1)
+            const int k = static_cast<int>(std::lower_bound(b, e, fr) - K.innerIndexPtr());
+            val[k] += Ke(r, c);
+          }
         }
       }
     }
+  }
+
+  // greedy colouring of the tets (in tet order, deterministic): no two tets of a colour share a node.
+  // Corners suffice: tets sharing a TET10 mid-edge node share that edge's corners.
+  static std::vector<std::vector<int>> colorTets(const TetMesh& mesh) {
+    std::vector<std::vector<int>> out;
+    std::vector<std::vector<char>> used;  // used[c][node]: colour c has a tet at the node
+    const int nen = 4;
+    for (int t = 0; t < mesh.numTets(); ++t) {
+      std::size_t c = 0;
+      for (; c < out.size(); ++c) {
+        bool free = true;
+        for (int a = 0; a < nen && free; ++a) free = !used[c][std::size_t(mesh.tets[t][a])];
+        if (free) break;
+      }
+      if (c == out.size()) {
+        out.emplace_back();
+        used.emplace_back(mesh.nodes.size(), 0);
+      }
+      out[c].push_back(t);
+      for (int a = 0; a < nen; ++a) used[c][std::size_t(mesh.tets[t][a])] = 1;
+    }
+    return out;
   }
 
   Eigen::VectorXd freePart(const Eigen::VectorXd& full) const {

@@ -2,7 +2,10 @@
 // nonlinear vs linear, singular systems and non-converging Newton solves.
 #include <gtest/gtest.h>
 
+#include <omp.h>
+
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "pectus/errors.h"
@@ -91,6 +94,24 @@ double timoshenko(double P) {
 }  // namespace
 
 TEST(FeSolver, PatchTestTet4) { patchTest(1); }
+
+// the assembly sums in the same order whatever the thread count: bit-identical displacements (TET10,
+// enough tets for several threads to share the assembly; nonlinear: assembled at every Newton iteration)
+TEST(FeSolver, SameResultWithOneAndTwoThreads) {
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 3, 3, 30, 1));
+  std::vector<Eigen::VectorXd> u;
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    Problem p = cantilever(q, 5.0);
+    NewtonOptions o;
+    o.loadSteps = 1;
+    u.push_back(solveNonlinear(p, o).u);
+  }
+  omp_set_num_threads(omp_get_num_procs());
+  ASSERT_EQ(u[0].size(), u[1].size());
+  EXPECT_EQ(std::memcmp(u[0].data(), u[1].data(), sizeof(double) * std::size_t(u[0].size())), 0);
+  EXPECT_GT(u[0].norm(), 0.0);
+}
 TEST(FeSolver, PatchTestTet10) { patchTest(2); }
 
 TEST(FeSolver, CantileverVsBeamTheory) {

@@ -1,0 +1,105 @@
+// pectus_layer_check: runs one filter of this project's plugins on PLY layers in-process (as meshlabserver
+// does) and saves every loaded layer before and after it, so that a test can compare them byte for byte.
+// meshlabserver cannot show this: after a failed filter it exits without saving anything.
+//
+//   pectus_layer_check <plugin dir> <filter name> <params file> <out prefix> <in.ply>...
+//
+// params file: one parameter per line, "<type> <name> <value...>" with type Float, Int, Bool, Enum,
+// Mesh (layer index), Point3 (x y z), String or SaveFile (the rest of the line). Parameters not listed
+// keep the filter's defaults. Writes <out prefix>before_<i>.ply and <out prefix>after_<i>.ply (ascii,
+// vertex/face quality and colour) and prints "applyFilter <0|1>". Exit code 0 unless the tool itself fails.
+#include <QCoreApplication>
+#include <QDir>
+#include <QPluginLoader>
+#include <common/interfaces.h>
+#include <wrap/io_trimesh/export_ply.h>
+#include <wrap/io_trimesh/import_ply.h>
+#include <vcg/complex/algorithms/update/bounding.h>
+#include <vcg/complex/algorithms/update/normal.h>
+
+#include <fstream>
+#include <iostream>
+#include <sstream>
+
+namespace {
+
+int fail(const std::string& msg) {
+  std::cerr << "pectus_layer_check: " << msg << "\n";
+  return 2;
+}
+
+void save(MeshModel& m, const std::string& path) {
+  using namespace vcg::tri::io;
+  int mask = Mask::IOM_VERTQUALITY | Mask::IOM_VERTCOLOR;
+  if (m.cm.face.IsQualityEnabled()) mask |= Mask::IOM_FACEQUALITY;
+  if (m.cm.face.IsColorEnabled()) mask |= Mask::IOM_FACECOLOR;
+  ExporterPLY<CMeshO>::Save(m.cm, path.c_str(), mask, false);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 6) return fail("usage: pectus_layer_check <plugin dir> <filter name> <params> <out prefix> <in.ply>...");
+  QCoreApplication app(argc, argv);
+  const QString filter = QString::fromUtf8(argv[2]);
+
+  MeshFilterInterface* plugin = nullptr;
+  QAction* action = nullptr;
+  for (const QString& f : QDir(argv[1]).entryList({"lib*.so"}, QDir::Files)) {
+    auto* loader = new QPluginLoader(QDir(argv[1]).absoluteFilePath(f));
+    auto* p = qobject_cast<MeshFilterInterface*>(loader->instance());
+    if (p == nullptr) continue;
+    for (QAction* a : p->actions())
+      if (p->filterName(a) == filter) plugin = p, action = a;
+  }
+  if (action == nullptr) return fail("no plugin in " + std::string(argv[1]) + " has the filter " + argv[2]);
+
+  MeshDocument md;
+  std::vector<MeshModel*> layers;
+  for (int i = 5; i < argc; ++i) {
+    MeshModel* m = md.addNewMesh(argv[i], QFileInfo(argv[i]).fileName(), true);
+    int mask = 0;
+    vcg::tri::io::ImporterPLY<CMeshO>::LoadMask(argv[i], mask);
+    m->Enable(mask);
+    if (vcg::tri::io::ImporterPLY<CMeshO>::Open(m->cm, argv[i], mask) != 0) return fail(std::string("cannot read ") + argv[i]);
+    vcg::tri::UpdateBounding<CMeshO>::Box(m->cm);
+    if (!(mask & vcg::tri::io::Mask::IOM_VERTNORMAL)) vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFace(m->cm);
+    layers.push_back(m);
+  }
+  const std::string out = argv[4];
+  for (std::size_t i = 0; i < layers.size(); ++i) save(*layers[i], out + "before_" + std::to_string(i) + ".ply");
+
+  RichParameterList par;
+  plugin->initParameterSet(action, md, par);
+  std::ifstream in(argv[3]);
+  std::string line;
+  while (std::getline(in, line)) {
+    std::istringstream s(line);
+    std::string type, name;
+    if (!(s >> type >> name)) continue;
+    const QString n = QString::fromStdString(name);
+    if (!par.hasParameter(n)) return fail("the filter has no parameter " + name);
+    if (type == "Float") { double v; s >> v; par.setValue(n, FloatValue(float(v))); }
+    else if (type == "Int") { long long v; s >> v; par.setValue(n, IntValue(int(v))); }
+    else if (type == "Enum") { int v; s >> v; par.setValue(n, EnumValue(v)); }
+    else if (type == "Bool") { int v; s >> v; par.setValue(n, BoolValue(v != 0)); }
+    else if (type == "Mesh") {
+      int v; s >> v;
+      if (v < 0 || v >= int(layers.size())) return fail("layer index out of range for " + name);
+      par.setValue(n, MeshValue(layers[v]));
+    } else if (type == "Point3") { float x, y, z; s >> x >> y >> z; par.setValue(n, Point3fValue(vcg::Point3f(x, y, z))); }
+    else {
+      std::string rest;
+      std::getline(s >> std::ws, rest);
+      if (type == "SaveFile") par.setValue(n, FileValue(QString::fromStdString(rest)));
+      else par.setValue(n, StringValue(QString::fromStdString(rest)));
+    }
+  }
+
+  GLLogStream log;
+  plugin->setLog(&log);
+  const bool ok = plugin->applyFilter(action, md, par, nullptr);
+  std::cout << "applyFilter " << (ok ? 1 : 0) << "\n";
+  for (std::size_t i = 0; i < layers.size(); ++i) save(*layers[i], out + "after_" + std::to_string(i) + ".ply");
+  return 0;
+}
