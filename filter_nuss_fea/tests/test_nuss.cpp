@@ -121,9 +121,9 @@ TEST(NussAnalysis, LinearModelLoadsSupportsCalibrationAndBadInput) {
   auto noSternum = lms;
   noSternum.erase(std::remove_if(noSternum.begin(), noSternum.end(), [](const Landmark& l) { return l.code == kSternumLowerEnd; }), noSternum.end());
   EXPECT_NE(errorOf([&] { nuss::analyze(surf, noSternum, coarse()); }).find("lower sternum end"), std::string::npos);
-  auto space7 = coarse();
-  space7.place.intercostalSpace = 7;
-  EXPECT_NE(errorOf([&] { nuss::analyze(surf, lms, space7); }).find("intercostal space 7"), std::string::npos);
+  auto space12 = coarse();  // no landmark and no rib 13 to place the exit between
+  space12.place.intercostalSpace = 12;
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, lms, space12); }).find("intercostal space 12"), std::string::npos);
   auto unreachable = coarse();
   unreachable.targetElevation = 50.0;
   unreachable.maxForce = 0.5 * 50.0 / a.linearCompliance;
