@@ -69,10 +69,9 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
   n.postCondition = MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR;
   addFilter(this, n);
 
-  pectus::ml::FilterSpec b;
-  b.id = FP_BAR_PLANNER;
-  b.name = "Nuss Bar Planner";
-  b.info =
+  n.id = FP_BAR_PLANNER;  // same class, arity and post-conditions
+  n.name = "Nuss Bar Planner";
+  n.info =
       "Compares Nuss bar options before surgery (the thesis' conclusion): runs the calibrated 'Nuss Procedure FE Analysis' "
       "on the current layer (the labelled rib cage) for every listed bar level (intercostal space) with one bar and/or "
       "two bars, and measures the thoracic volume gain (slice method and Ferguson envelope) and the pectus index after "
@@ -88,10 +87,7 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
       "deformed cage of the best option (lowest force or lowest max stress) coloured by von Mises stress, named after the "
       "option. Volumes: slice method from landmark 700 to 701, envelope from 500 to 701 (as those filters' defaults); "
       "pectus index at the level of landmark 501.";
-  b.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Measure | MeshFilterInterface::Remeshing);
-  b.arity = MeshFilterInterface::VARIABLE;
-  b.postCondition = MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR;
-  addFilter(this, b);
+  addFilter(this, n);
 }
 
 void FilterNussFeaPlugin::initParameters(int id, MeshDocument& md, RichParameterList& par) {

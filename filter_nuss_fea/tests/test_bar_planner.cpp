@@ -10,27 +10,22 @@
 
 #include "bar_planner.h"
 #include "pectus/errors.h"
-#include "ribcage.h"
+#include "coarse_cage.h"
 
 using namespace pectus;
 
 namespace {
 
+using pectus::fixture::errorOf;
+
 struct Cage {
-  CMeshO mesh;
-  std::vector<Landmark> lms;
+  const CMeshO& mesh;
+  const std::vector<Landmark>& lms;
   nuss::CageSurface surf;
 };
 
-Cage& cage() {
-  static Cage c;
-  if (c.mesh.fn == 0) {
-    ribcage::RibCageParams p;
-    p.edgeLength = 6.0;
-    p.ribPairs = 12;
-    c.lms = ribcage::generateRibCage(p, c.mesh);
-    c.surf = nuss::cageFromMesh(c.mesh);
-  }
+const Cage& cage() {
+  static const Cage c{fixture::coarseCage().mesh, fixture::coarseCage().lms, nuss::cageFromMesh(fixture::coarseCage().mesh)};
   return c;
 }
 
@@ -47,15 +42,6 @@ nuss::PlanOptions quick() {
   o.envelope.mAround = 8;
   o.indexRays = 360;
   return o;
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 std::vector<Landmark> without(std::vector<Landmark> lms, const std::function<bool(int)>& drop) {

@@ -7,27 +7,15 @@
 
 #include "nuss_analysis.h"
 #include "pectus/errors.h"
+#include "coarse_cage.h"
 #include "ribcage.h"
 
 using namespace pectus;
 
 namespace {
 
-struct Cage {
-  CMeshO mesh;
-  std::vector<Landmark> lms;
-};
-
-Cage& cage() {
-  static Cage c;
-  if (c.mesh.fn == 0) {
-    ribcage::RibCageParams p;
-    p.edgeLength = 6.0;
-    p.ribPairs = 12;
-    c.lms = ribcage::generateRibCage(p, c.mesh);
-  }
-  return c;
-}
+using pectus::fixture::errorOf;
+pectus::fixture::CoarseCage& cage() { return pectus::fixture::coarseCage(); }
 
 nuss::Options coarse() {
   nuss::Options o;
@@ -36,15 +24,6 @@ nuss::Options coarse() {
   o.nonlinear = false;
   o.force = 10;
   return o;
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 }  // namespace
