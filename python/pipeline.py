@@ -175,7 +175,8 @@ def run_pipeline(outdir: str, age=8.0, haller=5.3, elevation=44.7, sex="M", quic
                (os.path.join(outdir, "envelope_before.ply"), "", 4),
                (os.path.join(outdir, "envelope_after.ply"), "", 5)]
     t0 = time.time()
-    res = mlx.run([], script_path, outputs, prefix=prefix)
+    # the planner repeats the calibrated FE per option (full mode: ~4 min each on an idle machine): a longer limit
+    res = mlx.run([], script_path, outputs, prefix=prefix, timeout=4 * 3600 if planner else 3600)
     r = parse(res.log)
     r["seconds"] = time.time() - t0
     with open(os.path.join(outdir, "meshlabserver.log"), "w") as fh:
