@@ -8,6 +8,7 @@
 #include "pectus/errors.h"
 #include "pectus/labels.h"
 #include "haller.h"
+#include "bar_planner.h"
 #include "nuss_analysis.h"
 #include "pectus/fe/io.h"
 #include "plot.h"
@@ -67,17 +68,39 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
   n.arity = MeshFilterInterface::VARIABLE;
   n.postCondition = MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR;
   addFilter(this, n);
+
+  n.id = FP_BAR_PLANNER;  // same class, arity and post-conditions
+  n.name = "Nuss Bar Planner";
+  n.info =
+      "Compares Nuss bar options before surgery (the thesis' conclusion): runs the calibrated 'Nuss Procedure FE Analysis' "
+      "on the current layer (the labelled rib cage) for every listed bar level (intercostal space) with one bar and/or "
+      "two bars, and measures the thoracic volume gain (slice method and Ferguson envelope) and the pectus index after "
+      "each.<br>"
+      "<b>One bar</b> in space s: exactly the FE filter's model (Fe at the lower sternum end, Fsr = Fe/4 on ribs s and "
+      "s+1 next to the bar's exits). <b>Two bars</b>: the first as above, the second in space s + offset (default one "
+      "space above), parallel to the first: its sternal load on the sternum at the lower end's height moved by the height "
+      "difference of the two bars' exits, its four Fsr on ribs s2 and s2+1 next to its exits. The second bar carries the "
+      "given share of the total force, each bar Fe_i = 2Fs_i = 4Fsr_i. Every option is calibrated to the same elevation "
+      "of the lower sternum end; the tet mesh is built once for all options.<br>"
+      "<b>Results.</b> One Log line per option (force, elevation, max von Mises stress and where, max equivalent strain "
+      "and where, volume gains in cm3 and %, pectus index after), a CSV file with the same table, and a new layer with the "
+      "deformed cage of the best option (lowest force or lowest max stress) coloured by von Mises stress, named after the "
+      "option. Volumes: slice method from landmark 700 to 701, envelope from 500 to 701 (as those filters' defaults); "
+      "pectus index at the level of landmark 501.";
+  addFilter(this, n);
 }
 
 void FilterNussFeaPlugin::initParameters(int id, MeshDocument& md, RichParameterList& par) {
   if (id == FP_CREATE_RIBCAGE) initCreateRibCage(par);
   if (id == FP_NUSS_FEA) initNussFea(md, par);
+  if (id == FP_BAR_PLANNER) initBarPlanner(md, par);
 }
 
 void FilterNussFeaPlugin::run(int id, FilterContext& ctx) {
   switch (id) {
     case FP_CREATE_RIBCAGE: runCreateRibCage(ctx); break;
     case FP_NUSS_FEA: runNussFea(ctx); break;
+    case FP_BAR_PLANNER: runBarPlanner(ctx); break;
     default: throw std::logic_error("unknown filter id");
   }
 }
@@ -170,22 +193,24 @@ QStringList sides() { return QStringList() << "Right" << "Left"; }
 Eigen::Vector3d toE(const Point3m& p) { return Eigen::Vector3d(p[0], p[1], p[2]); }
 }  // namespace
 
-void FilterNussFeaPlugin::initNussFea(MeshDocument& md, RichParameterList& par) {
+namespace {
+// parameter groups shared by 'Nuss Procedure FE Analysis' and 'Nuss Bar Planner' (same names, defaults, help)
+void addLandmarkParam(MeshDocument& md, RichParameterList& par) {
   par.addParam(RichMesh("landmarkLayer", pectus::ml::defaultLandmarkLayer(md), &md, "Landmark layer",
                         "Point layer of landmarks (vertex quality = code, labels.h) as the rib cage generator writes it: "
                         "costovertebral joints 100*side+rib (fixed), 500 lower sternum end (Fe), bar exits "
-                        "600+10*side+s (Fsr). By default the layer whose label ends in 'landmarks'."));
-  par.addParam(RichEnum("mode", 0, modes(), "Force",
-                        "Calibrate: search Fe so the sternum end rises by the target elevation (secant/bracketing on the "
-                        "force-displacement curve, to the tolerance). Given: apply the elevating force below."));
+                        "600+10*side+s (Fsr; without one, the exit is placed between the ribs' lateral-most points). "
+                        "By default the layer whose label ends in 'landmarks'."));
+}
+void addCalibrationParams(RichParameterList& par) {
   par.addParam(RichFloat("targetElevation", 44.7f, "Target elevation (mm)",
                          "Measured rise of the lower sternum end (CT before, X-ray after). Thesis Table 6-1: 34.0-44.7 mm "
                          "(patient 1: 44.7 mm)."));
-  par.addParam(RichFloat("force", 140.0f, "Elevating force Fe (N)",
-                         "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N."));
   par.addParam(RichFloat("maxForce", 1000.0f, "Maximum force (N)",
                          "Calibration gives up (with a message) if this force does not reach the target."));
   par.addParam(RichFloat("tolerance", 0.1f, "Calibration tolerance (mm)", "|simulated - target elevation| allowed."));
+}
+void addModelParams(RichParameterList& par) {
   par.addParam(RichEnum("analysis", 0, analyses(), "Analysis",
                         "Large displacement: total Lagrangian St Venant-Kirchhoff, Newton-Raphson with load increments "
                         "(the thesis used ANSYS' large-displacement static solver). Small strain: linear elasticity."));
@@ -198,8 +223,8 @@ void FilterNussFeaPlugin::initNussFea(MeshDocument& md, RichParameterList& par) 
   par.addParam(RichFloat("nuBone", 0.3f, "Poisson ratio, bone", "Ribs and sternum (cortical bone literature value 0.3)."));
   par.addParam(RichFloat("nuCartilage", 0.4f, "Poisson ratio, cartilage",
                          "Costal cartilage (hydrated, nearly incompressible tissue; literature 0.4-0.45)."));
-  par.addParam(RichInt("intercostalSpace", 4, "Bar intercostal space",
-                       "The bar exits between ribs s and s+1 (landmarks 600+10*side+s; the generator writes s = 4, 5)."));
+}
+void addPatchParams(RichParameterList& par) {
   par.addParam(RichFloat("jointRadius", 6.0f, "Joint radius (mm)",
                          "Nodes within this distance of a costovertebral joint landmark are fixed (head and tubercle)."));
   par.addParam(RichFloat("sternumLoadRadius", 8.0f, "Fe patch radius (mm)",
@@ -207,6 +232,81 @@ void FilterNussFeaPlugin::initNussFea(MeshDocument& md, RichParameterList& par) 
   par.addParam(RichFloat("ribSupportRadius", 6.0f, "Fsr patch radius (mm)",
                          "Each Fsr is spread over the rib's surface nodes within this distance of the rib point nearest "
                          "to the bar exit."));
+}
+
+std::vector<pectus::Landmark> readLandmarkParam(FilterContext& ctx) {
+  MeshModel& lmLayer = ctx.mesh("landmarkLayer");
+  if (&lmLayer == &ctx.current())
+    throw pectus::InputError("The landmark layer is the cage layer itself: pick the point layer of landmarks (e.g. "
+                             "'ribcage landmarks') and make the labelled cage the current layer.");
+  auto lms = pectus::readLandmarks(lmLayer.cm);
+  if (lms.empty())
+    throw pectus::InputError("The landmark layer '" + lmLayer.label().toStdString() + "' has no vertices.");
+  return lms;
+}
+void readCalibrationParams(FilterContext& ctx, pectus::nuss::Options& o, bool calibrate) {
+  o.targetElevation = calibrate ? ctx.floatIn("targetElevation", 0, 300, true) : 0.0;
+  o.maxForce = ctx.floatIn("maxForce", 0, 1e6, true);
+  o.tolerance = ctx.floatIn("tolerance", 0, 50, true);
+}
+void readModelParams(FilterContext& ctx, pectus::nuss::Options& o) {
+  o.nonlinear = ctx.enumIn("analysis", 2) == 0;
+  o.mesh.order = ctx.enumIn("order", 2) == 0 ? 2 : 1;
+  o.mesh.radiusEdgeRatio = ctx.floatIn("tetQuality", 0, 100);
+  if (o.mesh.radiusEdgeRatio > 0 && o.mesh.radiusEdgeRatio < 1.2)
+    throw pectus::InputError("parameter 'tetQuality' must be 0 or at least 1.2 (TetGen does not terminate below), got " +
+                             fmt(o.mesh.radiusEdgeRatio));
+  o.mesh.maxVolume = ctx.floatIn("maxTetVolume", 0, 1e9);
+  o.nuBone = ctx.floatIn("nuBone", -1, 0.5, true, true);
+  o.nuCartilage = ctx.floatIn("nuCartilage", -1, 0.5, true, true);
+}
+void readPatchParams(FilterContext& ctx, pectus::nuss::Placement& pl) {
+  pl.jointRadius = ctx.floatIn("jointRadius", 0, 100, true);
+  pl.sternumLoadRadius = ctx.floatIn("sternumLoadRadius", 0, 100, true);
+  pl.ribSupportRadius = ctx.floatIn("ribSupportRadius", 0, 100, true);
+}
+
+// a new layer with the deformed cage (vertex i moves with FE node nodeOfVertex[i]), vertex quality and
+// colour = `nodal` (the 98th percentile caps the ramp so the joints' peaks do not wash out the map)
+MeshModel& addDeformedLayer(FilterContext& ctx, MeshModel& cur, const pectus::nuss::CageSurface& cage,
+                            const pectus::nuss::Analysis& a, const std::vector<double>& nodal, const QString& label) {
+  MeshModel& res = ctx.addLayer(label);
+  res.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR);
+  pectus::copyLabelledMesh(res.cm, cur.cm);
+  // the copy holds the live vertices of cur in order; cur's vertex i is FE node nodeOfVertex[i]
+  for (size_t i = 0, k = 0; i < cur.cm.vert.size(); ++i) {
+    if (cur.cm.vert[i].IsD()) continue;
+    auto& v = res.cm.vert[k++];
+    const int n = cage.nodeOfVertex[i];
+    const Eigen::Vector3d d = a.result.displacement(n);
+    v.P() += Point3m(Scalarm(d.x()), Scalarm(d.y()), Scalarm(d.z()));
+    v.Q() = Scalarm(nodal[n]);
+  }
+  std::vector<float> q;
+  for (const auto& v : res.cm.vert)
+    if (!v.IsD()) q.push_back(v.Q());
+  std::sort(q.begin(), q.end());
+  const float hi = q.empty() ? 1.0f : std::max(q[std::min(q.size() - 1, size_t(0.98 * q.size()))], 1e-12f);
+  vcg::tri::UpdateColor<CMeshO>::PerVertexQualityRamp(res.cm, hi, 0.0f);  // red = high, blue = low
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(res.cm);
+  vcg::tri::UpdateBounding<CMeshO>::Box(res.cm);
+  return res;
+}
+}  // namespace
+
+void FilterNussFeaPlugin::initNussFea(MeshDocument& md, RichParameterList& par) {
+  addLandmarkParam(md, par);
+  par.addParam(RichEnum("mode", 0, modes(), "Force",
+                        "Calibrate: search Fe so the sternum end rises by the target elevation (secant/bracketing on the "
+                        "force-displacement curve, to the tolerance). Given: apply the elevating force below."));
+  par.addParam(RichFloat("force", 140.0f, "Elevating force Fe (N)",
+                         "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N."));
+  addCalibrationParams(par);
+  addModelParams(par);
+  par.addParam(RichInt("intercostalSpace", 4, "Bar intercostal space",
+                       "The bar exits between ribs s and s+1 (landmarks 600+10*side+s, the generator writes s = 4, 5; "
+                       "other spaces: between the ribs' lateral-most points)."));
+  addPatchParams(par);
   par.addParam(RichBool("usePoints", false, "Place Fe and the exits at the points below",
                         "Instead of the landmarks 500 and 600+10*side+s (the joints still come from the landmarks)."));
   par.addParam(RichPoint3f("sternumPoint", Point3m(0, 0, 0), "Lower sternum end (Fe)", "Used with the option above (mm)."));
@@ -225,33 +325,15 @@ void FilterNussFeaPlugin::initNussFea(MeshDocument& md, RichParameterList& par) 
 void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   namespace nuss = pectus::nuss;
   MeshModel& cur = ctx.current();
-  MeshModel& lmLayer = ctx.mesh("landmarkLayer");
-  if (&lmLayer == &cur)
-    throw pectus::InputError("The landmark layer is the cage layer itself: pick the point layer of landmarks (e.g. "
-                             "'ribcage landmarks') and make the labelled cage the current layer.");
-  const auto lms = pectus::readLandmarks(lmLayer.cm);
-  if (lms.empty())
-    throw pectus::InputError("The landmark layer '" + lmLayer.label().toStdString() + "' has no vertices.");
+  const auto lms = readLandmarkParam(ctx);
 
   nuss::Options o;
   const bool calibrate = ctx.enumIn("mode", 2) == 0;
-  o.targetElevation = calibrate ? ctx.floatIn("targetElevation", 0, 300, true) : 0.0;
   o.force = ctx.floatIn("force", 0, 1e5, true);
-  o.maxForce = ctx.floatIn("maxForce", 0, 1e6, true);
-  o.tolerance = ctx.floatIn("tolerance", 0, 50, true);
-  o.nonlinear = ctx.enumIn("analysis", 2) == 0;
-  o.mesh.order = ctx.enumIn("order", 2) == 0 ? 2 : 1;
-  o.mesh.radiusEdgeRatio = ctx.floatIn("tetQuality", 0, 100);
-  if (o.mesh.radiusEdgeRatio > 0 && o.mesh.radiusEdgeRatio < 1.2)
-    throw pectus::InputError("parameter 'tetQuality' must be 0 or at least 1.2 (TetGen does not terminate below), got " +
-                             fmt(o.mesh.radiusEdgeRatio));
-  o.mesh.maxVolume = ctx.floatIn("maxTetVolume", 0, 1e9);
-  o.nuBone = ctx.floatIn("nuBone", -1, 0.5, true, true);
-  o.nuCartilage = ctx.floatIn("nuCartilage", -1, 0.5, true, true);
-  o.place.intercostalSpace = ctx.intIn("intercostalSpace", 1, 10);
-  o.place.jointRadius = ctx.floatIn("jointRadius", 0, 100, true);
-  o.place.sternumLoadRadius = ctx.floatIn("sternumLoadRadius", 0, 100, true);
-  o.place.ribSupportRadius = ctx.floatIn("ribSupportRadius", 0, 100, true);
+  readCalibrationParams(ctx, o, calibrate);
+  readModelParams(ctx, o);
+  o.place.intercostalSpace = ctx.intIn("intercostalSpace", 1, 11);
+  readPatchParams(ctx, o.place);
   if (ctx.boolean("usePoints")) {
     const RichParameterList& par = ctx.params();
     o.place.sternumPoint = toE(par.getPoint3m("sternumPoint"));
@@ -291,29 +373,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
     files = "; files " + base + ".vtu/.inp/_force_displacement.csv/.png/_rib_strain.csv";
   }
 
-  // deformed surface layer: vertex i moves with FE node nodeOfVertex[i]
-  const auto& nodal = stressField ? a.nodalStress : a.nodalStrain;
-  MeshModel& res = ctx.addLayer("nuss fe result");
-  res.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR);
-  pectus::copyLabelledMesh(res.cm, cur.cm);
-  // the copy holds the live vertices of cur in order; cur's vertex i is FE node nodeOfVertex[i]
-  for (size_t i = 0, k = 0; i < cur.cm.vert.size(); ++i) {
-    if (cur.cm.vert[i].IsD()) continue;
-    auto& v = res.cm.vert[k++];
-    const int n = cage.nodeOfVertex[i];
-    const Eigen::Vector3d d = a.result.displacement(n);
-    v.P() += Point3m(Scalarm(d.x()), Scalarm(d.y()), Scalarm(d.z()));
-    v.Q() = Scalarm(nodal[n]);
-  }
-  // colours: the 98th percentile caps the ramp so the joints' stress peaks do not wash out the map
-  std::vector<float> q;
-  for (const auto& v : res.cm.vert)
-    if (!v.IsD()) q.push_back(v.Q());
-  std::sort(q.begin(), q.end());
-  const float hi = q.empty() ? 1.0f : std::max(q[std::min(q.size() - 1, size_t(0.98 * q.size()))], 1e-12f);
-  vcg::tri::UpdateColor<CMeshO>::PerVertexQualityRamp(res.cm, hi, 0.0f);  // red = high, blue = low
-  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(res.cm);
-  vcg::tri::UpdateBounding<CMeshO>::Box(res.cm);
+  MeshModel& res = addDeformedLayer(ctx, cur, cage, a, stressField ? a.nodalStress : a.nodalStrain, "nuss fe result");
 
   std::vector<pectus::Landmark> moved = lms;
   for (auto& l : moved) l.p += a.displacementAt(l.p);
@@ -341,6 +401,78 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   ctx.log("Force-displacement (N:mm)" + curve + "; " + std::to_string(a.nonlinearSolves) + " nonlinear solves, " +
           std::to_string(a.newtonIterations) + " Newton iterations; mesh " + fmt(a.secondsMesh, 1) + " s, solve " +
           fmt(a.secondsSolve, 1) + " s, total " + fmt(secs, 1) + " s" + files);
+}
+
+namespace {
+QStringList barSets() { return QStringList() << "One and two bars" << "One bar" << "Two bars"; }
+QStringList bestBy() { return QStringList() << "Lowest force" << "Lowest max stress"; }
+}  // namespace
+
+void FilterNussFeaPlugin::initBarPlanner(MeshDocument& md, RichParameterList& par) {
+  addLandmarkParam(md, par);
+  par.addParam(RichString("levels", "3,4,5", "Bar levels (intercostal spaces)",
+                          "Intercostal spaces of the (first) bar to compare, as a list '3,4,5' or a range '3-5'; space s lies "
+                          "between ribs s and s+1."));
+  par.addParam(RichEnum("bars", 0, barSets(), "Bars",
+                        "One bar per level, two bars per level, or both (one row each)."));
+  par.addParam(RichInt("secondOffset", -1, "Second bar: offset (spaces)",
+                       "The second bar goes into space s + offset: -1 = the space above the first bar, -2 = two above. "
+                       "Not 0. The first bar's load stays at the lower sternum end, so the second bar goes above it."));
+  par.addParam(RichFloat("secondShare", 0.5f, "Second bar: share of the force",
+                         "Part of the total elevating force carried by the second bar, in (0, 1); the first bar carries the rest."));
+  addCalibrationParams(par);
+  addModelParams(par);
+  addPatchParams(par);
+  par.addParam(RichEnum("best", 0, bestBy(), "Best option",
+                        "The option whose deformed cage is added as a layer (and marked in the table): the lowest calibrated "
+                        "force or the lowest max von Mises stress."));
+  par.addParam(RichSaveFile("csvFile", "", ".csv", "Table (CSV file)",
+                            "If set, the table is written there (one row per option). Empty: Log only."));
+}
+
+void FilterNussFeaPlugin::runBarPlanner(FilterContext& ctx) {
+  namespace nuss = pectus::nuss;
+  MeshModel& cur = ctx.current();
+  const auto lms = readLandmarkParam(ctx);
+  nuss::PlanOptions o;
+  o.levels = nuss::parseLevels(ctx.params().getString("levels").toStdString());
+  const int bars = ctx.enumIn("bars", 3);
+  o.oneBar = bars != 2;
+  o.twoBars = bars != 1;
+  o.secondOffset = ctx.intIn("secondOffset", -10, 10);
+  o.secondShare = ctx.floatIn("secondShare", 0, 1, true, true);
+  readCalibrationParams(ctx, o.analysis, true);
+  readModelParams(ctx, o.analysis);
+  readPatchParams(ctx, o.analysis.place);
+  o.best = ctx.enumIn("best", 2) == 0 ? nuss::PlanOptions::Best::LowestForce : nuss::PlanOptions::Best::LowestStress;
+  const std::string csv = ctx.params().getSaveFileName("csvFile").trimmed().toStdString();
+  o.progress = [&](int pc, const std::string& w) { ctx.progress(pc, w.c_str()); };
+
+  const auto cage = nuss::cageFromMesh(cur.cm);
+  const nuss::Plan plan = nuss::planBars(cage, lms, o);
+  if (!csv.empty()) nuss::writePlanCsv(csv, plan);  // before any layer: a failure leaves the document unchanged
+
+  const nuss::PlanRow& best = plan.rows[plan.best];
+  MeshModel& res = addDeformedLayer(ctx, cur, cage, plan.bestAnalysis, plan.bestAnalysis.nodalStress,
+                                    QString::fromStdString("nuss planner best: " + best.option));
+  ctx.doc().setCurrentMesh(res.id());
+
+  const size_t n = plan.rows.size();
+  ctx.log("Nuss bar planner: " + std::to_string(n) + " options, each calibrated to " + fmt(o.analysis.targetElevation, 2) +
+          " mm (" + (o.analysis.nonlinear ? "large displacement" : "small strain") + ", " + std::to_string(plan.tets) +
+          (plan.order == 2 ? " TET10" : " TET4") + " elements meshed once in " + fmt(plan.secondsMesh, 1) + " s; reuse saved " +
+          fmt(plan.secondsMesh * double(n - 1), 1) + " s of TetGen); before: slice " + fmt(plan.sliceBefore / 1000, 2) + " cm3, envelope " +
+          fmt(plan.envelopeBefore / 1000, 2) + " cm3, Haller index " + fmt(plan.hallerBefore, 3));
+  for (const auto& line : nuss::planTable(plan)) ctx.log("Planner | " + line);
+  for (const auto& r : plan.rows)
+    ctx.log("Planner option '" + r.option + "': Fe = " + fmt(r.force, 2) + " N, elevation " + fmt(r.elevation, 2) +
+            " mm; max von Mises stress " + fmt(r.maxStress, 2) + " MPa at the " + r.maxStressAt + "; max equivalent strain " +
+            fmt(r.maxStrain, 4) + " at the " + r.maxStrainAt + "; volume gain slice " + fmt(r.sliceGain / 1000, 2) + " cm3 (" +
+            fmt(r.slicePercent, 2) + " %), envelope " + fmt(r.envelopeGain / 1000, 2) + " cm3 (" + fmt(r.envelopePercent, 2) +
+            " %); Haller index after " + fmt(r.hallerAfter, 3) + "; " + std::to_string(r.solves) + " solves, " + fmt(r.seconds, 1) + " s");
+  ctx.log("Planner best (" + std::string(o.best == nuss::PlanOptions::Best::LowestForce ? "lowest force" : "lowest max stress") +
+          "): '" + best.option + "', layer '" + res.label().toStdString() + "'; total " + fmt(plan.secondsTotal, 1) + " s" +
+          (csv.empty() ? "" : "; table " + csv));
 }
 
 MESHLAB_PLUGIN_NAME_EXPORTER(FilterNussFeaPlugin)

@@ -9,7 +9,7 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   Q_INTERFACES(MeshFilterInterface)
 
  public:
-  enum { FP_CREATE_RIBCAGE, FP_NUSS_FEA };
+  enum { FP_CREATE_RIBCAGE, FP_NUSS_FEA, FP_BAR_PLANNER };
   FilterNussFeaPlugin();
   QString pluginName() const override { return "FilterPectusNussFea"; }
 
@@ -22,4 +22,6 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   void runCreateRibCage(pectus::ml::FilterContext& ctx);
   void initNussFea(MeshDocument& md, RichParameterList& par);
   void runNussFea(pectus::ml::FilterContext& ctx);
+  void initBarPlanner(MeshDocument& md, RichParameterList& par);
+  void runBarPlanner(pectus::ml::FilterContext& ctx);
 };

@@ -9,7 +9,7 @@ on a missing one), defaults as in the GUI, any of them overridable by keyword:
 from __future__ import annotations
 
 import pectus_mlx as mlx
-from pectus_mlx import Bool, Enum, Filter, Float, Int, Mesh, Point3, SaveFile
+from pectus_mlx import Bool, Enum, Filter, Float, Int, Mesh, Point3, SaveFile, String
 
 
 def _build(name: str, spec: dict, overrides: dict) -> Filter:
@@ -45,13 +45,28 @@ NUSS_FIELD = ["von Mises stress (MPa)", "Equivalent strain"]
 SIDES = ["Right", "Left"]
 
 
+# parameter groups the FE filter and the bar planner share (as in filter_nuss_fea.cpp)
+NUSS_CALIBRATION = {"targetElevation": (Float, 44.7), "maxForce": (Float, 1000.0), "tolerance": (Float, 0.1)}
+NUSS_MODEL = {"analysis": (Enum, 0, NUSS_ANALYSIS), "order": (Enum, 0, NUSS_ORDER), "tetQuality": (Float, 2.0),
+              "maxTetVolume": (Float, 0.0), "nuBone": (Float, 0.3), "nuCartilage": (Float, 0.4)}
+NUSS_PATCHES = {"jointRadius": (Float, 6.0), "sternumLoadRadius": (Float, 8.0), "ribSupportRadius": (Float, 6.0)}
+
+
 def nuss_fea(**kw) -> Filter:
     return _build("Nuss Procedure FE Analysis", {
-        "landmarkLayer": (Mesh, 1), "mode": (Enum, 0, NUSS_MODE), "targetElevation": (Float, 44.7),
-        "force": (Float, 140.0), "maxForce": (Float, 1000.0), "tolerance": (Float, 0.1),
-        "analysis": (Enum, 0, NUSS_ANALYSIS), "order": (Enum, 0, NUSS_ORDER), "tetQuality": (Float, 2.0),
-        "maxTetVolume": (Float, 0.0), "nuBone": (Float, 0.3), "nuCartilage": (Float, 0.4),
-        "intercostalSpace": (Int, 4), "jointRadius": (Float, 6.0), "sternumLoadRadius": (Float, 8.0),
-        "ribSupportRadius": (Float, 6.0), "usePoints": (Bool, False), "sternumPoint": (Point3, (0, 0, 0)),
+        "landmarkLayer": (Mesh, 1), "mode": (Enum, 0, NUSS_MODE), "force": (Float, 140.0), **NUSS_CALIBRATION,
+        **NUSS_MODEL, "intercostalSpace": (Int, 4), **NUSS_PATCHES,
+        "usePoints": (Bool, False), "sternumPoint": (Point3, (0, 0, 0)),
         "exitRight": (Point3, (0, 0, 0)), "exitLeft": (Point3, (0, 0, 0)), "field": (Enum, 0, NUSS_FIELD),
         "pathSide": (Enum, 0, SIDES), "pathRib": (Int, 5), "resultBase": (SaveFile, "")}, dict(kw))
+
+
+PLANNER_BARS = ["One and two bars", "One bar", "Two bars"]
+PLANNER_BEST = ["Lowest force", "Lowest max stress"]
+
+
+def nuss_bar_planner(**kw) -> Filter:
+    return _build("Nuss Bar Planner", {
+        "landmarkLayer": (Mesh, 1), "levels": (String, "3,4,5"), "bars": (Enum, 0, PLANNER_BARS),
+        "secondOffset": (Int, -1), "secondShare": (Float, 0.5), **NUSS_CALIBRATION, **NUSS_MODEL, **NUSS_PATCHES,
+        "best": (Enum, 0, PLANNER_BEST), "csvFile": (SaveFile, "")}, dict(kw))

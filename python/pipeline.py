@@ -38,6 +38,7 @@ EX = {
     "slice": os.path.join(ROOT, "filter_thoracic_volume", "examples", "thoracic_volume_slice.mlx"),
     "envelope": os.path.join(ROOT, "filter_thoracic_volume", "examples", "thoracic_volume_envelope.mlx"),
     "index": os.path.join(ROOT, "filter_thoracic_volume", "examples", "pectus_index.mlx"),
+    "planner": os.path.join(ROOT, "filter_nuss_fea", "examples", "nuss_bar_planner.mlx"),
 }
 
 # layers of the document while the script runs (no input files: the generator creates them)
@@ -51,15 +52,25 @@ def example(key: str, name: str) -> mlx.Filter:
     raise KeyError(f"{name!r} not in {EX[key]}")
 
 
+def fe_settings(quick: bool) -> dict:
+    """The FE settings of the main job: small strain TET4 (seconds, for the end-to-end test) or large displacement TET10."""
+    return dict(analysis=1, order=1, tetQuality=0.0) if quick else dict(analysis=0, order=0, tetQuality=0.0)
+
+
+def planner_filters(outdir: str, elevation: float, quick: bool, cage: int, landmarks: int, levels: str, bars: int) -> list:
+    """'Nuss Bar Planner' on `cage` (made current first) with the main job's FE settings; table in planner.csv."""
+    current = mlx.Filter("Change the current layer", layer=mlx.Mesh(cage))  # MeshLab's filter_layer
+    plan = example("planner", "Nuss Bar Planner").set(
+        landmarkLayer=landmarks, levels=levels, bars=bars, targetElevation=elevation,
+        csvFile=mlx.SaveFile(os.path.join(outdir, "planner.csv"), ".csv"), **fe_settings(quick))
+    return [current, plan]
+
+
 def analysis_filters(outdir: str, elevation: float, quick: bool, cage: int, landmarks: int) -> list:
     """Nuss FE (calibrated) on the current layer, then both volumes and the pectus index, before = `cage`."""
     nuss = example("nuss", "Nuss Procedure FE Analysis").set(
         landmarkLayer=landmarks, mode=0, targetElevation=elevation,
-        resultBase=mlx.SaveFile(os.path.join(outdir, "nuss") + ".vtu", ".vtu"))
-    if quick:
-        nuss.set(analysis=1, order=1, tetQuality=0.0)  # small strain TET4: seconds, for the end-to-end test
-    else:
-        nuss.set(analysis=0, order=0, tetQuality=0.0)  # large displacement, TET10
+        resultBase=mlx.SaveFile(os.path.join(outdir, "nuss") + ".vtu", ".vtu"), **fe_settings(quick))
     compare = dict(compare=True, beforeLayer=cage, landmarkLayer=landmarks)
     sl = example("slice", "Thoracic Volume (Slice Method)").set(**compare)
     env = example("envelope", "Thoracic Volume (Ferguson Envelope)").set(**compare)
@@ -67,12 +78,14 @@ def analysis_filters(outdir: str, elevation: float, quick: bool, cage: int, land
     return [nuss, sl, env, idx]
 
 
-def build_script(outdir: str, age: float, haller: float, elevation: float, quick: bool) -> mlx.Script:
+def build_script(outdir: str, age: float, haller: float, elevation: float, quick: bool, planner: dict | None = None) -> mlx.Script:
+    """planner: None, or dict(levels="3,4,5", bars=0 (one and two) / 1 (one) / 2 (two)) to add the bar planner at the end."""
     gen = example("ribcage", "Create Pectus Excavatum Rib Cage").set(age=age, hallerIndex=haller, edgeLength=5.0)
     quality = example("quality", "Compute Element Quality (Triangle Alpha / Quad Beta)")
     mga = example("mga", "MGA Surface Mesh Smoothing").set(maxSweeps=2 if quick else 4)
     quality_after = example("quality", "Compute Element Quality (Triangle Alpha / Quad Beta)")
-    return mlx.Script([gen, quality, mga, quality_after] + analysis_filters(outdir, elevation, quick, CAGE, LANDMARKS))
+    extra = planner_filters(outdir, elevation, quick, CAGE, LANDMARKS, **planner) if planner else []
+    return mlx.Script([gen, quality, mga, quality_after] + analysis_filters(outdir, elevation, quick, CAGE, LANDMARKS) + extra)
 
 
 
@@ -108,6 +121,9 @@ def parse(log: list[str]) -> dict:
         "envelope_volumes": grab_all(log, r"Ferguson envelope, layer .*thoracic volume ([0-9.]+) cm3"),
         "haller": grab_all(log, r"Pectus index, layer .*Haller index ([0-9.]+)"),
         "fe_seconds": grab(log, r"total ([0-9.]+) s; files"),
+        "planner_table": [l.split("|", 1)[1][1:] for l in log if l.startswith("Planner |")],
+        "planner_header": next((l for l in log if l.startswith("Nuss bar planner:")), ""),
+        "planner_best": next((l for l in log if l.startswith("Planner best")), ""),
     }
     m = re.search(r"mean alpha ([0-9.]+) -> ([0-9.]+)", r["mga"] or "")
     r["mga_mean"] = (float(m.group(1)), float(m.group(2))) if m else None
@@ -139,7 +155,7 @@ def table(r: dict, age: float, sex: str, target: float) -> str:
 
 
 def write_summary(path: str, r: dict, sex: str, age: float, elevation: float, case: str = ""):
-    keys = [k for k in r if not isinstance(r[k], (list, tuple))]
+    keys = [k for k in r if not isinstance(r[k], (list, tuple)) and not k.startswith("planner")]
     hb, ha = (r["haller"] + [None, None])[:2]
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
@@ -147,9 +163,10 @@ def write_summary(path: str, r: dict, sex: str, age: float, elevation: float, ca
         w.writerow([case, sex, age, elevation] + [r[k] for k in keys] + [hb, ha])
 
 
-def run_pipeline(outdir: str, age=8.0, haller=5.3, elevation=44.7, sex="M", quick=False, prefix=None) -> tuple[int, dict, mlx.Result]:
+def run_pipeline(outdir: str, age=8.0, haller=5.3, elevation=44.7, sex="M", quick=False, prefix=None,
+                 planner: dict | None = None) -> tuple[int, dict, mlx.Result]:
     os.makedirs(outdir, exist_ok=True)
-    script = build_script(outdir, age, haller, elevation, quick)
+    script = build_script(outdir, age, haller, elevation, quick, planner)
     script_path = script.write(os.path.join(outdir, "pipeline.mlx"))
     outputs = [(os.path.join(outdir, "ribcage_smoothed.ply"), "fc fq", CAGE),
                (os.path.join(outdir, "ribcage_landmarks.ply"), "vq", LANDMARKS),
@@ -158,7 +175,8 @@ def run_pipeline(outdir: str, age=8.0, haller=5.3, elevation=44.7, sex="M", quic
                (os.path.join(outdir, "envelope_before.ply"), "", 4),
                (os.path.join(outdir, "envelope_after.ply"), "", 5)]
     t0 = time.time()
-    res = mlx.run([], script_path, outputs, prefix=prefix)
+    # the planner repeats the calibrated FE per option (full mode: ~4 min each on an idle machine): a longer limit
+    res = mlx.run([], script_path, outputs, prefix=prefix, timeout=4 * 3600 if planner else 3600)
     r = parse(res.log)
     r["seconds"] = time.time() - t0
     with open(os.path.join(outdir, "meshlabserver.log"), "w") as fh:

@@ -3,7 +3,10 @@
 real meshlabserver and one .mlx script (python/pipeline.py), then plots. Writes everything into one
 output folder (default out/main-<timestamp>) and prints a table shaped like the thesis' Table 6-1.
 
-    python3 python/run_main.py [OUTDIR] [--quick]
+    python3 python/run_main.py [OUTDIR] [--quick] [--planner [--planner-levels 3,4,5] [--planner-bars both|one|two]]
+
+--planner adds the 'Nuss Bar Planner' (filter_nuss_fea) to the same script, on the smoothed cage with the main job's
+FE settings, and prints its table (planner.csv in the output folder). Full mode takes ~4 min per option.
 """
 from __future__ import annotations
 
@@ -41,15 +44,37 @@ def plot_histograms(path: str, hists: list[list[int]], labels: list[str]):
     return path
 
 
+def option_value(args: list[str], name: str, default: str) -> str:
+    """The value after `name` in args (removed from args with it), or default."""
+    if name not in args:
+        return default
+    k = args.index(name)
+    if k + 1 >= len(args):
+        raise SystemExit(f"{name} needs a value")
+    value = args[k + 1]
+    del args[k:k + 2]
+    return value
+
+
+def print_planner(r: dict, out: str):
+    print(f"\nNuss bar planner ({r['planner_header'].split(': ', 1)[-1]})")
+    for line in r["planner_table"]:
+        print("  " + line)
+    print(f"{r['planner_best']}\n(* = best; table in {os.path.join(out, 'planner.csv')})")
+
+
 def main(argv: list[str]) -> int:
-    quick = "--quick" in argv
-    args = [a for a in argv[1:] if a != "--quick"]
+    args = argv[1:]
+    levels = option_value(args, "--planner-levels", "3,4,5")
+    bars = {"both": 0, "one": 1, "two": 2}[option_value(args, "--planner-bars", "both")]
+    quick, with_planner = "--quick" in args, "--planner" in args
+    args = [a for a in args if a not in ("--quick", "--planner")]
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
     out = os.path.abspath(args[0] if args else os.path.join(ROOT, "out", f"main-{stamp}"))
     print("pectus-meshlab main job: create the rib cage of the thesis' patient 1 (M/8, pectus index 5.3) -> element "
           "quality -> MGA smoothing -> Nuss FE with the force calibrated to 44.7 mm -> thoracic volume (slice, "
           "envelope) and pectus index before/after, through meshlabserver ...", flush=True)
-    rc, r, res = pipeline.run_pipeline(out, quick=quick)
+    rc, r, res = pipeline.run_pipeline(out, quick=quick, planner=dict(levels=levels, bars=bars) if with_planner else None)
     if rc != 0:
         print(res.stdout[-4000:], file=sys.stderr)
         print(f"pipeline failed (meshlabserver exit {rc}); log in {out}/meshlabserver.log", file=sys.stderr)
@@ -59,6 +84,8 @@ def main(argv: list[str]) -> int:
           f"min {r['quality_min_before']} -> {r['quality_min_after']} ({r['mga']})")
     print(f"FE: {r['tets']:.0f} {r['element']} elements, force calibrated in {r['solves']} solves, {r['fe_seconds']} s; "
           f"whole pipeline {r['seconds']:.0f} s")
+    if with_planner:
+        print_planner(r, out)
     if len(r["histograms"]) >= 2:
         plot_histograms(os.path.join(out, "quality_histograms.png"), r["histograms"][:2], ["before MGA", "after MGA"])
     print(f"Output folder: {out}")

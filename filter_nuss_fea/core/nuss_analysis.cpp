@@ -170,12 +170,48 @@ int nearestVertexOfPart(const CageSurface& cage, int part, const Vector3d& p, in
   return best;
 }
 
+}  // namespace
+
+Vector3d barExit(const CageSurface& cage, const std::vector<Landmark>& lms, int side, int space) {
+  if (auto p = findLandmark(lms, barExitLandmark(side, space))) return *p;
+  const char* sideName = side == 1 ? "right" : "left";
+  if (space < 1)
+    throw InputError("Intercostal space " + std::to_string(space) + " does not exist: spaces are numbered from 1 (between ribs 1 and 2).");
+  Vector3d mid = Vector3d::Zero();
+  for (int rib : {space, space + 1}) {
+    const int part = ribPart(side, rib);
+    std::vector<char> on(cage.surface.vertices.size(), 0);
+    double xmax = -1;
+    for (size_t f = 0; f < cage.surface.faces.size(); ++f)
+      if (cage.facePart[f] == part && cage.surface.faceTissue[f] == int(Tissue::Bone))
+        for (int v : cage.surface.faces[f]) on[v] = 1, xmax = std::max(xmax, std::abs(cage.surface.vertices[v].x()));
+    if (xmax < 0)
+      throw InputError("No bar exit landmark for intercostal space " + std::to_string(space) + " on the " + sideName + " (code " +
+                       std::to_string(barExitLandmark(side, space)) + ") and the cage has no " + partName(int(Tissue::Bone), part) +
+                       " to place it: the intercostal space lies outside the ribs; choose a space between two ribs or give the exit points.");
+    Vector3d c = Vector3d::Zero();
+    int n = 0;
+    for (size_t v = 0; v < on.size(); ++v)
+      if (on[v] && std::abs(cage.surface.vertices[v].x()) >= xmax - 10.0) c += cage.surface.vertices[v], ++n;
+    mid += 0.5 * c / n;
+  }
+  return mid;
+}
+
+namespace {
+
 // the fixed nodes, the Fe nodes and the four Fsr patches, into s (s.mesh: the tet mesh of cage)
-void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl, Analysis& s) {
-  const fe::TetMesh& mesh = s.mesh;
+void checkRadii(const Placement& pl) {
   if (!(pl.jointRadius > 0 && pl.sternumLoadRadius > 0 && pl.ribSupportRadius > 0))
     throw InputError("The joint, sternum load and rib support radii must be positive (mm).");
   if (pl.direction.norm() < 1e-12 || !pl.direction.allFinite()) throw InputError("The force direction must be a non-zero vector.");
+}
+
+void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl, Analysis& s);
+
+void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl, Analysis& s) {
+  const fe::TetMesh& mesh = s.mesh;
+  checkRadii(pl);
   // fixed: all mesh nodes (surface and interior) near a costovertebral joint landmark
   std::vector<char> fixed(mesh.nodes.size(), 0);
   int joints = 0;
@@ -196,7 +232,11 @@ void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Plac
         "Pick the landmark layer written by 'Create Pectus Excavatum Rib Cage' or add one vertex per joint with that code as quality.");
   for (int i = 0; i < mesh.numNodes(); ++i)
     if (fixed[i]) s.fixedNodes.push_back(i);
+  placeLoads(cage, lms, pl, s);
+}
 
+// the Fe patch(es) on the sternum and the Fsr patches on the ribs (surface nodes only)
+void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl, Analysis& s) {
   auto sternumFace = [&](size_t f) { return cage.surface.faceTissue[f] == int(Tissue::Sternum); };
   Vector3d sp;
   if (pl.sternumPoint) sp = *pl.sternumPoint;
@@ -211,28 +251,54 @@ void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Plac
     throw InputError("No sternum surface node lies within " + mm(pl.sternumLoadRadius) + " mm of the lower sternum end " + pointText(sp) +
                      ": increase the sternum load radius or move the point onto the sternum.");
 
-  const int space = pl.intercostalSpace;
-  for (int side = 1; side <= 2; ++side) {
-    std::optional<Vector3d> exit = side == 1 ? pl.exitRight : pl.exitLeft;
-    if (!exit) exit = findLandmark(lms, barExitLandmark(side, space));
-    if (!exit)
-      throw InputError("No bar exit landmark for intercostal space " + std::to_string(space) + " on the " + (side == 1 ? "right" : "left") +
-                       " (code " + std::to_string(barExitLandmark(side, space)) +
-                       ") and no exit point given: choose a space the landmark layer has or give the exit points.");
-    for (int rib : {space, space + 1}) {
-      const int part = ribPart(side, rib);
-      const int v = nearestVertexOfPart(cage, part, *exit, int(Tissue::Bone));
-      const std::string name = partName(int(Tissue::Bone), part);
-      if (v < 0) throw InputError("The cage has no bone faces of the " + name + ": the rib support force of the bar exit goes there.");
-      const Vector3d c = cage.surface.vertices[v];
-      auto nodes = surfaceNodesNear(cage, c, pl.ribSupportRadius, [&](size_t f) { return cage.facePart[f] == part; });
-      if ((c - *exit).norm() > 40)
-        throw InputError("The " + name + " is " + mm((c - *exit).norm(), 0) + " mm from the bar exit " + pointText(*exit) +
-                         ": the exit point is not between ribs " + std::to_string(space) + " and " + std::to_string(space + 1) + ".");
-      s.supportNodes.push_back(nodes);
-      s.supportNames.push_back(name);
+  // the rib supports of a bar in `space`: ribs space and space+1 next to its exits, both sides
+  auto barSupports = [&](int space, const std::string& bar) {
+    std::array<Vector3d, 2> exits;
+    for (int side = 1; side <= 2; ++side) {
+      std::optional<Vector3d> exit = bar.empty() ? (side == 1 ? pl.exitRight : pl.exitLeft) : std::nullopt;
+      if (!exit) exit = barExit(cage, lms, side, space);
+      exits[side - 1] = *exit;
+      for (int rib : {space, space + 1}) {
+        const int part = ribPart(side, rib);
+        const int v = nearestVertexOfPart(cage, part, *exit, int(Tissue::Bone));
+        const std::string name = partName(int(Tissue::Bone), part);
+        if (v < 0) throw InputError("The cage has no bone faces of the " + name + ": the rib support force of the" + bar + " bar exit goes there.");
+        const Vector3d c = cage.surface.vertices[v];
+        auto nodes = surfaceNodesNear(cage, c, pl.ribSupportRadius, [&](size_t f) { return cage.facePart[f] == part; });
+        if ((c - *exit).norm() > 40)
+          throw InputError("The " + name + " is " + mm((c - *exit).norm(), 0) + " mm from the" + bar + " bar exit " + pointText(*exit) +
+                           ": the exit point is not between ribs " + std::to_string(space) + " and " + std::to_string(space + 1) + ".");
+        s.supportNodes.push_back(nodes);
+        s.supportNames.push_back(name);
+      }
     }
-  }
+    return exits;
+  };
+  const auto exits1 = barSupports(pl.intercostalSpace, "");
+  if (pl.secondSpace == 0) return;
+
+  // the second bar: parallel to the first, its sternal patch at the lower sternum end moved up or down
+  // by the height difference of the two bars' exits (centre of the sternum's section at that height)
+  if (pl.secondSpace == pl.intercostalSpace)
+    throw InputError("The second bar must go into another intercostal space than the first (both in " + std::to_string(pl.secondSpace) + ").");
+  if (!(pl.secondShare > 0 && pl.secondShare < 1)) throw InputError("The second bar's share of the force must lie in (0, 1).");
+  const auto exits2 = barSupports(pl.secondSpace, " second");
+  const double z2 = sp.z() + 0.5 * (exits2[0].z() + exits2[1].z() - exits1[0].z() - exits1[1].z());
+  Vector3d c2 = Vector3d::Zero();
+  int nBand = 0;
+  for (size_t f = 0; f < cage.surface.faces.size(); ++f)
+    if (sternumFace(f))
+      for (int v : cage.surface.faces[f])
+        if (std::abs(cage.surface.vertices[v].z() - z2) <= pl.sternumLoadRadius) c2 += cage.surface.vertices[v], ++nBand;
+  if (nBand == 0)
+    throw InputError("The second bar (intercostal space " + std::to_string(pl.secondSpace) + ") crosses the midline at z = " + mm(z2) +
+                     " mm, where the cage has no sternum: choose a space whose bar meets the sternum.");
+  c2 /= nBand;
+  s.secondSternumNodes = surfaceNodesNear(cage, c2, pl.sternumLoadRadius, sternumFace);
+  if (s.secondSternumNodes.empty())
+    throw InputError("No sternum surface node lies within " + mm(pl.sternumLoadRadius) + " mm of the second bar's sternal point " +
+                     pointText(c2) + ": increase the sternum load radius.");
+  s.secondShare = pl.secondShare;
 }
 
 // connected components of the tet mesh; every one must hold a fixed node
@@ -253,11 +319,18 @@ int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, co
   return static_cast<int>(compTet.size());
 }
 
+// each bar: Fe_i on its sternal patch, Fe_i / 4 opposite on each of its four rib patches
 void addLoads(fe::Problem& p, const Analysis& a, const Vector3d& dir, double fe) {
   p.force.assign(p.mesh->nodes.size(), Vector3d::Zero());
-  for (int n : a.sternumNodes) p.force[n] += dir * (fe / a.sternumNodes.size());
-  for (const auto& nodes : a.supportNodes)
-    for (int n : nodes) p.force[n] -= dir * (fe / 4.0 / nodes.size());
+  const bool two = !a.secondSternumNodes.empty();
+  const double f1 = two ? fe * (1.0 - a.secondShare) : fe;
+  auto bar = [&](const std::vector<int>& sternum, size_t firstSupport, double f) {
+    for (int n : sternum) p.force[n] += dir * (f / sternum.size());
+    for (size_t k = firstSupport; k < firstSupport + 4; ++k)
+      for (int n : a.supportNodes[k]) p.force[n] -= dir * (f / 4.0 / a.supportNodes[k].size());
+  };
+  bar(a.sternumNodes, 0, f1);
+  if (two) bar(a.secondSternumNodes, 4, fe * a.secondShare);
 }
 
 double elevationOf(const Eigen::VectorXd& u, const Analysis& a, const Vector3d& dir) {
@@ -277,31 +350,62 @@ fe::Problem problemAt(const Analysis& a, const Options& opt, double force) {
   return p;
 }
 
-Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, const Options& opt) {
-  auto progress = [&](int pc, const std::string& w) {
-    if (opt.progress) opt.progress(pc, w);
-  };
+void checkPlacement(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl) {
+  checkRadii(pl);
+  Analysis scratch;
+  placeLoads(cage, lms, pl, scratch);
+}
+
+Model buildModel(const CageSurface& cage, const fe::TetgenOptions& mesh) {
+  const auto t0 = Clock::now();
+  Model m;
+  std::vector<int> tetFace;
+  m.mesh = fe::tetrahedralize(cage.surface, mesh, &tetFace);
+  m.tetPart.resize(tetFace.size());
+  for (size_t t = 0; t < tetFace.size(); ++t) m.tetPart[t] = cage.facePart[tetFace[t]];
+  m.secondsMesh = since(t0);
+  return m;
+}
+
+namespace {
+void checkOptions(const Options& opt) {
   if (!(opt.nuBone > -1 && opt.nuBone < 0.5) || !(opt.nuCartilage > -1 && opt.nuCartilage < 0.5))
     throw InputError("Poisson's ratios must lie in (-1, 0.5).");
   if (opt.targetElevation <= 0 && !(opt.force > 0)) throw InputError("The elevating force must be positive (N).");
   if (!(opt.curveStep > 0)) throw InputError("The force-displacement curve step must be positive (N).");
   if (!(opt.maxForce > 0) || !(opt.tolerance > 0)) throw InputError("The maximum force and the calibration tolerance must be positive.");
   if (!std::isfinite(opt.targetElevation)) throw InputError("The target elevation must be a finite number (mm).");
+}
 
+Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<Landmark>& lms, const Options& opt);
+}  // namespace
+
+Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, const Options& opt) {
+  checkOptions(opt);
+  if (opt.progress) opt.progress(5, "TetGen (after checking the surface)");
+  return analyzeModel(cage, buildModel(cage, opt.mesh), lms, opt);
+}
+
+Analysis analyze(const CageSurface& cage, const Model& model, const std::vector<Landmark>& lms, const Options& opt) {
+  checkOptions(opt);
+  return analyzeModel(cage, model, lms, opt);
+}
+
+namespace {
+Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<Landmark>& lms, const Options& opt) {
+  auto progress = [&](int pc, const std::string& w) {
+    if (opt.progress) opt.progress(pc, w);
+  };
   Analysis a;
-  auto t0 = Clock::now();
-  progress(5, "TetGen (after checking the surface)");
-  std::vector<int> tetFace;
-  a.mesh = fe::tetrahedralize(cage.surface, opt.mesh, &tetFace);
-  a.tetPart.resize(tetFace.size());
-  for (size_t t = 0; t < tetFace.size(); ++t) a.tetPart[t] = cage.facePart[tetFace[t]];
-  a.secondsMesh = since(t0);
+  a.mesh = std::move(model.mesh);
+  a.tetPart = std::move(model.tetPart);
+  a.secondsMesh = model.secondsMesh;
 
   place(cage, lms, opt.place, a);
   const Vector3d dir = opt.place.direction.normalized();
   a.components = checkComponents(a.mesh, a.tetPart, a.fixedNodes);
 
-  t0 = Clock::now();
+  auto t0 = Clock::now();
   progress(15, "Factorising (CHOLMOD)");
   fe::Problem prob = problemAt(a, opt, 1.0);  // unit Fe; the solves scale it
   fe::Solver solver(prob);
@@ -376,6 +480,7 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
   std::vector<char> special(a.mesh.nodes.size(), 0);
   for (int n : a.fixedNodes) special[n] = 1;
   for (int n : a.sternumNodes) special[n] = 1;
+  for (int n : a.secondSternumNodes) special[n] = 1;
   for (const auto& v : a.supportNodes)
     for (int n : v) special[n] = 1;
   int iS = -1, iE = -1;
@@ -405,6 +510,7 @@ Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, cons
   progress(100, "Done");
   return a;
 }
+}  // namespace
 
 std::vector<PathSample> strainAlongRib(const Analysis& a, int side, int rib, double binWidth) {
   if (!(binWidth > 0)) throw InputError("The rib path bin width must be positive (mm).");

@@ -48,7 +48,23 @@ struct Placement {
   Eigen::Vector3d direction{0, 1, 0};  ///< Fe direction (anterior); Fsr are opposite
   /// user points overriding the landmarks: lower sternum end, right and left bar exits
   std::optional<Eigen::Vector3d> sternumPoint, exitRight, exitLeft;
+  /// Two-bar repair: the second bar's intercostal space (0: one bar) and the share of Fe it carries.
+  /// Its exits come from the landmarks (or the ribs, see barExit); its sternal patch is centred on the
+  /// sternum at the height of the lower sternum end moved by the z difference between the two bars'
+  /// exits (bars are parallel). Each bar is self-equilibrated: Fe_i = 2 Fs_i = 4 Fsr_i, Fe_1 + Fe_2 = Fe.
+  /// The elevation (calibration target) stays that of the lower sternum end (the first bar's patch).
+  int secondSpace = 0;
+  double secondShare = 0.5;
 };
+
+/// The bar exit of intercostal space s on one side (1 right, 2 left): landmark 600 + 10*side + s when
+/// present, else the midpoint of the lateral-most points of ribs s and s+1 (centroid of each rib's bone
+/// surface nodes within 10 mm in |x| of its most lateral node, which is where the generator puts the
+/// landmarks). Throws InputError naming the missing rib when the cage has no rib s or s+1 on that side.
+Eigen::Vector3d barExit(const CageSurface& cage, const std::vector<Landmark>& lms, int side, int space);
+/// Places the loads of `pl` on the cage surface (no mesh, no solve): throws the InputError the analysis
+/// would throw for them (missing landmark, a space outside the ribs, a second bar beside the sternum).
+void checkPlacement(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl);
 
 /// Newton settings of the analysis: 5 increments at least, relative tolerances 1e-6 (the elevation is
 /// converged to far below the 0.1 mm calibration tolerance), modified Newton (refactorise only when
@@ -89,6 +105,15 @@ struct Location {
   std::string describe() const;  ///< e.g. "left rib 5 (bone), posterior, 12 mm from the costovertebral joint"
 };
 
+/// The tet model of a cage (TetGen once; every load case of the same cage and mesh options reuses it)
+struct Model {
+  fe::TetMesh mesh;
+  std::vector<int> tetPart;  ///< anatomical part of each tet (of its nearest surface face)
+  double secondsMesh = 0;
+};
+/// Tetrahedralises the cage; throws InputError for an open or self-intersecting surface.
+Model buildModel(const CageSurface& cage, const fe::TetgenOptions& mesh);
+
 struct Analysis {
   fe::TetMesh mesh;
   std::vector<int> tetPart;
@@ -104,8 +129,10 @@ struct Analysis {
   double maxStressAll = 0, maxStrainAll = 0;     ///< including the joints and load patches
   double maxStrainCartilage = 0, maxStrainBone = 0;
   std::vector<int> fixedNodes, sternumNodes;
-  std::vector<std::vector<int>> supportNodes;    ///< right s, right s+1, left s, left s+1
+  std::vector<std::vector<int>> supportNodes;    ///< right s, right s+1, left s, left s+1 (then the second bar's)
   std::vector<std::string> supportNames;
+  std::vector<int> secondSternumNodes;           ///< the second bar's sternal patch (empty: one bar)
+  double secondShare = 0;                        ///< share of Fe on the second bar
   int components = 0;
   int nonlinearSolves = 0, newtonIterations = 0, factorizations = 0;
   double secondsMesh = 0, secondsSolve = 0;
@@ -116,6 +143,8 @@ struct Analysis {
 /// Throws InputError with a message naming what to fix (open/self-intersecting surface, missing labels
 /// or landmarks, a part without fixed nodes, unreachable target, Newton failure).
 Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& landmarks, const Options& opt);
+/// The same on a model built before (opt.mesh is not used; the model's mesh is copied into the result).
+Analysis analyze(const CageSurface& cage, const Model& model, const std::vector<Landmark>& landmarks, const Options& opt);
 
 /// The problem of an analysis at force Fe (for the .inp writer); refers to a.mesh.
 fe::Problem problemAt(const Analysis& a, const Options& opt, double force);

@@ -7,27 +7,15 @@
 
 #include "nuss_analysis.h"
 #include "pectus/errors.h"
+#include "coarse_cage.h"
 #include "ribcage.h"
 
 using namespace pectus;
 
 namespace {
 
-struct Cage {
-  CMeshO mesh;
-  std::vector<Landmark> lms;
-};
-
-Cage& cage() {
-  static Cage c;
-  if (c.mesh.fn == 0) {
-    ribcage::RibCageParams p;
-    p.edgeLength = 6.0;
-    p.ribPairs = 12;
-    c.lms = ribcage::generateRibCage(p, c.mesh);
-  }
-  return c;
-}
+using pectus::fixture::errorOf;
+pectus::fixture::CoarseCage& cage() { return pectus::fixture::coarseCage(); }
 
 nuss::Options coarse() {
   nuss::Options o;
@@ -36,15 +24,6 @@ nuss::Options coarse() {
   o.nonlinear = false;
   o.force = 10;
   return o;
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const InputError& e) {
-    return e.what();
-  }
-  return "";
 }
 
 }  // namespace
@@ -121,9 +100,9 @@ TEST(NussAnalysis, LinearModelLoadsSupportsCalibrationAndBadInput) {
   auto noSternum = lms;
   noSternum.erase(std::remove_if(noSternum.begin(), noSternum.end(), [](const Landmark& l) { return l.code == kSternumLowerEnd; }), noSternum.end());
   EXPECT_NE(errorOf([&] { nuss::analyze(surf, noSternum, coarse()); }).find("lower sternum end"), std::string::npos);
-  auto space7 = coarse();
-  space7.place.intercostalSpace = 7;
-  EXPECT_NE(errorOf([&] { nuss::analyze(surf, lms, space7); }).find("intercostal space 7"), std::string::npos);
+  auto space12 = coarse();  // no landmark and no rib 13 to place the exit between
+  space12.place.intercostalSpace = 12;
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, lms, space12); }).find("intercostal space 12"), std::string::npos);
   auto unreachable = coarse();
   unreachable.targetElevation = 50.0;
   unreachable.maxForce = 0.5 * 50.0 / a.linearCompliance;

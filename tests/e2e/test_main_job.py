@@ -1,6 +1,7 @@
 """The README's main job (python/run_main.py, here with --quick: the same one-script pipeline with a
 small-strain TET4 FE) runs, names its output folder, and its printed Table 6-1 agrees with summary.csv
-and the files it writes."""
+and the files it writes. With --planner (one bar at space 4, the FE's own level) the planner's row needs the
+force of the table."""
 import csv
 import os
 import re
@@ -9,7 +10,8 @@ import subprocess
 from harness import SOURCE, check, finish, workdir
 
 out = workdir("main")
-p = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "python", "run_main.py"), out, "--quick"],
+p = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "python", "run_main.py"), out, "--quick",
+                    "--planner", "--planner-levels", "4", "--planner-bars", "one"],
                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=1800)
 print(p.stdout[-3500:])
 check(p.returncode == 0, "main job exits 0", p.stdout[-3000:])
@@ -25,6 +27,12 @@ if rows:
     m = re.search(r"Haller\) index before -> after\s+([0-9.]+) -> ([0-9.]+)", p.stdout)
     check(m is not None and abs(float(m.group(1)) - float(s["haller_before"])) < 0.006 and float(m.group(2)) < float(m.group(1)),
           "printed pectus index before/after = summary, and it falls")
+plan = list(csv.DictReader(open(os.path.join(out, "planner.csv")))) if os.path.exists(os.path.join(out, "planner.csv")) else []
+check(len(plan) == 1 and plan[0]["option"] == "1 bar, space 4", "planner.csv: one option, one bar at space 4")
+if plan and rows:
+    check(abs(float(plan[0]["force_N"]) - float(rows[0]["force"])) <= 0.01 * float(rows[0]["force"]),
+          f"planner force {plan[0]['force_N']} N = the pipeline's FE force {rows[0]['force']} N (1 %)")
+    check("1 bar, space 4 *" in p.stdout, "the planner table is printed, its only row marked best")
 for f in ("quality_histograms.png", "nuss_force_displacement.png", "nuss.vtu", "pipeline.mlx"):
     check(os.path.exists(os.path.join(out, f)) and os.path.getsize(os.path.join(out, f)) > 1000, f"{f} written")
 finish()
