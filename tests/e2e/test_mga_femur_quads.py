@@ -25,14 +25,14 @@ ex = lambda *p: os.path.join(SOURCE, *p)  # noqa: E731
 convert = mlx.load_script(ex("filter_quad_convert", "examples", "tri_to_quad.mlx"))
 mga = [f.set(maxSweeps=1) if f.name == "MGA Surface Mesh Smoothing" else f
        for f in mlx.load_script(ex("filter_mga_smooth", "examples", "mga_smooth.mlx"))]
-outs = {}
-for name, filters in (("converted", convert), ("smoothed", convert + mga)):
-    out = os.path.join(d, name + ".off")
-    save = [f.set(fileName=out, format=1) for f in mlx.load_script(ex("filter_quad_convert", "examples", "save_polygonal.mlx"))]
-    r = run([femur], mlx.Script(filters + save))
-    check(r.rc == 0 and os.path.exists(out), f"{name}: meshlabserver exit 0 and a polygon file", r.stdout[-1500:])
-    outs[name] = read_off(out)
-
+save = lambda out: [f.set(fileName=out, format=1)  # noqa: E731
+                    for f in mlx.load_script(ex("filter_quad_convert", "examples", "save_polygonal.mlx"))]
+outs = {name: os.path.join(d, name + ".off") for name in ("converted", "smoothed")}
+# one meshlabserver run: convert, save, smooth (one sweep), save
+r = run([femur], mlx.Script(convert + save(outs["converted"]) + mga + save(outs["smoothed"])))
+check(r.rc == 0 and all(os.path.exists(p) for p in outs.values()), "meshlabserver exit 0 and both polygon files",
+      r.stdout[-1500:])
+outs = {k: read_off(p) for k, p in outs.items()}
 (V0, F0), (V1, F1) = outs["converted"], outs["smoothed"]
 check(F0 == F1 and all(len(f) == 4 for f in F1), "same quads before and after smoothing", f"{len(F0)} / {len(F1)}")
 b0 = np.array([beta(V0[f]) for f in F0])
