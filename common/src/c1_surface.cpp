@@ -20,8 +20,8 @@ namespace {
 
 // value and first partials with respect to (s, t): forward-mode automatic differentiation
 struct J {
-  double v = 0, s = 0, t = 0;
-  J() = default;
+  double v, s, t;
+  J() {}  // uninitialized: every J is assigned before use
   J(double v_, double s_ = 0, double t_ = 0) : v(v_), s(s_), t(t_) {}
 };
 inline J operator+(J a, J b) { return {a.v + b.v, a.s + b.s, a.t + b.t}; }
@@ -498,7 +498,7 @@ void C1Surface::evalImpl(int face, const TT& s, const TT& t, Vec3& P, Vec3& Ps, 
   const auto& N = net_[face];
   const J u = J(1.0) - s - t, v = s, w = t;
   const J uu = u * u, vv = v * v, ww = w * w;
-  J B[13];
+  J B[12];
   B[0] = uu * u;            // V0
   B[1] = 3.0 * (uu * v);    // e01
   B[2] = 3.0 * (uu * w);    // e02
@@ -520,12 +520,19 @@ void C1Surface::evalImpl(int face, const TT& s, const TT& t, Vec3& P, Vec3& Ps, 
   }
   const Vec3* cp[12] = {&mesh_.V[F[0]], &N[0], &N[1], &N[2], &N[3], &N[4], &N[5],
                         &mesh_.V[F[1]], &mesh_.V[F[2]], &N[6], &N[7], &N[8]};
-  P.setZero(); Ps.setZero(); Pt.setZero();
+  // plain scalar sums in control-point order (no Eigen temporaries in the loop)
+  double p[3] = {0, 0, 0}, ps[3] = {0, 0, 0}, pt[3] = {0, 0, 0};
   for (int k = 0; k < 12; ++k) {
-    P += B[k].v * *cp[k];
-    Ps += B[k].s * *cp[k];
-    Pt += B[k].t * *cp[k];
+    const double* c = cp[k]->data();
+    for (int i = 0; i < 3; ++i) {
+      p[i] += B[k].v * c[i];
+      ps[i] += B[k].s * c[i];
+      pt[i] += B[k].t * c[i];
+    }
   }
+  P = Vec3(p[0], p[1], p[2]);
+  Ps = Vec3(ps[0], ps[1], ps[2]);
+  Pt = Vec3(pt[0], pt[1], pt[2]);
 }
 
 PatchJet C1Surface::jet(int face, const Vec3& bary) const {

@@ -23,39 +23,118 @@ std::uint64_t itemSeed(std::uint64_t seed, std::uint64_t item) {
 
 namespace {
 
-using Bits = std::vector<std::uint8_t>;
+/// xoshiro256** (Blackman and Vigna), seeded by splitmix64: a 32-byte state, so seeding one run per
+/// node and element costs nothing (std::mt19937_64 fills 2.5 kB); a UniformRandomBitGenerator
+class Xoshiro {
+ public:
+  using result_type = std::uint64_t;
+  explicit Xoshiro(std::uint64_t seed) {
+    for (auto& w : s_) w = seed = itemSeed(seed, 0);
+  }
+  static constexpr result_type min() { return 0; }
+  static constexpr result_type max() { return ~result_type(0); }
+  result_type operator()() {
+    const std::uint64_t r = rotl(s_[1] * 5, 7) * 9, t = s_[1] << 17;
+    s_[2] ^= s_[0];
+    s_[3] ^= s_[1];
+    s_[1] ^= s_[2];
+    s_[0] ^= s_[3];
+    s_[2] ^= t;
+    s_[3] = rotl(s_[3], 45);
+    return r;
+  }
 
+ private:
+  static std::uint64_t rotl(std::uint64_t x, int k) { return (x << k) | (x >> (64 - k)); }
+  std::uint64_t s_[4];
+};
+
+/// A string of `total` bits packed into 64-bit words: bit k (parameter after parameter, most significant
+/// first) is bit 63 - k % 64 of word k / 64; unused low bits of the last word stay zero.
 struct Codec {
   std::vector<Range> ranges;
   std::vector<int> len;
-  int total = 0;
-  std::vector<double> decode(const Bits& b) const {
-    std::vector<double> x(ranges.size());
+  std::vector<double> maxv;  ///< 2^len - 1
+  int total = 0, words = 1;
+  static bool bit(const std::uint64_t* b, int k) { return (b[k >> 6] >> (63 - (k & 63))) & 1u; }
+  void decode(const std::uint64_t* b, std::vector<double>& x) const {
     int pos = 0;
     for (std::size_t i = 0; i < ranges.size(); ++i) {
       std::uint64_t v = 0;
-      for (int k = 0; k < len[i]; ++k) v = (v << 1) | b[std::size_t(pos + k)];
+      for (int k = 0; k < len[i]; ++k) v = (v << 1) | std::uint64_t(bit(b, pos + k));
       pos += len[i];
-      const double maxv = std::ldexp(1.0, len[i]) - 1.0;
-      x[i] = ranges[i].lo + (ranges[i].hi - ranges[i].lo) * (double(v) / maxv);
+      x[i] = ranges[i].lo + (ranges[i].hi - ranges[i].lo) * (double(v) / maxv[i]);
     }
-    return x;
   }
-  Bits encode(const std::vector<double>& x) const {
-    Bits b(static_cast<std::size_t>(total));
+  void encode(const std::vector<double>& x, std::uint64_t* b) const {
+    std::fill(b, b + words, 0);
     int pos = 0;
     for (std::size_t i = 0; i < ranges.size(); ++i) {
-      const double maxv = std::ldexp(1.0, len[i]) - 1.0;
       const double t = std::clamp((x[i] - ranges[i].lo) / (ranges[i].hi - ranges[i].lo), 0.0, 1.0);
-      auto v = std::uint64_t(std::llround(t * maxv));
-      for (int k = len[i] - 1; k >= 0; --k) {
-        b[std::size_t(pos + k)] = std::uint8_t(v & 1u);
-        v >>= 1;
-      }
+      const auto v = std::uint64_t(std::llround(t * maxv[i]));
+      for (int k = 0; k < len[i]; ++k)
+        if ((v >> (len[i] - 1 - k)) & 1u) b[(pos + k) >> 6] |= std::uint64_t(1) << (63 - ((pos + k) & 63));
       pos += len[i];
     }
-    return b;
   }
+  /// mask of the bits k >= c in word w
+  std::uint64_t tailMask(int w, int c) const {
+    if (c <= 64 * w) return ~std::uint64_t(0);
+    if (c >= 64 * (w + 1)) return 0;
+    return (std::uint64_t(1) << (64 - (c & 63))) - 1;
+  }
+  /// mask of the used bits of word w
+  std::uint64_t usedMask(int w) const { return ~tailMask(w, total); }
+};
+
+/// fitness of the strings met so far in one run (single-word strings, the word is the key): open
+/// addressing, grows at half load
+class Memo {
+ public:
+  bool find(std::uint64_t key, double& f) const {
+    if (keys_.empty()) return false;
+    for (std::size_t i = slot(key);; i = (i + 1) & (keys_.size() - 1)) {
+      if (!used_[i]) return false;
+      if (keys_[i] == key) {
+        f = vals_[i];
+        return true;
+      }
+    }
+  }
+  void insert(std::uint64_t key, double f) {
+    if (2 * (count_ + 1) > keys_.size()) grow();
+    std::size_t i = slot(key);
+    while (used_[i]) i = (i + 1) & (keys_.size() - 1);
+    used_[i] = 1;
+    keys_[i] = key;
+    vals_[i] = f;
+    ++count_;
+  }
+
+ private:
+  /// Fibonacci hashing: the top bits of the product (keys hold their bits at the top of the word)
+  std::size_t slot(std::uint64_t key) const { return std::size_t(((key ^ (key >> 32)) * 0x9E3779B97F4A7C15ull) >> shift_); }
+  void grow() {
+    std::vector<std::uint64_t> k;
+    std::vector<double> v;
+    std::vector<char> u;
+    k.swap(keys_);
+    v.swap(vals_);
+    u.swap(used_);
+    const std::size_t n = k.empty() ? 128 : 2 * k.size();
+    shift_ = 64 - __builtin_ctzll(n);
+    keys_.assign(n, 0);
+    vals_.assign(n, 0);
+    used_.assign(n, 0);
+    count_ = 0;
+    for (std::size_t i = 0; i < k.size(); ++i)
+      if (u[i]) insert(k[i], v[i]);
+  }
+  std::vector<std::uint64_t> keys_;
+  std::vector<double> vals_;
+  std::vector<char> used_;
+  std::size_t count_ = 0;
+  int shift_ = 57;
 };
 
 }  // namespace
@@ -69,31 +148,48 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
   for (const auto& r : ranges) {
     if (!(r.hi > r.lo)) throw std::invalid_argument("MGA: empty parameter range");
     codec.len.push_back(substringLength(r.hi - r.lo, opt.accuracy));
+    codec.maxv.push_back(std::ldexp(1.0, codec.len.back()) - 1.0);
     codec.total += codec.len.back();
   }
-  std::mt19937_64 rng(opt.seed);
-  std::bernoulli_distribution coin(0.5);
-  auto randomBits = [&]() {
-    Bits b(static_cast<std::size_t>(codec.total));
-    for (auto& bit : b) bit = coin(rng) ? 1 : 0;
-    return b;
+  codec.words = (codec.total + 63) / 64;
+  const std::size_t W = std::size_t(codec.words);
+  Xoshiro rng(opt.seed);
+  auto randomBits = [&](std::uint64_t* b) {
+    for (std::size_t w = 0; w < W; ++w) b[w] = rng() & codec.usedMask(int(w));
   };
 
+  // strings live in flat buffers (individual i at i * W): no allocation per generation
   const std::size_t P = std::size_t(opt.population);
-  std::vector<Bits> pop(P);
+  std::vector<std::uint64_t> pop(P * W), next(P * W), best(W);
+  auto ind = [&](std::vector<std::uint64_t>& buf, std::size_t i) { return buf.data() + i * W; };
   std::vector<double> fit(P);
   Result res;
-  auto eval = [&](const Bits& b) {
+  // The fitness is a function of the string alone, and a micro-GA breeds many copies of the same
+  // string (crossover of near-identical parents, the converged population): each distinct string is
+  // evaluated once per run and looked up afterwards (strings of up to 64 bits; longer ones are not
+  // cached). The search itself - selection, crossover, restarts - is unchanged.
+  Memo memo;
+  const bool useMemo = W == 1;
+  std::vector<double> x(ranges.size());
+  auto eval = [&](const std::uint64_t* b) {
+    double f = 0;
+    if (useMemo && memo.find(b[0], f)) {
+      ++res.cacheHits;
+      return f;
+    }
     ++res.evaluations;
-    const double f = fitness(codec.decode(b));
-    return std::isfinite(f) ? f : -1e300;
+    codec.decode(b, x);
+    f = fitness(x);
+    if (!std::isfinite(f)) f = -1e300;
+    if (useMemo) memo.insert(b[0], f);
+    return f;
   };
 
-  for (std::size_t i = 0; i < P; ++i) pop[i] = randomBits();
-  if (seedPoint != nullptr && seedPoint->size() == ranges.size()) pop[0] = codec.encode(*seedPoint);
-  for (std::size_t i = 0; i < P; ++i) fit[i] = eval(pop[i]);
+  for (std::size_t i = 0; i < P; ++i) randomBits(ind(pop, i));
+  if (seedPoint != nullptr && seedPoint->size() == ranges.size()) codec.encode(*seedPoint, ind(pop, 0));
+  for (std::size_t i = 0; i < P; ++i) fit[i] = eval(ind(pop, i));
   std::size_t bestIdx = std::size_t(std::max_element(fit.begin(), fit.end()) - fit.begin());
-  Bits best = pop[bestIdx];
+  std::copy_n(ind(pop, bestIdx), W, best.begin());
   double bestFit = fit[bestIdx];
 
   auto select = [&](void) -> std::size_t {
@@ -124,44 +220,52 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
 
   std::uniform_int_distribution<int> cut(1, std::max(1, codec.total - 1));
   for (int gen = 0; gen < opt.maxGenerations; ++gen) {
-    // Step 6: select parents (the elite is in the pool), crossover with probability one
-    std::vector<Bits> next;
-    next.reserve(P);
-    next.push_back(best);
-    while (next.size() < P) {
-      const Bits& a = pop[select()];
-      const Bits& b = pop[select()];
+    // Step 6: select parents (the elite is in the pool), one-point crossover with probability one
+    std::copy(best.begin(), best.end(), ind(next, 0));
+    for (std::size_t n = 1; n < P;) {
+      const std::uint64_t* a = ind(pop, select());
+      const std::uint64_t* b = ind(pop, select());
       const int c = cut(rng);
-      Bits c1(a), c2(b);
-      for (int k = c; k < codec.total; ++k) std::swap(c1[std::size_t(k)], c2[std::size_t(k)]);
-      next.push_back(std::move(c1));
-      if (next.size() < P) next.push_back(std::move(c2));
+      std::uint64_t* c1 = ind(next, n++);
+      std::uint64_t* c2 = n < P ? ind(next, n++) : nullptr;
+      for (std::size_t w = 0; w < W; ++w) {
+        const std::uint64_t tail = codec.tailMask(int(w), c);
+        c1[w] = (a[w] & ~tail) | (b[w] & tail);
+        if (c2) c2[w] = (b[w] & ~tail) | (a[w] & tail);
+      }
     }
     pop.swap(next);
     fit[0] = bestFit;
-    for (std::size_t i = 1; i < P; ++i) fit[i] = eval(pop[i]);
+    for (std::size_t i = 1; i < P; ++i) fit[i] = eval(ind(pop, i));
     for (std::size_t i = 1; i < P; ++i)
-      if (fit[i] > bestFit) { bestFit = fit[i]; best = pop[i]; }
+      if (fit[i] > bestFit) {
+        bestFit = fit[i];
+        std::copy_n(ind(pop, i), W, best.begin());
+      }
     res.generations = gen + 1;
     res.bestHistory.push_back(bestFit);
 
     // Step 7: nominal convergence -> restart around the kept best
     std::size_t differing = 0;
     for (std::size_t i = 0; i < P; ++i)
-      for (int k = 0; k < codec.total; ++k) differing += pop[i][std::size_t(k)] != best[std::size_t(k)];
+      for (std::size_t w = 0; w < W; ++w) differing += std::size_t(__builtin_popcountll(ind(pop, i)[w] ^ best[w]));
     if (double(differing) < opt.convergedBitFraction * double(codec.total * int(P))) {
       if (res.restarts >= opt.maxRestarts) break;
       ++res.restarts;
-      pop[0] = best;
+      std::copy(best.begin(), best.end(), ind(pop, 0));
       fit[0] = bestFit;
       for (std::size_t i = 1; i < P; ++i) {
-        pop[i] = randomBits();
-        fit[i] = eval(pop[i]);
-        if (fit[i] > bestFit) { bestFit = fit[i]; best = pop[i]; }
+        randomBits(ind(pop, i));
+        fit[i] = eval(ind(pop, i));
+        if (fit[i] > bestFit) {
+          bestFit = fit[i];
+          std::copy_n(ind(pop, i), W, best.begin());
+        }
       }
     }
   }
-  res.x = codec.decode(best);
+  res.x.resize(ranges.size());
+  codec.decode(best.data(), res.x);
   res.fitness = bestFit;
   return res;
 }

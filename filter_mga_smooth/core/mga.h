@@ -31,7 +31,8 @@ struct Result {
   double fitness = 0;
   int generations = 0;
   int restarts = 0;
-  int evaluations = 0;
+  int evaluations = 0;           ///< fitness calls (distinct strings)
+  int cacheHits = 0;             ///< strings met again, whose fitness was looked up instead
   std::vector<double> bestHistory;  ///< best fitness after each generation (never decreases)
 };
 

@@ -28,11 +28,18 @@ struct Loc {
   double s = 0, t = 0;
 };
 
-/// Local projection onto the C1 surface: Gauss-Newton on one patch, walking across edges.
+/// Local projection onto the C1 surface. A walk over the flat triangles of the original mesh first finds
+/// the triangle whose plane projection of q has non-negative barycentric coordinates (no patch
+/// evaluation), then Gauss-Newton on that patch from those coordinates, walking across edges if the
+/// iterate leaves the patch; the global closestPoint if the walk fails.
+/// Gauss-Newton stops when the step in (s, t) is below this (a 1e-8 fraction of the patch: far below the
+/// micro-GA accuracy)
+constexpr double kProjTol = 1e-8;
 class Projector {
  public:
   Projector(const C1Surface& S) : S_(S) {
     const auto& F = S.mesh().F;
+    const auto& V = S.mesh().V;
     adj_.assign(F.size(), {-1, -1, -1});
     std::map<std::pair<int, int>, std::pair<int, int>> edges;  // (a<b) -> (face, local edge)
     for (int f = 0; f < int(F.size()); ++f)
@@ -47,6 +54,21 @@ class Projector {
           adj_[it->second.first][it->second.second] = f;
         }
       }
+    flat_.resize(F.size());
+    for (std::size_t f = 0; f < F.size(); ++f) {
+      Flat& fl = flat_[f];
+      fl.a = V[std::size_t(F[f][0])];
+      fl.e1 = V[std::size_t(F[f][1])] - fl.a;
+      fl.e2 = V[std::size_t(F[f][2])] - fl.a;
+      const double m11 = fl.e1.dot(fl.e1), m12 = fl.e1.dot(fl.e2), m22 = fl.e2.dot(fl.e2);
+      const double det = m11 * m22 - m12 * m12;
+      fl.ok = det > 1e-14 * m11 * m22 && det > 0;
+      if (fl.ok) {
+        // (s, t) = rows of M^-1 [e1 e2]^T applied to (q - a)
+        fl.gs = (m22 * fl.e1 - m12 * fl.e2) / det;
+        fl.gt = (m11 * fl.e2 - m12 * fl.e1) / det;
+      }
+    }
   }
 
   /// Projects q starting at `start`; returns the location, point and unit normal.
@@ -54,20 +76,31 @@ class Projector {
     const auto& F = S_.mesh().F;
     int f = start.face, prev = -1;
     double s = start.s, t = start.t;
+    flatWalk(q, f, s, t);
     for (int walk = 0; walk < 24; ++walk) {
       for (int it = 0; it < 10; ++it) {
         const c1::PatchJet j = S_.jet(f, Vec3(1 - s - t, s, t));
         const Vec3 r = j.P - q;
-        Eigen::Matrix2d H;
-        H << j.Ps.dot(j.Ps), j.Ps.dot(j.Pt), j.Ps.dot(j.Pt), j.Pt.dot(j.Pt);
-        const Eigen::Vector2d g(j.Ps.dot(r), j.Pt.dot(r));
-        const double det = H.determinant();
+        const double h11 = j.Ps.dot(j.Ps), h12 = j.Ps.dot(j.Pt), h22 = j.Pt.dot(j.Pt);
+        const double det = h11 * h22 - h12 * h12;
         if (!(det > 1e-30)) break;
-        const Eigen::Vector2d d = -H.inverse() * g;
-        if (!d.allFinite()) break;
-        s += d.x();
-        t += d.y();
-        if (std::abs(d.x()) + std::abs(d.y()) < 1e-12) break;
+        const double gs = j.Ps.dot(r), gt = j.Pt.dot(r);
+        const double ds = -(h22 * gs - h12 * gt) / det, dt = -(h11 * gt - h12 * gs) / det;
+        if (!std::isfinite(ds) || !std::isfinite(dt)) break;
+        if (std::abs(ds) + std::abs(dt) < kProjTol) {
+          // converged at (s, t): j is the point there; inside the patch it is the answer
+          if (s >= 0 && t >= 0 && s + t <= 1) {
+            const Vec3 nrm = j.normal();
+            if (nrm.squaredNorm() > 0) {
+              P = j.P;
+              N = nrm;
+              return Loc{f, s, t};
+            }
+          }
+          break;
+        }
+        s += ds;
+        t += dt;
         if (s < -0.5 || t < -0.5 || s + t > 1.5) break;  // far outside this patch: walk
       }
       Vec3 b(1 - s - t, s, t);
@@ -114,8 +147,38 @@ class Projector {
   }
 
  private:
+  struct Flat {
+    Vec3 a, e1, e2, gs, gt;
+    bool ok = false;
+  };
+  /// moves (f, s, t) to the flat triangle whose plane projection of q lies inside it (or the last one
+  /// reached: a boundary, a degenerate triangle, a cycle), with those coordinates clamped to it
+  void flatWalk(const Vec3& q, int& f, double& s, double& t) const {
+    int prev = -1;
+    for (int step = 0; step < 64; ++step) {
+      const Flat& fl = flat_[std::size_t(f)];
+      if (!fl.ok) return;
+      const Vec3 d = q - fl.a;
+      const double fs = fl.gs.dot(d), ft = fl.gt.dot(d);
+      const Vec3 b(1 - fs - ft, fs, ft);
+      int l = 0;
+      b.minCoeff(&l);
+      const int nb = b[l] < -1e-12 ? adj_[std::size_t(f)][std::size_t(l)] : -1;
+      if (nb < 0 || nb == prev) {
+        Vec3 c = b.cwiseMax(0.0);
+        c /= c.sum();
+        s = c[1];
+        t = c[2];
+        return;
+      }
+      prev = f;
+      f = nb;
+    }
+  }
+
   const C1Surface& S_;
   std::vector<std::array<int, 3>> adj_;
+  std::vector<Flat> flat_;
 };
 
 struct Mesh {
@@ -126,12 +189,16 @@ struct Mesh {
 
 /// fitness of node n at position x with surface normal nrm: sum of element qualities (cap > 0, the final
 /// pass: the worst element's quality up to the cap, plus kCapSumWeight times the sum) if none is folded
-/// against nrm and the worst is not below the guard, else below any valid value
+/// against nrm and the worst is not below the guard, else below any valid value. Invalid stars rank
+/// lexicographically: first by the elements invalid in themselves (a reflex, folded or degenerate quad
+/// along its own normal, a degenerate triangle), then by those folded only against the surface normal at
+/// the node, then by the sum; so a star that starts with an element folded against the node's normal
+/// (a nearly flat corner on a curved surface) can never trade it for an element invalid in itself.
 constexpr double kCapSumWeight = 0.01;
 double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double guard, double cap = 0,
                  double* minQ = nullptr) {
   double sum = 0, lo = 1e300;
-  int invalid = 0;
+  int invalid = 0, broken = 0;
   Vec3 p[4];
   for (int ei : M.vE[std::size_t(n)]) {
     const Element& e = M.E[std::size_t(ei)];
@@ -145,12 +212,13 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
       q = quadBeta(p[0], p[1], p[2], p[3]);
       ok = q > 1e-12 && quadBetaWithNormal(p[0], p[1], p[2], p[3], nrm) > 1e-12;
     }
-    if (!ok) ++invalid;
+    if (!(q > 1e-12)) ++broken;
+    else if (!ok) ++invalid;
     sum += q;
     lo = std::min(lo, q);
   }
   if (minQ) *minQ = lo;
-  if (invalid) return -100.0 * invalid + 0.01 * sum;
+  if (broken || invalid) return -1e4 * broken - 100.0 * invalid + 0.01 * sum;
   if (lo < guard) return -50.0 + 0.01 * sum;
   return cap > 0 ? std::min(lo, cap) + kCapSumWeight * sum : sum;
 }
@@ -495,6 +563,12 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   double mean = res.before.mean;
   std::vector<double> projDist(nv, 0.0);
   std::vector<std::size_t> evaluations(nv, 0);
+  // active set: after the first sweep a node is searched again only if it or a node of its elements
+  // gained more than tolerance x (its number of elements) in its last search
+  std::vector<char> active(nv, 0), gained(nv, 0);
+  for (int n : freeNodes) active[std::size_t(n)] = 1;
+  const double activeTol = opt.tolerance;
+  const bool useActive = opt.activeSet;
   // one sweep over the free nodes; maxMin: only nodes whose worst element is below opt.minPassBelow,
   // maximising that worst element
   auto sweepOnce = [&](int sweep, bool maxMin) {
@@ -504,6 +578,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
 #pragma omp parallel for schedule(dynamic, 8)
       for (int ci = 0; ci < int(cls.size()); ++ci) {
         const int n = cls[std::size_t(ci)];
+        if (!maxMin && !active[std::size_t(n)]) continue;
         const Vec3 x0 = M.X[std::size_t(n)];
         const Loc l0 = loc[std::size_t(n)];
         const Vec3 n0 = S.at(l0.face, Vec3(1 - l0.s - l0.t, l0.s, l0.t)).normal;
@@ -525,6 +600,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         M.X[std::size_t(n)] = ns.bestX;
         loc[std::size_t(n)] = ns.bestLoc;
         projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], ns.bestDist);
+        if (!maxMin) gained[std::size_t(n)] = ns.bestFit - fit0 > activeTol * double(M.vE[std::size_t(n)].size());
       }
     }
   };
@@ -532,6 +608,22 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
     sweepOnce(sweep, false);
     res.sweeps = sweep + 1;
+    res.searches += std::size_t(std::count(active.begin(), active.end(), char(1)));
+    std::size_t nActive = 0;
+    if (useActive) {
+      std::fill(active.begin(), active.end(), 0);
+      for (std::size_t i = 0; i < nv; ++i)
+        if (gained[i])
+          for (int ei : M.vE[i])
+            for (int k = 0; k < M.E[std::size_t(ei)].nv; ++k) active[std::size_t(M.E[std::size_t(ei)].v[k])] = 1;
+      std::fill(gained.begin(), gained.end(), 0);
+      for (std::size_t i = 0; i < nv; ++i) {
+        if (fixed[i]) active[i] = 0;
+        nActive += active[i];
+      }
+    } else {
+      nActive = freeNodes.size();
+    }
     const double newMean = stats(M).mean;
     const double gain = newMean - mean;
     mean = newMean;
@@ -539,7 +631,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
       stopped = true;
       break;
     }
-    if (gain < opt.tolerance) break;
+    if (gain < opt.tolerance || nActive == 0) break;
   }
   if (opt.minPassBelow > 0 && !stopped)
     for (int k = 0; k < opt.minPassSweeps; ++k) {

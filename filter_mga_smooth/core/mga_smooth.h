@@ -74,6 +74,7 @@ struct Options {
   double minPassBelow = 0;      ///< final max-min pass for nodes whose worst element is below this (0: off)
   int minPassSweeps = 3;        ///< at most this many final max-min sweeps (stops when the minimum stalls)
   double singularAngleDeg = 90; ///< normal-cone angle of a node's faces above which it is singular (180: none)
+  bool activeSet = true;         ///< after the first sweep, search only nodes whose star still gains (see above)
   int cgIterations = 10;        ///< ConjugateGradient: CG iterations per node and sweep
   std::uint64_t seed = 1;
   /// called after every sweep with (sweep, mean quality); return false to stop
@@ -88,6 +89,7 @@ struct Result {
   std::size_t freeNodes = 0, boundaryNodes = 0, featureNodes = 0, singularNodes = 0, userFixedNodes = 0;
   std::size_t evaluations = 0;       ///< fitness evaluations (both methods)
   std::size_t nodesMoved = 0;
+  std::size_t searches = 0;          ///< node searches over all sweeps (the active set skips converged nodes)
   int sweeps = 0;
   int minPassSweeps = 0;             ///< final max-min sweeps run
   int colours = 0;
