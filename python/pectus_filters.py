@@ -28,6 +28,7 @@ def _build(name: str, spec: dict, overrides: dict) -> Filter:
 
 
 RIBCAGE_SIZE = ["From age", "Explicit dimensions"]
+RIBCAGE_OUTPUT = ["One labelled surface", "One layer per tissue (as CT segmentation)"]
 
 
 def create_ribcage(**kw) -> Filter:
@@ -35,9 +36,11 @@ def create_ribcage(**kw) -> Filter:
         "sizeMode": (Enum, 0, RIBCAGE_SIZE), "age": (Float, 7.0), "chestWidth": (Float, 181.0),
         "chestDepth": (Float, 74.0), "spineHeight": (Float, 172.0), "ribPairs": (Int, 12),
         "hallerIndex": (Float, 4.0), "funnelCenterX": (Float, 0.0), "funnelCenterZ": (Float, 0.8),
-        "funnelWidth": (Float, 80.0), "funnelHeight": (Float, 70.0), "edgeLength": (Float, 2.0)}, dict(kw))
+        "funnelWidth": (Float, 80.0), "funnelHeight": (Float, 70.0), "edgeLength": (Float, 2.0),
+        "output": (Enum, 0, RIBCAGE_OUTPUT)}, dict(kw))
 
 
+NUSS_INPUT = ["Current layer (one labelled surface)", "One layer per tissue (visible layers)"]
 NUSS_MODE = ["Calibrate Fe to the target elevation", "Given elevating force"]
 NUSS_ANALYSIS = ["Large displacement (nonlinear)", "Small strain (linear)"]
 NUSS_ORDER = ["Quadratic TET10 (no locking)", "Linear TET4 (thesis, ANSYS SOLID185)"]
@@ -47,7 +50,7 @@ SIDES = ["Right", "Left"]
 
 def nuss_fea(**kw) -> Filter:
     return _build("Nuss Procedure FE Analysis", {
-        "landmarkLayer": (Mesh, 1), "mode": (Enum, 0, NUSS_MODE), "targetElevation": (Float, 44.7),
+        "input": (Enum, 0, NUSS_INPUT), "landmarkLayer": (Mesh, 1), "mode": (Enum, 0, NUSS_MODE), "targetElevation": (Float, 44.7),
         "force": (Float, 140.0), "maxForce": (Float, 1000.0), "tolerance": (Float, 0.1),
         "analysis": (Enum, 0, NUSS_ANALYSIS), "order": (Enum, 0, NUSS_ORDER), "tetQuality": (Float, 2.0),
         "maxTetVolume": (Float, 0.0), "nuBone": (Float, 0.3), "nuCartilage": (Float, 0.4),

@@ -146,6 +146,7 @@ TEST(FeCalibrate, NonlinearBarTipElevation) {
   const CalibrationResult r = calibrateForce(d, target, o);
   std::printf("[calibrate] force %.4f N -> %.4f mm in %d nonlinear solves (linear guess %.4f N)\n", r.force, r.displacement,
               r.evaluations, o.initialForce);
+  for (const auto& [f, dd] : r.history) std::printf("  %.4f N -> %.4f mm\n", f, dd);
   EXPECT_LE(std::abs(s.solveNonlinear(no, r.force).displacement(b.tip).y() - target), 0.1);
   EXPECT_LE(r.evaluations, 4);
   EXPECT_EQ(solves, r.evaluations);
