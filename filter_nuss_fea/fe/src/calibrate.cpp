@@ -23,7 +23,7 @@ namespace {
 // nothing is above the target yet; with only two points near the target (or the origin as the third),
 // the secant through them. Safeguards: inside the bracket (else linear interpolation on it), or beyond
 // the highest force below the target and at most 4 times it.
-double nextForce(std::vector<std::pair<double, double>> pts, double target, double maxForce) {
+double nextForce(std::vector<std::pair<double, double>> pts, double target, double maxForce, bool increments) {
   std::sort(pts.begin(), pts.end());
   // keep a strictly increasing curve (drop repeats and points that break monotonicity)
   std::vector<std::pair<double, double>> c;
@@ -63,6 +63,12 @@ double nextForce(std::vector<std::pair<double, double>> pts, double target, doub
     F = fl + (target - c.back().second) * (fl - f1) / (c.back().second - d1);
   }
   if (!(F > fl) || !std::isfinite(F)) F = 2 * fl;
+  // extrapolation falls short on a stiffening curve, and each short solve only creeps closer; aiming
+  // kOvershoot times as far makes the next solve pass the target, so its increments bracket it tightly
+  // and the one after lands by interpolation
+  // (only when the solves report their increments: a plain evaluation gives no bracket on the way)
+  constexpr double kOvershoot = 1.5;
+  if (increments) F = fl + kOvershoot * (F - fl);
   return std::min({F, 4 * fl, maxForce});
 }
 
@@ -103,7 +109,7 @@ CalibrationResult calibrateForce(const std::function<double(double, const Observ
         << " N: " << d << " mm). Lower the target or raise the maximum force.";
       throw InputError(s.str());
     }
-    f = nextForce(seen, target, opt.maxForce);
+    f = nextForce(seen, target, opt.maxForce, seen.size() > std::size_t(2 * r.evaluations + 1));
   }
 }
 
