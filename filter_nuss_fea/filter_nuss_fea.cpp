@@ -10,6 +10,7 @@
 #include "haller.h"
 #include "bar_planner.h"
 #include "nuss_analysis.h"
+#include "tissue_join.h"
 #include "pectus/fe/io.h"
 #include "plot.h"
 #include "ribcage.h"
@@ -133,6 +134,12 @@ void FilterNussFeaPlugin::initCreateRibCage(RichParameterList& par) {
   par.addParam(RichFloat("edgeLength", float(d.edgeLength), "Target edge length (mm)",
                          "Resolution, 0.4-8 mm: 5-6 mm gives a few thousand faces (tests), 2 mm ~80k, "
                          "1 mm ~300k."));
+  par.addParam(RichEnum("output", 0, QStringList() << "One labelled surface" << "One layer per tissue (as CT segmentation)",
+                        "Output",
+                        "One labelled surface: the smooth union of all tissues, tissue per face. One layer per tissue: "
+                        "closed surfaces 'ribs', 'costal cartilage' and 'sternum' that overlap at the costochondral "
+                        "junctions and the sternum, as CT segmentation tools export them (the input of 'Nuss Procedure FE "
+                        "Analysis' with 'One layer per tissue')."));
 }
 
 void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
@@ -153,18 +160,37 @@ void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
   p.edgeLength = par.getFloat("edgeLength");
   pectus::ribcage::validate(p);  // before any layer is added
 
+  const bool perTissue = ctx.enumIn("output", 2) == 1;
   const auto t0 = std::chrono::steady_clock::now();
   CMeshO cage;
+  std::array<CMeshO, 3> tissues;
   pectus::ribcage::RibCageStats st;
-  const auto lms = pectus::ribcage::generateRibCage(p, cage, &st, [&](int pc, const char* w) { ctx.progress(pc, w); });
+  auto prog = [&](int pc, const char* w) { ctx.progress(pc, w); };
+  const auto lms = perTissue ? pectus::ribcage::generateTissueLayers(p, tissues, &st, prog)
+                             : pectus::ribcage::generateRibCage(p, cage, &st, prog);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  const auto measured = pectus::ribcage::measureHaller(cage);
 
-  MeshModel& mm = ctx.addLayer("pectus rib cage");
-  mm.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY);
-  pectus::copyLabelledMesh(mm.cm, cage);
-  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(mm.cm);
-  vcg::tri::UpdateBounding<CMeshO>::Box(mm.cm);
+  auto addLabelled = [&](const QString& name, CMeshO& src) -> MeshModel& {
+    MeshModel& mm = ctx.addLayer(name);
+    mm.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY);
+    pectus::copyLabelledMesh(mm.cm, src);
+    vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(mm.cm);
+    vcg::tri::UpdateBounding<CMeshO>::Box(mm.cm);
+    return mm;
+  };
+  std::optional<pectus::ribcage::HallerMeasure> measured;
+  int faces = 0, vertices = 0;
+  if (perTissue) {
+    const char* names[3] = {"ribs", "costal cartilage", "sternum"};
+    for (int k = 0; k < 3; ++k) {
+      const MeshModel& mm = addLabelled(names[k], tissues[std::size_t(k)]);
+      faces += mm.cm.fn, vertices += mm.cm.vn;
+    }
+  } else {
+    measured = pectus::ribcage::measureHaller(cage);
+    const MeshModel& mm = addLabelled("pectus rib cage", cage);
+    faces = mm.cm.fn, vertices = mm.cm.vn;
+  }
 
   MeshModel& lm = ctx.addLayer("ribcage landmarks", false);
   lm.updateDataMask(MeshModel::MM_VERTQUALITY);
@@ -172,7 +198,8 @@ void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
   vcg::tri::UpdateBounding<CMeshO>::Box(lm.cm);
 
   const auto& d = st.dims;
-  ctx.log("Rib cage: " + std::to_string(mm.cm.fn) + " faces, " + std::to_string(mm.cm.vn) + " vertices, " +
+  ctx.log("Rib cage" + std::string(perTissue ? " (3 tissue layers)" : "") + ": " + std::to_string(faces) + " faces, " +
+          std::to_string(vertices) + " vertices, " +
           std::to_string(p.ribPairs) + " rib pairs; Haller index requested " + fmt(p.hallerIndex) +
           ", model " + fmt(st.hallerModel) + ", measured on mesh " +
           (measured ? fmt(measured->index) : std::string("n/a")) + " (T " +
@@ -268,16 +295,19 @@ void readPatchParams(FilterContext& ctx, pectus::nuss::Placement& pl) {
 
 // a new layer with the deformed cage (vertex i moves with FE node nodeOfVertex[i]), vertex quality and
 // colour = `nodal` (the 98th percentile caps the ramp so the joints' peaks do not wash out the map)
-MeshModel& addDeformedLayer(FilterContext& ctx, MeshModel& cur, const pectus::nuss::CageSurface& cage,
+// the deformed surface (the analysed one: the current layer or the joined tissue layers) as a new layer,
+// coloured by the nodal field
+MeshModel& addDeformedLayer(FilterContext& ctx, CMeshO& surface, const pectus::nuss::CageSurface& cage,
                             const pectus::nuss::Analysis& a, const std::vector<double>& nodal, const QString& label) {
   MeshModel& res = ctx.addLayer(label);
   res.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR);
-  pectus::copyLabelledMesh(res.cm, cur.cm);
-  // the copy holds the live vertices of cur in order; cur's vertex i is FE node nodeOfVertex[i]
-  for (size_t i = 0, k = 0; i < cur.cm.vert.size(); ++i) {
-    if (cur.cm.vert[i].IsD()) continue;
+  pectus::copyLabelledMesh(res.cm, surface);
+  // the copy holds the live vertices of the surface in order; its vertex i is FE node nodeOfVertex[i]
+  for (size_t i = 0, k = 0; i < surface.vert.size(); ++i) {
+    if (surface.vert[i].IsD()) continue;
     auto& v = res.cm.vert[k++];
     const int n = cage.nodeOfVertex[i];
+    if (n < 0) continue;  // referenced by no face: not in the model, left where it was
     const Eigen::Vector3d d = a.result.displacement(n);
     v.P() += Point3m(Scalarm(d.x()), Scalarm(d.y()), Scalarm(d.z()));
     v.Q() = Scalarm(nodal[n]);
@@ -295,6 +325,18 @@ MeshModel& addDeformedLayer(FilterContext& ctx, MeshModel& cur, const pectus::nu
 }  // namespace
 
 void FilterNussFeaPlugin::initNussFea(MeshDocument& md, RichParameterList& par) {
+  par.addParam(RichEnum("input", 0, QStringList() << "Current layer (one labelled surface)" << "One layer per tissue (visible layers)",
+                        "Model input",
+                        "Current layer: one closed surface whose faces carry tissue and part labels (as 'Create Pectus "
+                        "Excavatum Rib Cage' writes it).<br>One layer per tissue: every visible layer with faces (except the "
+                        "landmark layer) is one closed tissue surface as CT segmentation tools export them; the tissue comes "
+                        "from the layer name ('cartilag' -> costal cartilage; 'stern', 'manubr', 'xiph' -> sternum; 'rib', "
+                        "'bone', 'costa' -> bone), else from the layer's face labels if all one tissue. Hide layers that are "
+                        "not part of the cage. The layers are joined by a CGAL corefinement union into one conforming volume; "
+                        "each tet takes the tissue of the layer containing it, cartilage winning over sternum and sternum "
+                        "over bone where layers overlap. Parts: a labelled layer keeps its own; else each piece of a bone "
+                        "layer is the rib of the nearest costovertebral joint landmark, cartilage faces take the nearest "
+                        "rib's number, sternum faces are the sternum body. The joined surface is the result layer."));
   addLandmarkParam(md, par);
   par.addParam(RichEnum("mode", 0, modes(), "Force",
                         "Calibrate: search Fe so the sternum end rises by the target elevation (secant/bracketing on the "
@@ -347,7 +389,24 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   if (base.size() > 4 && base.compare(base.size() - 4, 4, ".vtu") == 0) base.resize(base.size() - 4);
   o.progress = [&](int pc, const std::string& w) { ctx.progress(pc, w.c_str()); };
 
-  const auto cage = nuss::cageFromMesh(cur.cm);
+  // the model surface: the current labelled layer, or the visible tissue layers joined into `joined`
+  const bool perTissue = ctx.enumIn("input", 2) == 1;
+  CMeshO joined;
+  std::string joinText;
+  const auto cage = [&] {
+    if (!perTissue) return nuss::cageFromMesh(cur.cm);
+    std::vector<nuss::TissueLayer> layers;
+    for (MeshModel* m : ctx.doc().meshList)
+      if (m != &lmLayer && m->isVisible() && m->cm.fn > 0) layers.push_back({m->label().toStdString(), &m->cm});
+    if (layers.empty())
+      throw pectus::InputError("No visible layer with faces besides the landmark layer: load one closed surface per tissue.");
+    nuss::JoinStats js;
+    auto c = nuss::joinTissueLayers(layers, lms, joined, &js);
+    joinText = "; joined " + std::to_string(js.layers) + " tissue layers: " + fmt(js.sumVolume / 1000, 2) + " cm^3 in the layers, " +
+               fmt(js.unionVolume / 1000, 2) + " cm^3 in their union";
+    return c;
+  }();
+  CMeshO& surfaceMesh = perTissue ? joined : cur.cm;
   const auto t0 = std::chrono::steady_clock::now();
   const nuss::Analysis a = nuss::analyze(cage, lms, o);
   const auto path = nuss::strainAlongRib(a, pathSide, pathRib);
@@ -373,7 +432,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
     files = "; files " + base + ".vtu/.inp/_force_displacement.csv/.png/_rib_strain.csv";
   }
 
-  MeshModel& res = addDeformedLayer(ctx, cur, cage, a, stressField ? a.nodalStress : a.nodalStrain, "nuss fe result");
+  MeshModel& res = addDeformedLayer(ctx, surfaceMesh, cage, a, stressField ? a.nodalStress : a.nodalStrain, "nuss fe result");
 
   std::vector<pectus::Landmark> moved = lms;
   for (auto& l : moved) l.p += a.displacementAt(l.p);
@@ -387,7 +446,9 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   ctx.log("Nuss FE model: " + std::to_string(a.mesh.numTets()) + (a.mesh.order == 2 ? " TET10" : " TET4") + " elements, " +
           std::to_string(a.mesh.numNodes()) + " nodes, " + std::to_string(a.fixedNodes.size()) + " fixed nodes at the joints, Fe on " +
           std::to_string(a.sternumNodes.size()) + " sternum nodes, Fsr on " + a.supportNames[0] + "/" + a.supportNames[1] + "/" +
-          a.supportNames[2] + "/" + a.supportNames[3] + (cage.weldedFaces ? "; welded " + std::to_string(cage.weldedFaces) + " sliver faces" : ""));
+          a.supportNames[2] + "/" + a.supportNames[3] + (cage.weldedFaces ? "; welded " + std::to_string(cage.weldedFaces) + " sliver faces" : "") +
+          (cage.unreferencedVertices ? "; dropped " + std::to_string(cage.unreferencedVertices) + " vertices of no face" : "") +
+          joinText);
   ctx.log(std::string("Nuss FE result (") + (o.nonlinear ? "large displacement" : "small strain") + "): Fe = " + fmt(a.force, 2) +
           " N (Fs = " + fmt(a.force / 2, 2) + " N, Fsr = " + fmt(a.force / 4, 2) + " N)" +
           (calibrate ? ", calibrated to " + fmt(o.targetElevation, 2) + " mm in " + std::to_string(a.calibration->evaluations) + " solves" : "") +
@@ -453,7 +514,7 @@ void FilterNussFeaPlugin::runBarPlanner(FilterContext& ctx) {
   if (!csv.empty()) nuss::writePlanCsv(csv, plan);  // before any layer: a failure leaves the document unchanged
 
   const nuss::PlanRow& best = plan.rows[plan.best];
-  MeshModel& res = addDeformedLayer(ctx, cur, cage, plan.bestAnalysis, plan.bestAnalysis.nodalStress,
+  MeshModel& res = addDeformedLayer(ctx, cur.cm, cage, plan.bestAnalysis, plan.bestAnalysis.nodalStress,
                                     QString::fromStdString("nuss planner best: " + best.option));
   ctx.doc().setCurrentMesh(res.id());
 

@@ -28,6 +28,7 @@ def _build(name: str, spec: dict, overrides: dict) -> Filter:
 
 
 RIBCAGE_SIZE = ["From age", "Explicit dimensions"]
+RIBCAGE_OUTPUT = ["One labelled surface", "One layer per tissue (as CT segmentation)"]
 
 
 def create_ribcage(**kw) -> Filter:
@@ -35,9 +36,11 @@ def create_ribcage(**kw) -> Filter:
         "sizeMode": (Enum, 0, RIBCAGE_SIZE), "age": (Float, 7.0), "chestWidth": (Float, 181.0),
         "chestDepth": (Float, 74.0), "spineHeight": (Float, 172.0), "ribPairs": (Int, 12),
         "hallerIndex": (Float, 4.0), "funnelCenterX": (Float, 0.0), "funnelCenterZ": (Float, 0.8),
-        "funnelWidth": (Float, 80.0), "funnelHeight": (Float, 70.0), "edgeLength": (Float, 2.0)}, dict(kw))
+        "funnelWidth": (Float, 80.0), "funnelHeight": (Float, 70.0), "edgeLength": (Float, 2.0),
+        "output": (Enum, 0, RIBCAGE_OUTPUT)}, dict(kw))
 
 
+NUSS_INPUT = ["Current layer (one labelled surface)", "One layer per tissue (visible layers)"]
 NUSS_MODE = ["Calibrate Fe to the target elevation", "Given elevating force"]
 NUSS_ANALYSIS = ["Large displacement (nonlinear)", "Small strain (linear)"]
 NUSS_ORDER = ["Quadratic TET10 (no locking)", "Linear TET4 (thesis, ANSYS SOLID185)"]
@@ -54,7 +57,7 @@ NUSS_PATCHES = {"jointRadius": (Float, 6.0), "sternumLoadRadius": (Float, 8.0), 
 
 def nuss_fea(**kw) -> Filter:
     return _build("Nuss Procedure FE Analysis", {
-        "landmarkLayer": (Mesh, 1), "mode": (Enum, 0, NUSS_MODE), "force": (Float, 140.0), **NUSS_CALIBRATION,
+        "input": (Enum, 0, NUSS_INPUT), "landmarkLayer": (Mesh, 1), "mode": (Enum, 0, NUSS_MODE), "force": (Float, 140.0), **NUSS_CALIBRATION,
         **NUSS_MODEL, "intercostalSpace": (Int, 4), **NUSS_PATCHES,
         "usePoints": (Bool, False), "sternumPoint": (Point3, (0, 0, 0)),
         "exitRight": (Point3, (0, 0, 0)), "exitLeft": (Point3, (0, 0, 0)), "field": (Enum, 0, NUSS_FIELD),

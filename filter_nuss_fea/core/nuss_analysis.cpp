@@ -88,10 +88,17 @@ CageSurface cageFromMesh(const CMeshO& m) {
       for (int k = 0; k < 3; ++k)
         if (vcg::Distance(F.cP(k), F.cP((k + 1) % 3)) < tol)
           parent[find(parent, int(vcg::tri::Index(m, F.cV(k))))] = find(parent, int(vcg::tri::Index(m, F.cV((k + 1) % 3))));
+  // vertices no live face references (left by deleting faces, or by a segmentation tool) are dropped:
+  // TetGen would keep them as nodes without elements, and the stiffness would be singular there
+  std::vector<char> used(m.vert.size(), 0);
+  for (const auto& F : m.face)
+    if (!F.IsD())
+      for (int k = 0; k < 3; ++k) used[vcg::tri::Index(m, F.cV(k))] = 1;
   CageSurface c;
   std::vector<int> compact(m.vert.size(), -1);
   for (size_t i = 0; i < m.vert.size(); ++i) {
     if (m.vert[i].IsD()) continue;
+    if (!used[i]) { ++c.unreferencedVertices; continue; }
     const int r = find(parent, int(i));
     if (compact[r] < 0) {
       compact[r] = static_cast<int>(c.surface.vertices.size());
@@ -101,7 +108,7 @@ CageSurface cageFromMesh(const CMeshO& m) {
   }
   c.nodeOfVertex.assign(m.vert.size(), -1);
   for (size_t i = 0; i < m.vert.size(); ++i)
-    if (!m.vert[i].IsD()) c.nodeOfVertex[i] = compact[find(parent, int(i))];
+    if (!m.vert[i].IsD() && used[i]) c.nodeOfVertex[i] = compact[find(parent, int(i))];
   std::map<std::array<int, 3>, int> seen;  // sorted vertex triple -> count
   std::vector<std::array<int, 3>> faces;
   std::vector<int> tissue, part;
@@ -363,6 +370,7 @@ Model buildModel(const CageSurface& cage, const fe::TetgenOptions& mesh) {
   m.mesh = fe::tetrahedralize(cage.surface, mesh, &tetFace);
   m.tetPart.resize(tetFace.size());
   for (size_t t = 0; t < tetFace.size(); ++t) m.tetPart[t] = cage.facePart[tetFace[t]];
+  if (cage.labelTets) cage.labelTets(m.mesh, m.tetPart);
   m.secondsMesh = since(t0);
   return m;
 }

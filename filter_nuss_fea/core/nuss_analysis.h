@@ -30,12 +30,17 @@
 namespace pectus::nuss {
 
 /// The cage surface as the FE core wants it: live vertices compacted, micro-edges welded, labels per
-/// face. m.vert[i] is FE node nodeOfVertex[i] (-1: deleted), so results map back to the layer.
+/// face. m.vert[i] is FE node nodeOfVertex[i] (-1: deleted, or referenced by no face), so results map
+/// back to the layer.
 struct CageSurface {
   fe::SurfaceMesh surface;
   std::vector<int> facePart;
   std::vector<int> nodeOfVertex;
-  int weldedFaces = 0;  ///< faces dropped by welding edges shorter than 1e-3 x the mean edge length
+  int weldedFaces = 0;           ///< faces dropped by welding edges shorter than 1e-3 x the mean edge length
+  int unreferencedVertices = 0;  ///< live vertices of no face: dropped (no FE node)
+  /// If set, relabels the tets (tissue and part) after TetGen's nearest-face labels: the containment
+  /// rule of the joined tissue layers (tissue_join.h)
+  std::function<void(fe::TetMesh&, std::vector<int>& tetPart)> labelTets;
 };
 /// Throws InputError when m has no faces, non-finite coordinates or no tissue labels (labels.h).
 CageSurface cageFromMesh(const CMeshO& m);

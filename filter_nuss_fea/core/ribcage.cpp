@@ -13,6 +13,7 @@
 #include "mesh_simplify.h"
 #include "pectus/errors.h"
 #include "ribcage_model.h"
+#include "self_intersections.h"
 
 namespace pectus::ribcage {
 
@@ -147,13 +148,15 @@ Dimensions validate(const RibCageParams& p) {
   return d;
 }
 
-std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCageStats* stats,
-                                      const std::function<void(int, const char*)>& progress) {
-  auto prog = [&](int pc, const char* w) { if (progress) progress(pc, w); };
+namespace {
+
+double resolution(const RibCageParams& p, const Dimensions& dims) { return std::min({0.85 * p.edgeLength, dims.ribThickness / 2.5, 1.8}); }
+
+// the anatomy with the funnel depth calibrated to the requested index (measured on the implicit surface)
+CageModel calibratedModel(const RibCageParams& p, RibCageStats& st, const std::function<void(int, const char*)>& prog) {
   const Dimensions dims = validate(p);
-  RibCageStats st;
   st.hallerRequested = p.hallerIndex;
-  const double h = std::min({0.85 * p.edgeLength, dims.ribThickness / 2.5, 1.8});
+  const double h = resolution(p, dims);
   const double spacing = std::clamp(2 * h, 0.8, 1.5);
   auto t0 = Clock::now();
 
@@ -208,10 +211,13 @@ std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCa
   st.dims = dims;
   st.dims.sternumLength = model.zNotch - model.zTip;
   st.secondsField = secondsSince(t0);
+  return model;
+}
 
-  // --- sparse marching tetrahedra
-  prog(15, "extracting the surface");
-  t0 = Clock::now();
+// the field's zero set by sparse marching tetrahedra, decimated to the edge length without self-intersections
+void extractSurface(const CageModel& model, const CageField& field, const RibCageParams& p, CMeshO& out, RibCageStats& st) {
+  const double h = resolution(p, model.d);
+  auto t0 = Clock::now();
   SparseGrid g;
   const double hg = std::min(h, 0.95 * (1.0 + model.blend) / std::sqrt(3.0));
   g.h = hg;
@@ -238,7 +244,6 @@ std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCa
   st.secondsExtract = secondsSince(t0);
 
   // --- into the CMeshO, decimate to the target edge length
-  prog(45, "decimating");
   t0 = Clock::now();
   out.Clear();
   {
@@ -270,24 +275,22 @@ std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCa
     }
     decimateQuadric(out, attempt < 3 ? target : target << (attempt - 2));
     for (auto& v : out.vert) v.SetW();
-    if (!out.face.IsMarkEnabled()) out.face.EnableMark();
-    std::vector<CFaceO*> si;
-    vcg::tri::Clean<CMeshO>::SelfIntersections(out, si);
+    const std::vector<int> si = selfIntersectingFaces(out);
     st.decimationRetries = attempt;
     if (si.empty()) break;
     if (attempt == 7) throw std::runtime_error("rib cage: decimation left self-intersections; use a smaller edgeLength");
-    for (CFaceO* f : si) {
+    for (int f : si) {
       vcg::Box3<Scalarm> b;
-      for (int k = 0; k < 3; ++k) b.Add(f->P(k));
+      for (int k = 0; k < 3; ++k) b.Add(out.face[std::size_t(f)].P(k));
       b.Offset(Scalarm(2.0 * (attempt + 1) * p.edgeLength));
       frozen.push_back(b);
     }
   }
-  st.secondsDecimate = secondsSince(t0);
+  st.secondsDecimate += secondsSince(t0);
+}
 
-  // --- labels
-  prog(85, "labelling");
-  t0 = Clock::now();
+// tissue and part of each face from the primitive nearest to its centroid (only: one tissue for all)
+void labelFaces(const CageModel& model, const CageField& field, CMeshO& out, Tissue only = Tissue::Unknown) {
   std::vector<int> tissue(out.face.size()), part(out.face.size());
 #pragma omp parallel for schedule(static)
   for (long long i = 0; i < (long long)out.face.size(); ++i) {
@@ -303,11 +306,13 @@ std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCa
       part[std::size_t(i)] = ribPart(cv.side, cv.rib);
     }
   }
+  if (only != Tissue::Unknown) std::fill(tissue.begin(), tissue.end(), int(only));
   writeFaceLabels(out, tissue, part);
   vcg::tri::UpdateBounding<CMeshO>::Box(out);
-  st.secondsLabel = secondsSince(t0);
+}
 
-  // --- landmarks
+std::vector<Landmark> landmarks(const CageModel& model, const CageField& field, const RibCageStats& st) {
+  const Dimensions& dims = st.dims;
   std::vector<Landmark> lms;
   const Curve& sternum = model.curves.back();
   for (const Curve& c : model.curves)
@@ -316,12 +321,12 @@ std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCa
   {
     double s;
     const double yFront = field.boxMax().y() + 10;
-    Vec3 deep(0, sternum.c.front().y(), apFinal.z);
-    if (firstHit(field, Vec3(0, yFront, apFinal.z), -Vec3::UnitY(), yFront, s)) deep = Vec3(0, yFront - s, apFinal.z);
+    Vec3 deep(0, sternum.c.front().y(), st.zDeepest);
+    if (firstHit(field, Vec3(0, yFront, st.zDeepest), -Vec3::UnitY(), yFront, s)) deep = Vec3(0, yFront - s, st.zDeepest);
     lms.push_back({kFunnelDeepest, deep});
   }
   lms.push_back({kSternumUpperEnd, sternum.c.front()});
-  lms.push_back({kVertebraAtDeepest, Vec3(0, 0, apFinal.z)});
+  lms.push_back({kVertebraAtDeepest, Vec3(0, 0, st.zDeepest)});
   auto lateral = [&](int side, int rib) {
     for (const Curve& c : model.curves)
       if (c.side == side && c.rib == rib) {
@@ -336,7 +341,53 @@ std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCa
     for (int s = 4; s <= 5; ++s) lms.push_back({barExitLandmark(side, s), 0.5 * (lateral(side, s) + lateral(side, s + 1))});
   lms.push_back({kDiaphragmDome, Vec3(0, 0.5 * dims.chestDepth, model.zXJ)});
   lms.push_back({kLungApex, Vec3(0, 0.3 * dims.chestDepth, dims.spineHeight)});
+  return lms;
+}
 
+}  // namespace
+
+std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCageStats* stats,
+                                      const std::function<void(int, const char*)>& progress) {
+  auto prog = [&](int pc, const char* w) { if (progress) progress(pc, w); };
+  RibCageStats st;
+  const CageModel model = calibratedModel(p, st, prog);
+  const CageField field(model);
+  prog(15, "extracting the surface");
+  extractSurface(model, field, p, out, st);
+  prog(85, "labelling");
+  const auto t0 = Clock::now();
+  labelFaces(model, field, out);
+  st.secondsLabel = secondsSince(t0);
+  auto lms = landmarks(model, field, st);
+  if (stats) *stats = st;
+  prog(100, "done");
+  return lms;
+}
+
+std::vector<Landmark> generateTissueLayers(const RibCageParams& p, std::array<CMeshO, 3>& out, RibCageStats* stats,
+                                           const std::function<void(int, const char*)>& progress) {
+  auto prog = [&](int pc, const char* w) { if (progress) progress(pc, w); };
+  RibCageStats st;
+  const CageModel model = calibratedModel(p, st, prog);
+  const CageField field(model);
+  // segment i of a rib spans u[i]..u[i+1]: the one holding the costochondral junction belongs to both
+  // tissues and each cut end is capped by a half-ellipsoid, so bone and cartilage overlap by a few mm;
+  // the cartilages stop at the sternum's surface (their last kept segment and its cap reach a few mm in)
+  const CageField sternumField(model, 5.0, [](const Curve& c, int) { return c.rib == 0; });
+  const std::array<std::function<bool(const Curve&, int)>, 3> keep{
+      [](const Curve& c, int i) { return c.rib > 0 && c.u[std::size_t(i)] < c.uCartilage; },
+      [&](const Curve& c, int i) {
+        return c.rib > 0 && c.u[std::size_t(i) + 1] > c.uCartilage && sternumField(c.c[std::size_t(i)]) > 0;
+      },
+      [](const Curve& c, int) { return c.rib == 0; }};
+  const std::array<Tissue, 3> tissues{Tissue::Bone, Tissue::Cartilage, Tissue::Sternum};
+  for (std::size_t k = 0; k < 3; ++k) {
+    prog(15 + 25 * int(k), tissueName(tissues[k]));
+    const CageField part(model, 5.0, keep[k]);
+    extractSurface(model, part, p, out[k], st);
+    labelFaces(model, field, out[k], tissues[k]);
+  }
+  auto lms = landmarks(model, field, st);
   if (stats) *stats = st;
   prog(100, "done");
   return lms;

@@ -8,6 +8,7 @@
 // embedded), then decimated by quadric edge collapse to the target edge length. Each face gets the
 // label of the primitive nearest to its centroid.
 #pragma once
+#include <array>
 #include <functional>
 #include <string>
 #include <vector>
@@ -58,5 +59,12 @@ Dimensions validate(const RibCageParams& p);
 /// and returns the landmarks. progress(percent, what) may be empty.
 std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCageStats* stats = nullptr,
                                       const std::function<void(int, const char*)>& progress = {});
+
+/// The same cage as one closed, labelled surface per tissue, as CT segmentation tools export them:
+/// out[0] the ribs (bone), out[1] the costal cartilages, out[2] the sternum. Bone and cartilage overlap
+/// by a few mm at the costochondral junctions and the cartilages reach into the sternum; there is no
+/// smooth-union fillet between the tissues. Same landmarks as generateRibCage.
+std::vector<Landmark> generateTissueLayers(const RibCageParams& p, std::array<CMeshO, 3>& out, RibCageStats* stats = nullptr,
+                                           const std::function<void(int, const char*)>& progress = {});
 
 }  // namespace pectus::ribcage

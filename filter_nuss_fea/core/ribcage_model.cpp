@@ -254,12 +254,13 @@ CageModel buildModel(const Dimensions& d, const RibCageParams& p, double funnelD
 
 // ------------------------------------------------------------------------------------------------
 
-CageField::CageField(const CageModel& m, double cell) : m_(m), cell_(cell) {
+CageField::CageField(const CageModel& m, double cell, const std::function<bool(const Curve&, int)>& keep) : m_(m), cell_(cell) {
   lo_ = Vec3::Constant(std::numeric_limits<double>::max());
   hi_ = -lo_;
   for (int ci = 0; ci < int(m.curves.size()); ++ci) {
     const Curve& c = m.curves[std::size_t(ci)];
     for (int i = 0; i + 1 < int(c.c.size()); ++i) {
+      if (keep && !keep(c, i)) continue;
       const double r = std::max({c.ra[std::size_t(i)], c.rb[std::size_t(i)], c.ra[std::size_t(i + 1)],
                                  c.rb[std::size_t(i + 1)]}) + m.blend + 1.0;
       Seg s{ci, i, c.c[std::size_t(i)].cwiseMin(c.c[std::size_t(i + 1)]) - Vec3::Constant(r),

@@ -1,6 +1,7 @@
 // Internal: the rib cage's centre curves (anatomy) and the implicit field built on them.
 #pragma once
 #include <array>
+#include <functional>
 #include <vector>
 
 #include <Eigen/Dense>
@@ -38,7 +39,8 @@ CageModel buildModel(const Dimensions& d, const RibCageParams& p, double funnelD
 /// Spatial hash of the curves' segments and the smooth-union field (negative inside).
 class CageField {
  public:
-  explicit CageField(const CageModel& m, double cell = 5.0);
+  /// keep(curve, i): use segment i of the curve (all when empty), e.g. the segments of one tissue
+  explicit CageField(const CageModel& m, double cell = 5.0, const std::function<bool(const Curve&, int)>& keep = {});
   double operator()(const Eigen::Vector3d& p) const;
   /// nearest primitive at p: curve index and the u parameter there
   std::pair<int, double> nearest(const Eigen::Vector3d& p) const;

@@ -6,6 +6,7 @@
 #include <numeric>
 
 #include "nuss_analysis.h"
+#include "tissue_join.h"
 #include "pectus/errors.h"
 #include "coarse_cage.h"
 #include "ribcage.h"
@@ -140,4 +141,54 @@ TEST(NussAnalysis, MicroEdgesAreWelded) {
   EXPECT_EQ(c.surface.faces.size(), 4u);
   EXPECT_EQ(c.nodeOfVertex[3], c.nodeOfVertex[4]);
   EXPECT_EQ(c.weldedFaces, 2);
+}
+
+TEST(NussAnalysis, UnreferencedVerticesAreDropped) {
+  // the cage plus stray vertices no face uses (one far outside, one inside a rib): they are not FE nodes,
+  // so the stiffness stays positive definite and the analysis gives the cage's own answer
+  const auto ref = nuss::analyze(nuss::cageFromMesh(cage().mesh), cage().lms, coarse());
+  CMeshO m;
+  copyLabelledMesh(m, cage().mesh);
+  auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, 2);
+  vi[0].P() = Point3m(500, 500, 500);
+  vi[1].P() = m.face[0].cP(0);
+  const auto c = nuss::cageFromMesh(m);
+  EXPECT_EQ(c.unreferencedVertices, 2);
+  EXPECT_EQ(c.nodeOfVertex[m.vert.size() - 1], -1);
+  EXPECT_EQ(c.nodeOfVertex[m.vert.size() - 2], -1);
+  const auto a = nuss::analyze(c, cage().lms, coarse());
+  EXPECT_EQ(a.mesh.numNodes(), ref.mesh.numNodes());
+  EXPECT_NEAR(a.elevation, ref.elevation, 1e-9 * ref.elevation);
+}
+
+TEST(NussAnalysis, TissueLayersJoinedIntoTheCagesVolume) {
+  // the same cage as three overlapping tissue surfaces (as CT segmentation exports them), joined by the
+  // corefinement union: one closed model with the labelled cage's pieces (the cage + 4 floating ribs) and
+  // volume, all three tissues, and an analysis that runs on it
+  ribcage::RibCageParams p;
+  p.edgeLength = 6.0;
+  std::array<CMeshO, 3> layers;
+  const auto lms = ribcage::generateTissueLayers(p, layers);
+  CMeshO joined;
+  nuss::JoinStats st;
+  const auto surf = nuss::joinTissueLayers({{"ribs", &layers[0]}, {"costal cartilage", &layers[1]}, {"sternum", &layers[2]}}, lms,
+                                           joined, &st);
+  EXPECT_LT(st.unionVolume, st.sumVolume);  // the layers overlap
+  EXPECT_EQ(st.components, 5);
+  const auto a = nuss::analyze(surf, lms, coarse());
+  const auto ref = nuss::analyze(nuss::cageFromMesh(cage().mesh), cage().lms, coarse());
+  double vRef = 0;
+  for (int t = 0; t < ref.mesh.numTets(); ++t) vRef += ref.mesh.tetVolume(t);
+  std::printf("[tissue layers] %zu faces, volume %.1f cm3 (layers %.1f, labelled cage %.1f), TET4 elevation %.3f mm vs labelled cage "
+              "%.3f mm (%d vs %d tets)\n",
+              surf.surface.faces.size(), st.unionVolume / 1000, st.sumVolume / 1000, vRef / 1000, a.elevation, ref.elevation,
+              a.mesh.numTets(), ref.mesh.numTets());
+  EXPECT_NEAR(st.unionVolume, vRef, 0.03 * vRef);
+  EXPECT_GT(a.elevation, 0);
+  std::array<int, 4> n{};
+  for (int t = 0; t < a.mesh.numTets(); ++t) n[std::size_t(a.mesh.tissue[std::size_t(t)])]++;
+  EXPECT_GT(n[1], 0);
+  EXPECT_GT(n[2], 0);
+  EXPECT_GT(n[3], 0);
+  EXPECT_EQ(n[0], 0);
 }

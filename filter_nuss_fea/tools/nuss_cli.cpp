@@ -57,8 +57,12 @@ int main(int argc, char** argv) {
     std::printf("max stress at %s\nmax strain at %s\n", a.maxStressAt.describe().c_str(), a.maxStrainAt.describe().c_str());
     std::printf("fixed %zu, sternum %zu, supports", a.fixedNodes.size(), a.sternumNodes.size());
     for (size_t k = 0; k < a.supportNodes.size(); ++k) std::printf(" %s:%zu", a.supportNames[k].c_str(), a.supportNodes[k].size());
+    if (a.calibration) {
+      std::printf("\ncalibration");
+      for (const auto& [f, d] : a.calibration->history) std::printf(" %.3f:%.3f", f, d);
+    }
     std::printf("\ncurve");
-    for (const auto& p : a.curve) std::printf(" %.0f:%.2f", p.first, p.second);
+    for (const auto& p : a.curve) std::printf(" %.2f:%.3f", p.first, p.second);
     std::printf("\n");
     if (!vtu.empty()) fe::writeVtu(vtu, a.mesh, &a.result);
   } catch (const InputError& e) {

@@ -14,6 +14,7 @@
 
 #include "haller.h"
 #include "ribcage.h"
+#include "self_intersections.h"
 
 using namespace pectus;
 using namespace pectus::ribcage;
@@ -51,7 +52,7 @@ int main(int argc, char** argv) {
     m.face.EnableMark();
     vcg::tri::UpdateTopology<CMeshO>::FaceFace(m);
     std::vector<CFaceO*> si;
-    vcg::tri::Clean<CMeshO>::SelfIntersections(m, si);
+    for (int f : selfIntersectingFaces(m)) si.push_back(&m.face[std::size_t(f)]);
     std::vector<std::pair<int, CFaceO*>> cc;
     const int ncc = vcg::tri::Clean<CMeshO>::ConnectedComponents(m, cc);
     std::printf("self-intersecting faces %zu, non-manifold edges %d, components %d\n", si.size(),

@@ -7,19 +7,13 @@ import numpy as np
 
 from harness import check, finish, read_ply, run, workdir, file_digest
 import pectus_mlx as mlx
+from pectus_filters import create_ribcage
 
-NAME = "Create Pectus Excavatum Rib Cage"
 PALETTE = {(235, 222, 190): 1, (90, 160, 235): 2, (215, 110, 95): 3}
 
 
 def script(haller=4.0, edge=5.0, ribs=12, age=7.0):
-    return mlx.Script([mlx.Filter(
-        NAME,
-        sizeMode=mlx.Enum(0, ["From age", "Explicit dimensions"]),
-        age=mlx.Float(age), chestWidth=mlx.Float(181), chestDepth=mlx.Float(74), spineHeight=mlx.Float(172),
-        ribPairs=mlx.Int(ribs), hallerIndex=mlx.Float(haller), funnelCenterX=mlx.Float(0),
-        funnelCenterZ=mlx.Float(0.8), funnelWidth=mlx.Float(80), funnelHeight=mlx.Float(70),
-        edgeLength=mlx.Float(edge))])
+    return mlx.Script([create_ribcage(age=age, ribPairs=ribs, hallerIndex=haller, edgeLength=edge)])
 
 
 def line_hits(V, F, axis, u, v):

@@ -4,16 +4,11 @@ import os
 
 from harness import check, finish, run, workdir
 import pectus_mlx as mlx
+from pectus_filters import create_ribcage
 
 
 def script(haller=4.0, edge=6.0, age=7.0):
-    return mlx.Script([mlx.Filter(
-        "Create Pectus Excavatum Rib Cage",
-        sizeMode=mlx.Enum(0, ["From age", "Explicit dimensions"]),
-        age=mlx.Float(age), chestWidth=mlx.Float(181), chestDepth=mlx.Float(74), spineHeight=mlx.Float(172),
-        ribPairs=mlx.Int(12), hallerIndex=mlx.Float(haller), funnelCenterX=mlx.Float(0),
-        funnelCenterZ=mlx.Float(0.8), funnelWidth=mlx.Float(80), funnelHeight=mlx.Float(70),
-        edgeLength=mlx.Float(edge))])
+    return mlx.Script([create_ribcage(age=age, hallerIndex=haller, edgeLength=edge)])
 
 d = workdir("ribcage-bad")
 for name, kw in (("hallerIndex", dict(haller=0.5)), ("edgeLength", dict(edge=-1.0)), ("age", dict(age=-2.0))):

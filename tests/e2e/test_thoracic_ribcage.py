@@ -8,15 +8,12 @@ import numpy as np
 
 import harness as h
 import pectus_mlx as mlx
+from pectus_filters import create_ribcage
 from pectus_mlx import grab_all as grab
 from harness import check
 
 W = h.workdir("thoracic-ribcage")
-GEN = mlx.Filter("Create Pectus Excavatum Rib Cage", sizeMode=mlx.Enum(0, ["From age", "Explicit dimensions"]),
-                 age=mlx.Float(7), chestWidth=mlx.Float(181), chestDepth=mlx.Float(74), spineHeight=mlx.Float(172),
-                 ribPairs=mlx.Int(12), hallerIndex=mlx.Float(4.0), funnelCenterX=mlx.Float(0),
-                 funnelCenterZ=mlx.Float(0.8), funnelWidth=mlx.Float(80), funnelHeight=mlx.Float(70),
-                 edgeLength=mlx.Float(3.0))
+GEN = create_ribcage(edgeLength=3.0)
 R = ["Landmarks", "Given heights"]
 LOW = ["700 dome of the diaphragm", "500 lower end of the sternum"]
 

@@ -1,0 +1,108 @@
+// One layer per tissue joined into one conforming volume (tissue_join.h): two overlapping boxes (a "rib"
+// and a "costal cartilage") give one closed surface whose tets fill the union's volume, labelled by the
+// solid containing them (cartilage wins in the overlap); and the bad layers are refused with messages.
+#include <gtest/gtest.h>
+
+#include <vcg/complex/algorithms/create/platonic.h>
+
+#include "pectus/errors.h"
+#include "tissue_join.h"
+
+using namespace pectus;
+
+namespace {
+
+void box(CMeshO& m, double x0, double y0, double z0, double x1, double y1, double z1) {
+  vcg::tri::Box(m, vcg::Box3<Scalarm>(Point3m(Scalarm(x0), Scalarm(y0), Scalarm(z0)), Point3m(Scalarm(x1), Scalarm(y1), Scalarm(z1))));
+}
+
+std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const InputError& e) {
+    return e.what();
+  }
+  return "";
+}
+
+}  // namespace
+
+TEST(TissueJoin, TissueFromLayerName) {
+  EXPECT_EQ(nuss::tissueFromName("Costal Cartilage.stl"), Tissue::Cartilage);
+  EXPECT_EQ(nuss::tissueFromName("ribs_left"), Tissue::Bone);
+  EXPECT_EQ(nuss::tissueFromName("Sternum"), Tissue::Sternum);
+  EXPECT_EQ(nuss::tissueFromName("manubrium"), Tissue::Sternum);
+  EXPECT_EQ(nuss::tissueFromName("Segment_1"), Tissue::Unknown);
+}
+
+TEST(TissueJoin, OverlappingBoxesGiveTheUnionVolumeWithCartilageInTheOverlap) {
+  CMeshO rib, cart;
+  box(rib, 0, 0, 0, 20, 10, 10);   // 2000 mm^3
+  box(cart, 15, 2, 2, 35, 8, 8);   // 720 mm^3, 5 x 6 x 6 = 180 mm^3 inside the rib
+  const double unionVolume = 2000 + 720 - 180;
+  const std::vector<Landmark> lms{{cvjLandmark(1, 5), Eigen::Vector3d(0, 5, 5)}};
+  CMeshO joined;
+  nuss::JoinStats st;
+  const auto cage = nuss::joinTissueLayers({{"rib 5", &rib}, {"costal cartilage", &cart}}, lms, joined, &st);
+  EXPECT_EQ(st.layers, 2);
+  EXPECT_NEAR(st.sumVolume, 2720, 1e-6);
+  EXPECT_NEAR(st.unionVolume, unionVolume, 1e-6 * unionVolume);
+  ASSERT_TRUE(cage.labelTets);
+  fe::checkSurfaceForTetgen(cage.surface);  // closed, not self-intersecting
+
+  // faces on the rib's box are bone of part 105 (the joint nearest to the unlabelled piece), the rest cartilage
+  for (std::size_t f = 0; f < cage.surface.faces.size(); ++f) {
+    Eigen::Vector3d c = Eigen::Vector3d::Zero();
+    for (int v : cage.surface.faces[f]) c += cage.surface.vertices[std::size_t(v)] / 3;
+    EXPECT_EQ(cage.surface.faceTissue[f], c.x() <= 20 + 1e-6 ? int(Tissue::Bone) : int(Tissue::Cartilage)) << f;
+    EXPECT_EQ(cage.facePart[f], ribPart(1, 5));
+  }
+
+  fe::TetgenOptions o;
+  o.radiusEdgeRatio = 1.6;
+  o.maxVolume = 1.0;
+  std::vector<int> tetFace;
+  fe::TetMesh mesh = fe::tetrahedralize(cage.surface, o, &tetFace);
+  std::vector<int> tetPart(tetFace.size(), 0);
+  cage.labelTets(mesh, tetPart);
+  double vol = 0, vBone = 0, vCart = 0, vOverlapCart = 0, vOverlap = 0;
+  for (int t = 0; t < mesh.numTets(); ++t) {
+    const double v = mesh.tetVolume(t);
+    ASSERT_GT(v, 0);
+    vol += v;
+    (mesh.tissue[std::size_t(t)] == int(Tissue::Bone) ? vBone : vCart) += v;
+    const Eigen::Vector3d c = mesh.centroid(t);
+    if (c.x() > 15 && c.x() < 20 && c.y() > 2 && c.y() < 8 && c.z() > 2 && c.z() < 8) {
+      vOverlap += v;
+      if (mesh.tissue[std::size_t(t)] == int(Tissue::Cartilage)) vOverlapCart += v;
+    }
+    EXPECT_EQ(tetPart[std::size_t(t)], ribPart(1, 5));
+  }
+  std::printf("[join] %d tets, volume %.2f (union %.2f), bone %.2f cartilage %.2f\n", mesh.numTets(), vol, unionVolume, vBone, vCart);
+  EXPECT_NEAR(vol, unionVolume, 0.01 * unionVolume);
+  EXPECT_NEAR(vCart, 720, 0.03 * 720);          // the whole cartilage box, overlap included
+  EXPECT_NEAR(vBone, 2000 - 180, 0.03 * 1820);
+  EXPECT_GT(vOverlapCart, 0.97 * vOverlap);      // cartilage wins where both contain the tet
+}
+
+TEST(TissueJoin, BadLayersAreNamed) {
+  CMeshO rib, cart, open, twice, sternum;
+  box(rib, 0, 0, 0, 20, 10, 10);
+  box(cart, 15, 2, 2, 35, 8, 8);
+  box(open, 15, 2, 2, 35, 8, 8);
+  vcg::tri::Allocator<CMeshO>::DeleteFace(open, open.face[0]);
+  box(twice, 15, 2, 2, 35, 8, 8);
+  CMeshO other;
+  box(other, 20, 4, 4, 40, 6, 12);
+  vcg::tri::Append<CMeshO, CMeshO>::Mesh(twice, other);  // two boxes crossing in one layer
+  const std::vector<Landmark> lms;
+  CMeshO j;
+  auto err = [&](const std::vector<nuss::TissueLayer>& l) { return errorOf([&] { nuss::joinTissueLayers(l, lms, j); }); };
+  EXPECT_NE(err({{"rib", &rib}, {"Segment_2", &cart}}).find("Cannot tell the tissue of layer 'Segment_2'"), std::string::npos);
+  EXPECT_NE(err({{"rib", &rib}, {"cartilage", &open}}).find("Layer 'cartilage' is open"), std::string::npos);
+  EXPECT_NE(err({{"rib", &rib}, {"cartilage", &twice}}).find("Layer 'cartilage' intersects itself"), std::string::npos);
+  EXPECT_NE(err({{"rib", &rib}, {"sternum", &cart}}).find("no cartilage layer"), std::string::npos);
+  EXPECT_NE(err({{"cartilage", &cart}}).find("no bone (rib) layer"), std::string::npos);
+  CMeshO empty;
+  EXPECT_NE(err({{"rib", &rib}, {"cartilage", &empty}}).find("Layer 'cartilage' has no faces"), std::string::npos);
+}
