@@ -24,7 +24,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     vol::Range range{zmin + std::min(a, b) * (zmax - zmin), zmin + std::max(a, b) * (zmax - zmin)};
     if (what == 0) {
       vol::SliceParams p;
-      p.spacing = r.real(0, 40);
+      p.spacing = r.real(0.5, 40);  // (finer planes are legal but make single runs of minutes)
       p.resolution = r.range(8, 48);
       p.rays = r.range(8, 64);
       vol::requireRange(range, "fuzz");
