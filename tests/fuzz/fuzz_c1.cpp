@@ -7,10 +7,9 @@
 using namespace pectus;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  fuzz::Reader r(data, size);
-  fuzz::MeshLimits lim;
-  lim.badIndices = true;
-  const fuzz::Mesh fm = fuzz::decodeMesh(r, lim);
+  fuzz::Input in(data, size, fuzz::limits(8, true));
+  fuzz::Reader& r = in.r;
+  const fuzz::Mesh& fm = in.mesh;
   c1::Options opt;
   opt.gradient = static_cast<c1::GradientMethod>(r.u8() % 3);
   opt.frame = r.flag() ? c1::Frame::HeightField : c1::Frame::VertexNormal;

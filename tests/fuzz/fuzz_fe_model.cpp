@@ -10,10 +10,9 @@
 using namespace pectus;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  fuzz::Reader r(data, size);
-  fuzz::MeshLimits lim;
-  lim.maxSide = 6;
-  const fuzz::Mesh fm = fuzz::decodeMesh(r, lim);
+  fuzz::Input in(data, size, fuzz::limits(6, false));
+  fuzz::Reader& r = in.r;
+  const fuzz::Mesh& fm = in.mesh;
   CMeshO m;
   fuzz::toCMesh(fm, m, false);
   if (r.u8() % 8 != 0) {  // else: no labels

@@ -166,6 +166,20 @@ inline Mesh decodeMesh(Reader& r, const MeshLimits& lim = {}) {
   return m;
 }
 
+inline MeshLimits limits(int maxSide, bool badIndices) {
+  MeshLimits l;
+  l.maxSide = maxSide;
+  l.badIndices = badIndices;
+  return l;
+}
+
+/// What every target starts with: the reader over its input and the mesh decoded from the first bytes.
+struct Input {
+  Reader r;
+  Mesh mesh;
+  Input(const std::uint8_t* data, std::size_t size, const MeshLimits& lim) : r(data, size), mesh(decodeMesh(r, lim)) {}
+};
+
 inline c1::TriMesh triMesh(const Mesh& m) { return {m.V, m.F}; }
 
 /// The mesh as MeshLab holds it (indices must be valid: CMeshO stores pointers); `quads`: a grid's cell

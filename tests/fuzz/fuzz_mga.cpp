@@ -8,10 +8,9 @@
 using namespace pectus;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  fuzz::Reader r(data, size);
-  fuzz::MeshLimits lim;
-  lim.maxSide = 6;
-  const fuzz::Mesh fm = fuzz::decodeMesh(r, lim);
+  fuzz::Input in(data, size, fuzz::limits(6, false));
+  fuzz::Reader& r = in.r;
+  const fuzz::Mesh& fm = in.mesh;
   smooth::Options o;
   o.method = r.u8() % 4 == 0 ? smooth::Method::ConjugateGradient : smooth::Method::MicroGA;
   o.kind = r.flag() ? ElementKind::Quads : ElementKind::Triangles;

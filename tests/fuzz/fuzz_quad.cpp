@@ -24,10 +24,9 @@ void checkPoly(const quad::PolyMesh& p) {
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  fuzz::Reader r(data, size);
-  fuzz::MeshLimits lim;
-  lim.badIndices = true;
-  const fuzz::Mesh fm = fuzz::decodeMesh(r, lim);
+  fuzz::Input in(data, size, fuzz::limits(8, true));
+  fuzz::Reader& r = in.r;
+  const fuzz::Mesh& fm = in.mesh;
   quad::ConvertOptions co;
   co.pairing = r.flag() ? quad::Pairing::Greedy : quad::Pairing::Optimal;
   co.leftovers = r.flag() ? quad::Leftovers::QuadDominant : quad::Leftovers::AllQuads;

@@ -8,8 +8,9 @@
 using namespace pectus;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  fuzz::Reader r(data, size);
-  fuzz::Mesh fm = fuzz::decodeMesh(r, {});
+  fuzz::Input in(data, size, fuzz::limits(8, false));
+  fuzz::Reader& r = in.r;
+  fuzz::Mesh& fm = in.mesh;
   const Eigen::Vector3d scale = r.vec3(10, 200).cwiseProduct(Eigen::Vector3d(1, 1, 1.5));
   for (auto& p : fm.V) p = p.cwiseProduct(scale);
   CMeshO m;
