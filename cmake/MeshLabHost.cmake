@@ -38,19 +38,24 @@ set_target_properties(pectus_vcg_io PROPERTIES POSITION_INDEPENDENT_CODE ON)
 target_link_libraries(pectus_vcg_io PUBLIC pectus_vcg)
 target_compile_options(pectus_vcg_io PRIVATE -w)
 
-find_package(Qt5 5.15 REQUIRED COMPONENTS Core Gui Widgets OpenGL Xml)
-find_path(GLEW_INCLUDE_DIR GL/glew.h REQUIRED)
-find_library(MESHLAB_COMMON_LIB meshlab-common PATHS "${MESHLAB_LIB_DIR}" NO_DEFAULT_PATH REQUIRED)
+if(PECTUS_BUILD_PLUGINS)
+  find_package(Qt5 5.15 REQUIRED COMPONENTS Core Gui Widgets OpenGL Xml)
+  find_path(GLEW_INCLUDE_DIR GL/glew.h REQUIRED)
+  find_library(MESHLAB_COMMON_LIB meshlab-common PATHS "${MESHLAB_LIB_DIR}" NO_DEFAULT_PATH REQUIRED)
 
-add_library(pectus_meshlab_api INTERFACE)
-add_library(pectus::meshlab ALIAS pectus_meshlab_api)
-target_include_directories(pectus_meshlab_api SYSTEM INTERFACE "${MESHLAB_SOURCE_DIR}/src" "${GLEW_INCLUDE_DIR}")
-target_link_libraries(pectus_meshlab_api INTERFACE pectus_vcg "${MESHLAB_COMMON_LIB}"
-  Qt5::Core Qt5::Gui Qt5::Widgets Qt5::OpenGL Qt5::Xml)
+  add_library(pectus_meshlab_api INTERFACE)
+  add_library(pectus::meshlab ALIAS pectus_meshlab_api)
+  target_include_directories(pectus_meshlab_api SYSTEM INTERFACE "${MESHLAB_SOURCE_DIR}/src" "${GLEW_INCLUDE_DIR}")
+  target_link_libraries(pectus_meshlab_api INTERFACE pectus_vcg "${MESHLAB_COMMON_LIB}"
+    Qt5::Core Qt5::Gui Qt5::Widgets Qt5::OpenGL Qt5::Xml)
 
-set(PECTUS_PLUGIN_OUTPUT_DIR "${CMAKE_BINARY_DIR}/plugins")
+  set(PECTUS_PLUGIN_OUTPUT_DIR "${CMAKE_BINARY_DIR}/plugins")
+endif()
 
 function(pectus_add_plugin name)
+  if(NOT PECTUS_BUILD_PLUGINS)  # cores-only build (sanitizer/fuzz presets): no Qt, no MeshLab
+    return()
+  endif()
   cmake_parse_arguments(P "" "" "SOURCES;LIBS" ${ARGN})
   add_library(${name} MODULE ${P_SOURCES})
   set_target_properties(${name} PROPERTIES

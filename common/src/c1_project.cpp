@@ -10,6 +10,7 @@
 #include "c1_internal.h"
 #include "pectus/c1_surface.h"
 #include "pectus/errors.h"
+#include "pectus/grid_cell.h"
 
 namespace pectus::c1 {
 
@@ -75,8 +76,8 @@ void C1Surface::buildIndex() const {
   const int ncell = ix->dim[0] * ix->dim[1] * ix->dim[2];
   auto range = [&](int f, int lo[3], int hi[3]) {
     for (int k = 0; k < 3; ++k) {
-      lo[k] = std::clamp(int(std::floor((ix->bmin[f][k] - ix->lo[k]) / cs)), 0, ix->dim[k] - 1);
-      hi[k] = std::clamp(int(std::floor((ix->bmax[f][k] - ix->lo[k]) / cs)), 0, ix->dim[k] - 1);
+      lo[k] = clampedCell((ix->bmin[f][k] - ix->lo[k]) / cs, ix->dim[k]);
+      hi[k] = clampedCell((ix->bmax[f][k] - ix->lo[k]) / cs, ix->dim[k]);
     }
   };
   ix->cellStart.assign(ncell + 1, 0);
@@ -178,7 +179,7 @@ SurfacePoint C1Surface::closestPoint(const Vec3& p) const {
   };
 
   int c[3];
-  for (int k = 0; k < 3; ++k) c[k] = std::clamp(int(std::floor((p[k] - ix.lo[k]) / ix.cs)), 0, ix.dim[k] - 1);
+  for (int k = 0; k < 3; ++k) c[k] = clampedCell((p[k] - ix.lo[k]) / ix.cs, ix.dim[k]);
   const int maxR = std::max({ix.dim[0], ix.dim[1], ix.dim[2]});
   for (int r = 0; r <= maxR; ++r) {
     int lo[3], hi[3];

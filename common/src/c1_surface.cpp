@@ -269,7 +269,8 @@ void C1Surface::build(std::vector<Vec3>* given) {
 
   normals_.assign(nv, hf ? opt_.axis : Vec3(0, 0, 1));
   flat_.assign(nv, 0);
-  const auto [he1, he2] = completeFrame(hf ? opt_.axis : Vec3(0, 0, 1));
+  Vec3 he1, he2;  // (not a structured binding: clang 14 cannot capture those in the OpenMP region)
+  std::tie(he1, he2) = completeFrame(hf ? opt_.axis : Vec3(0, 0, 1));
 
   std::size_t flatCount = 0, linCount = 0, isolated = 0, bnd = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : flatCount, linCount, isolated, bnd)

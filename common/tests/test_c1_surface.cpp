@@ -435,6 +435,22 @@ TEST(C1Surface, DegenerateAndIsolatedInputGivesNoNaN) {
   for (const auto& v : s.refine(3).V) EXPECT_TRUE(v.allFinite());
 }
 
+// found by fuzzing (tests/fuzz/fuzz_c1): a query whose grid cell index does not fit in an int (a tiny mesh,
+// a far point) was converted to int before clamping, undefined behaviour (UBSan: float-cast-overflow)
+TEST(C1Surface, ClosestPointOfAFarQueryOnATinyMesh) {
+  TriMesh m;
+  m.V = {Vec3(0, 0, 0), Vec3(1e-6, 0, 0), Vec3(0, 1e-6, 0), Vec3(0, 0, 1e-6)};
+  m.F = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  const C1Surface s(m);
+  for (const Vec3& q : {Vec3(1e9, -3e9, 2e9), Vec3(-1e12, 0, 0), Vec3(0, 0, 1e15)}) {
+    const auto cp = s.closestPoint(q);
+    EXPECT_GE(cp.face, 0);
+    EXPECT_TRUE(cp.point.allFinite());
+    EXPECT_LT(cp.point.norm(), 1e-5);
+    EXPECT_NEAR(cp.distance, q.norm(), 1e-6 * q.norm());
+  }
+}
+
 TEST(C1Surface, HeightFieldRefusesAFoldedMesh) {
   TriMesh m;
   m.V = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};

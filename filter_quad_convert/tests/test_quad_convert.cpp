@@ -6,6 +6,7 @@
 #include <cstdio>
 #include <fstream>
 #include <functional>
+#include <limits>
 #include <random>
 #include <sstream>
 
@@ -199,6 +200,21 @@ TEST(quad_convert, BadInput) {
     FAIL() << "no throw";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("isolated"), std::string::npos);
+  }
+  // found by fuzzing: a NaN vertex went through into the output, a bad index was read out of range
+  c1::TriMesh pair;
+  pair.V = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  pair.F = {{0, 1, 2}, {0, 2, 3}};
+  for (const ConvertOptions& o : {ConvertOptions{Pairing::Greedy, Leftovers::QuadDominant}, ConvertOptions{}}) {
+    auto nan = pair;
+    nan.V[3].y() = std::numeric_limits<double>::quiet_NaN();
+    EXPECT_THROW(convertToQuads(nan, o), InputError);
+    auto bad = pair;
+    bad.F[1][2] = 4;
+    EXPECT_THROW(convertToQuads(bad, o), InputError);
+    bad.F[1][2] = -1;
+    EXPECT_THROW(convertToQuads(bad, o), InputError);
+    EXPECT_EQ(convertToQuads(pair, o).merged, 1u);
   }
 }
 

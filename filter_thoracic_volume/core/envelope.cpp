@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "pectus/errors.h"
+#include "pectus/grid_cell.h"
 #include "thoracic_volume.h"
 
 namespace pectus::vol {
@@ -79,7 +80,7 @@ struct Surf {
   double ray(double ca, double sa, double angle, double z, int* its = nullptr) const {
     const double dphi = 2 * kPi / e.m;
     double t = (z - e.zLo) / dz;
-    int i = std::clamp(int(std::floor(t)), 0, e.n - 1);
+    int i = clampedCell(t, e.n);
     const double u = std::clamp(t - i, 0.0, 1.0);
     double a = angle / dphi;
     int j = int(std::floor(a));
@@ -294,10 +295,10 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const auto& sm = raw[k];
     const double t = (sm.z - ezLo) / dz;
-    const int i = std::clamp(int(std::floor(t)), 0, n - 1);
+    const int i = clampedCell(t, n);
     const double u = std::clamp(t - i, 0.0, 1.0);
     const double a = sm.angle / dphi;
-    const int j = std::clamp(int(std::floor(a)), 0, m - 1);
+    const int j = clampedCell(a, m);
     const double v = std::clamp(a - j, 0.0, 1.0);
     const std::size_t pid = std::size_t(i) * m + j;
     quarter[pid * 4 + (u >= 0.5 ? 2 : 0) + (v >= 0.5 ? 1 : 0)] = 1;

@@ -9,6 +9,7 @@
 #include <tetgen.h>
 
 #include "pectus/errors.h"
+#include "pectus/grid_cell.h"
 
 namespace pectus::fe {
 
@@ -40,7 +41,7 @@ struct Grid {
           for (int i = a[0]; i <= b[0]; ++i) cells[idx(i, j, k)].push_back(f);
     }
   }
-  int clampc(double x, int d) const { return std::clamp(static_cast<int>(std::floor((x - lo(d)) / h)), 0, n[d] - 1); }
+  int clampc(double x, int d) const { return clampedCell((x - lo(d)) / h, n[d]); }
   size_t idx(int i, int j, int k) const { return (static_cast<size_t>(k) * n[1] + j) * n[0] + i; }
   void range(const SurfaceMesh& s, int f, int a[3], int b[3]) const {
     for (int d = 0; d < 3; ++d) {

@@ -1,0 +1,55 @@
+// Fuzz target: the Nuss FE model builder up to (not including) the solve - labelled CMeshO -> cageFromMesh
+// (weld, labels) -> surface checks (closed, self-intersection) -> TetGen -> TET10 -> boundary faces - on
+// small, possibly broken closed meshes.
+// Properties: every tet has valid, distinct nodes, a tissue label and positive volume; the input vertices
+// keep their indices.
+#include "fuzz_mesh.h"
+#include "nuss_analysis.h"
+#include "pectus/errors.h"
+
+using namespace pectus;
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  fuzz::Input in(data, size, fuzz::limits(6, false));
+  fuzz::Reader& r = in.r;
+  const fuzz::Mesh& fm = in.mesh;
+  CMeshO m;
+  fuzz::toCMesh(fm, m, false);
+  if (r.u8() % 8 != 0) {  // else: no labels
+    std::vector<int> tissue, part;
+    for (std::size_t f = 0; f < m.face.size(); ++f) {
+      tissue.push_back(r.range(1, 3));
+      const bool rib = r.range(0, 3) != 0;
+      const int side = r.range(0, 1);
+      part.push_back(rib ? ribPart(side, r.range(1, 12)) : 0);
+    }
+    writeFaceLabels(m, tissue, part);
+  }
+  fe::TetgenOptions to;
+  to.radiusEdgeRatio = r.flag() ? 0.0 : r.real(1.2, 3);
+  to.maxVolume = r.real(0.002, 0.5);
+  to.order = r.range(1, 2);
+  to.preserveSurface = r.flag();
+  try {
+    const auto cage = nuss::cageFromMesh(m);
+    PECTUS_FUZZ_CHECK(cage.surface.faces.size() == cage.surface.faceTissue.size());
+    PECTUS_FUZZ_CHECK(cage.facePart.size() == cage.surface.faces.size());
+    PECTUS_FUZZ_CHECK(cage.nodeOfVertex.size() == m.vert.size());
+    std::vector<int> tetFace;
+    const auto tm = fe::tetrahedralize(cage.surface, to, &tetFace);
+    const int nn = tm.numNodes();
+    PECTUS_FUZZ_CHECK(nn >= int(cage.surface.vertices.size()));
+    for (std::size_t i = 0; i < cage.surface.vertices.size(); ++i)
+      PECTUS_FUZZ_CHECK((tm.nodes[i] - cage.surface.vertices[i]).norm() <= 1e-9 * (1 + cage.surface.vertices[i].norm()));
+    PECTUS_FUZZ_CHECK(tm.tissue.size() == tm.tets.size() && tetFace.size() == tm.tets.size());
+    for (int t = 0; t < tm.numTets(); ++t) {
+      for (int k = 0; k < tm.nodesPerTet(); ++k) PECTUS_FUZZ_CHECK(tm.tets[t][k] >= 0 && tm.tets[t][k] < nn);
+      PECTUS_FUZZ_CHECK(tetFace[t] >= 0 && tetFace[t] < int(cage.surface.faces.size()));
+      PECTUS_FUZZ_CHECK(tm.tetVolume(t) > 0);
+    }
+    const auto bf = fe::boundaryFaces(tm);
+    PECTUS_FUZZ_CHECK(tm.tets.empty() || !bf.empty());
+  } catch (const InputError&) {
+  }
+  return 0;
+}
