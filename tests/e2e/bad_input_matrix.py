@@ -149,6 +149,10 @@ FILTERS = {
                  set=dict(analysis=1, order=1, tetQuality=0.0, targetElevation=10.0,
                           resultBase=mlx.SaveFile("", ".vtu")),  # no files (the example writes into the cwd)
                  kinds=CLOSED_KINDS + ["no_labels", "no_landmarks"], group="nuss", split=True),
+    "planner": dict(mlx="filter_nuss_fea/examples/nuss_bar_planner.mlx", index=1, base="cage", layout="nuss",
+                    set=dict(levels="4", bars=1, analysis=1, order=1, tetQuality=0.0, targetElevation=10.0,
+                             csvFile=mlx.SaveFile("", ".csv")),
+                    kinds=CLOSED_KINDS + ["no_labels", "no_landmarks"], group="planner", split=True),
     "tri_to_quad": dict(mlx="filter_quad_convert/examples/tri_to_quad.mlx", base="open", kinds=SURFACE_KINDS,
                         group="quad"),
     "structure": dict(mlx="filter_quad_convert/examples/structure.mlx", base="open", kinds=SURFACE_KINDS,
