@@ -208,15 +208,19 @@ def grab_all(log: Iterable[str], pattern: str) -> list:
 
 
 def find_meshlabserver(prefix: str | None = None) -> str:
-    prefix = prefix or os.environ.get("PECTUS_PREFIX")
-    if prefix:
-        exe = os.path.join(prefix, "bin", "meshlabserver")
-        if os.path.exists(exe):
-            return exe
+    """meshlabserver of the given prefix, else of $PECTUS_PREFIX, else of this checkout's build/prefix (where
+    the plugins are), else the system one (which sees the plugins only if the .deb is installed)."""
+    here = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "build", "prefix")
+    for p in (prefix, os.environ.get("PECTUS_PREFIX"), here):
+        if p and os.path.exists(os.path.join(p, "bin", "meshlabserver")):
+            return os.path.join(p, "bin", "meshlabserver")
     exe = shutil.which("meshlabserver")
     if not exe:
         raise FileNotFoundError("meshlabserver not found: set PECTUS_PREFIX or install meshlab")
     return exe
+
+
+XVFB_CLEANUP_ERROR = "xvfb-run: error: problem while cleaning up temporary directory"
 
 
 def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tuple] = (),
@@ -244,16 +248,21 @@ def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tu
     if script:
         cmd += ["-s", script]
     try:
-        # own process group: on a timeout meshlabserver (a grandchild under xvfb-run) is killed too
-        with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, cwd=cwd, text=True,
-                              errors="replace", env=dict(os.environ, **env) if env else None,
-                              start_new_session=True) as p:
-            try:
-                out, _ = p.communicate(timeout=timeout)
-            except subprocess.TimeoutExpired:
-                os.killpg(p.pid, signal.SIGKILL)
-                p.communicate()
-                raise
+        for attempt in range(3):
+            # own process group: on a timeout meshlabserver (a grandchild under xvfb-run) is killed too
+            with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, cwd=cwd, text=True,
+                                  errors="replace", env=dict(os.environ, **env) if env else None,
+                                  start_new_session=True) as p:
+                try:
+                    out, _ = p.communicate(timeout=timeout)
+                except subprocess.TimeoutExpired:
+                    os.killpg(p.pid, signal.SIGKILL)
+                    p.communicate()
+                    raise
+            # xvfb-run exits 5 when it cannot remove its own temporary folder (seen under parallel load);
+            # meshlabserver's exit code is then lost, so run again (the filters are deterministic)
+            if not (p.returncode == 5 and XVFB_CLEANUP_ERROR in out):
+                break
         return Result(p.returncode, out)
     finally:
         if tmp:
