@@ -396,8 +396,9 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   const auto cage = [&] {
     if (!perTissue) return nuss::cageFromMesh(cur.cm);
     std::vector<nuss::TissueLayer> layers;
+    const MeshModel* lmLayer = &ctx.mesh("landmarkLayer");
     for (MeshModel* m : ctx.doc().meshList)
-      if (m != &ctx.mesh("landmarkLayer") && m->isVisible() && m->cm.fn > 0) layers.push_back({m->label().toStdString(), &m->cm});
+      if (m != lmLayer && m->isVisible() && m->cm.fn > 0) layers.push_back({m->label().toStdString(), &m->cm});
     if (layers.empty())
       throw pectus::InputError("No visible layer with faces besides the landmark layer: load one closed surface per tissue.");
     nuss::JoinStats js;

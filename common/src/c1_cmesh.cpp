@@ -6,14 +6,7 @@ namespace pectus::c1 {
 
 TriMesh toTriMesh(const CMeshO& m, std::vector<int>* vertexIndex) {
   TriMesh t;
-  std::vector<int> map(m.vert.size(), -1);
-  if (vertexIndex) vertexIndex->clear();
-  for (std::size_t i = 0; i < m.vert.size(); ++i) {
-    if (m.vert[i].IsD()) continue;
-    map[i] = int(t.V.size());
-    t.V.push_back(toEigen(m.vert[i].cP()));
-    if (vertexIndex) vertexIndex->push_back(int(i));
-  }
+  const std::vector<int> map = liveVertices(m, t.V, vertexIndex);
   t.F.reserve(m.face.size());
   for (const auto& f : m.face) {
     if (f.IsD()) continue;

@@ -71,14 +71,7 @@ std::string PolyStats::summary() const {
 
 PolyMesh fromCMesh(const CMeshO& m, bool quads, std::vector<int>* vertexIndex) {
   PolyMesh p;
-  std::vector<int> map(m.vert.size(), -1);
-  if (vertexIndex) vertexIndex->clear();
-  for (std::size_t i = 0; i < m.vert.size(); ++i) {
-    if (m.vert[i].IsD()) continue;
-    map[i] = int(p.V.size());
-    p.V.push_back(toEigen(m.vert[i].cP()));
-    if (vertexIndex) vertexIndex->push_back(int(i));
-  }
+  const std::vector<int> map = liveVertices(m, p.V, vertexIndex);
   const ElementMesh em = buildElements(m, quads ? ElementKind::Quads : ElementKind::Triangles);
   p.F.reserve(em.elements.size());
   for (const auto& e : em.elements) {

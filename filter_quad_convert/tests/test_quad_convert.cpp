@@ -337,18 +337,7 @@ TEST(quad_structure, QuadEdgeSwapRestoresTheGrid) {
 
 TEST(quad_structure, QuadOperators) {
   // quad grid; one quad split into three around a centre node (valence 3): node elimination undoes it
-  PolyMesh q;
-  const int n = 6;
-  for (int j = 0; j <= n; ++j)
-    for (int i = 0; i <= n; ++i) q.V.push_back({double(i), double(j), 0.0});
-  for (int j = 0; j < n; ++j)
-    for (int i = 0; i < n; ++i) {
-      const int a = j * (n + 1) + i;
-      Poly p;
-      p.nv = 4;
-      p.v = {a, a + 1, a + n + 2, a + n + 1};
-      q.F.push_back(p);
-    }
+  PolyMesh q = quadGrid(6);
   // merge two quads (2,2),(3,2) into a hexagon split by a centre node into 3 quads
   const int a = 2 * 7 + 2;
   const int H[6] = {a, a + 1, a + 2, a + 9, a + 8, a + 7};  // hexagon around the 2x1 block

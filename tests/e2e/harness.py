@@ -40,6 +40,12 @@ def check(cond: bool, what: str, detail: str = "") -> bool:
     return cond
 
 
+def check_refused(r, msg: str, what: str) -> bool:
+    """A failed filter: meshlabserver exits non-zero and a Log line contains `msg`."""
+    ok = check(r.rc != 0, f"{what}: non-zero exit", str(r.rc))
+    return check(any(msg in l for l in r.log), f"{what}: message '{msg}' in the Log", "\n".join(r.log)) and ok
+
+
 def finish():
     print(f"{_passed} passed, {len(_failures)} failed")
     sys.exit(1 if _failures else 0)

@@ -7,8 +7,25 @@
 #include <common/ml_mesh_type.h>
 
 #include <Eigen/Dense>
+#include <vector>
 
 namespace pectus {
 inline Eigen::Vector3d toEigen(const Point3m& p) { return {double(p[0]), double(p[1]), double(p[2])}; }
 inline Point3m toPoint(const Eigen::Vector3d& p) { return Point3m(Scalarm(p[0]), Scalarm(p[1]), Scalarm(p[2])); }
+
+/// Appends the positions of the live vertices of `m` to `V` in order and returns, per m.vert index, the
+/// index in V (-1 for deleted vertices); `vertexIndex`, if given, receives for each vertex of V its index
+/// in m.vert.
+inline std::vector<int> liveVertices(const CMeshO& m, std::vector<Eigen::Vector3d>& V,
+                                     std::vector<int>* vertexIndex = nullptr) {
+  std::vector<int> map(m.vert.size(), -1);
+  if (vertexIndex) vertexIndex->clear();
+  for (std::size_t i = 0; i < m.vert.size(); ++i) {
+    if (m.vert[i].IsD()) continue;
+    map[i] = int(V.size());
+    V.push_back(toEigen(m.vert[i].cP()));
+    if (vertexIndex) vertexIndex->push_back(int(i));
+  }
+  return map;
+}
 }  // namespace pectus
