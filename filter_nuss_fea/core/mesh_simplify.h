@@ -1,8 +1,13 @@
 // Quadric edge-collapse decimation of a closed CMeshO to a target face count, topology preserving
-// (link condition), with normal-flip and triangle-quality checks.
+// (link condition), with normal-flip and triangle-quality checks; with embeddingCell > 0 (mm, the cell of
+// the face grid) no collapse may make the surface intersect itself (exact predicates, as CGAL's
+// self_intersections tests a surface); `guarded`: only collapses touching these boxes are checked (empty:
+// all; the regions hold the collapses that folded the surface in an unguarded run).
 #pragma once
+#include <vector>
+
 #include "pectus/cmesh.h"
 
 namespace pectus::ribcage {
-void decimateQuadric(CMeshO& m, int targetFaces);
+void decimateQuadric(CMeshO& m, int targetFaces, double embeddingCell = 0, const std::vector<vcg::Box3<Scalarm>>& guarded = {});
 }

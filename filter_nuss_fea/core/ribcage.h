@@ -48,7 +48,7 @@ struct RibCageStats {
   double transverseInner = 0, apMin = 0, zDeepest = 0;
   double gridSpacing = 0;
   std::size_t rawFaces = 0;     ///< faces before decimation
-  int decimationRetries = 0;    ///< re-decimations with vertices frozen around self-intersections
+  int decimationRetries = 0;    ///< 1: the first decimation intersected itself and was redone with the embedding guard
   double secondsField = 0, secondsExtract = 0, secondsDecimate = 0, secondsLabel = 0;
 };
 

@@ -1,6 +1,6 @@
-// Self-intersecting faces of a triangle mesh by CGAL's Polygon_mesh_processing::self_intersections (exact
-// predicates; faces sharing a vertex or an edge are tested too, which vcg's Clean::SelfIntersections skips
-// for faces sharing a vertex, so folds of neighbouring faces went unnoticed). Host-free.
+// Self-intersecting faces of a CMeshO by the project's one check (pectus/self_intersections.h: CGAL's
+// exact Polygon_mesh_processing::self_intersections; faces sharing a vertex or an edge are tested too,
+// which vcg's Clean::SelfIntersections skips for faces sharing a vertex). Host-free.
 #pragma once
 #include <vector>
 

@@ -17,12 +17,12 @@
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
-#include <CGAL/Polygon_mesh_processing/self_intersections.h>
 #include <CGAL/Side_of_triangle_mesh.h>
 #include <CGAL/Surface_mesh.h>
 #include <vcg/complex/allocate.h>
 
 #include "pectus/errors.h"
+#include "pectus/self_intersections.h"
 
 namespace pectus::nuss {
 
@@ -110,14 +110,14 @@ Solid toSolid(const TissueLayer& l, Tissue tissue) {
                      "): each tissue layer must be a closed surface; close its holes (Filters > Remeshing > Close Holes) "
                      "or export the segmentation as closed surfaces.");
   }
-  std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
-  PMP::self_intersections(s.mesh, std::back_inserter(pairs));
-  if (!pairs.empty()) {
-    const auto h = halfedge(pairs.front().first, s.mesh);
+  std::vector<Eigen::Vector3d> soupPts;
+  for (const auto& p : pts) soupPts.emplace_back(p.x(), p.y(), p.z());
+  std::vector<std::array<int, 3>> soupTris;
+  for (const auto& q : polys) soupTris.push_back({int(q[0]), int(q[1]), int(q[2])});
+  if (const auto pairs = selfIntersections(soupPts, soupTris); !pairs.empty())
     throw InputError("Layer '" + l.name + "' intersects itself (" + std::to_string(pairs.size()) + " face pairs, e.g. near " +
-                     where(s.mesh.point(target(h, s.mesh))) +
+                     where(pts[polys[std::size_t(pairs.front().a)][0]]) +
                      "): repair it (Filters > Cleaning and Repairing > Select Self Intersecting Faces shows where).");
-  }
   PMP::orient_to_bound_a_volume(s.mesh);
   return s;
 }

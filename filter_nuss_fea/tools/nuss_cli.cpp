@@ -1,7 +1,11 @@
 // Command-line driver of the Nuss FE analysis core (bench/nuss_convergence.py, quick studies):
 //   pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]
-//                   [--target mm | --force N] [--linear] [--space s] [--threads n] [--vtu out.vtu]
-// Builds the default rib cage, runs the analysis and prints one line of key=value figures.
+//                   [--target mm | --force N] [--linear] [--space s] [--threads n] [--vtu out.vtu] [--layers]
+// Builds the default rib cage (--layers: as one layer per tissue, joined as the filter's 'One layer per
+// tissue' input does), runs the analysis and prints one line of key=value figures and the tets' volume
+// per tissue.
+#include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cstdlib>
@@ -12,6 +16,7 @@
 #include "pectus/errors.h"
 #include "pectus/fe/io.h"
 #include "ribcage.h"
+#include "tissue_join.h"
 
 using namespace pectus;
 
@@ -21,6 +26,7 @@ int main(int argc, char** argv) {
   nuss::Options o;
   o.targetElevation = 0;
   std::string vtu;
+  bool layers = false;
   for (int i = 1; i < argc; ++i) {
     auto next = [&]() -> const char* {
       if (i + 1 >= argc) { std::fprintf(stderr, "missing value after %s\n", argv[i]); std::exit(2); }
@@ -38,14 +44,27 @@ int main(int argc, char** argv) {
     else if (a == "--linear") o.nonlinear = false;
     else if (a == "--space") o.place.intercostalSpace = std::atoi(next());
     else if (a == "--vtu") vtu = next();
+    else if (a == "--layers") layers = true;
     else { std::fprintf(stderr, "usage: see the header of tools/nuss_cli.cpp (unknown argument %s)\n", argv[i]); return 2; }
   }
   try {
     CMeshO cage;
     const auto t0 = std::chrono::steady_clock::now();
-    const auto lms = ribcage::generateRibCage(rp, cage);
+    std::array<CMeshO, 3> tissues;
+    const auto lms = layers ? ribcage::generateTissueLayers(rp, tissues) : ribcage::generateRibCage(rp, cage);
+    nuss::CageSurface surf;
+    if (layers) {
+      const char* names[3] = {"ribs", "costal cartilage", "sternum"};
+      std::vector<nuss::TissueLayer> tl;
+      for (std::size_t k = 0; k < 3; ++k) tl.push_back({names[k], &tissues[k]});
+      nuss::JoinStats js;
+      surf = nuss::joinTissueLayers(tl, lms, cage, &js);
+      std::printf("joined %d layers: %.1f mm3 in the layers, %.1f mm3 in the union, %d components\n", js.layers,
+                  js.sumVolume, js.unionVolume, js.components);
+    } else {
+      surf = nuss::cageFromMesh(cage);
+    }
     const double tCage = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    const auto surf = nuss::cageFromMesh(cage);
     const auto a = nuss::analyze(surf, lms, o);
     std::printf("faces=%zu tets=%d nodes=%d order=%d dofs=%d force=%.2f elevation=%.3f compliance=%.5f "
                 "maxStress=%.3f maxStrain=%.4f strainCart=%.4f strainBone=%.5f maxStressAll=%.3f nlSolves=%d newton=%d factor=%d "
@@ -64,6 +83,10 @@ int main(int argc, char** argv) {
     std::printf("\ncurve");
     for (const auto& p : a.curve) std::printf(" %.2f:%.3f", p.first, p.second);
     std::printf("\n");
+    double vol[4] = {0, 0, 0, 0};
+    for (int t = 0; t < a.mesh.numTets(); ++t) vol[std::clamp(a.mesh.tissue[std::size_t(t)], 0, 3)] += std::abs(a.mesh.tetVolume(t));
+    std::printf("tet volume mm3: bone %.1f cartilage %.1f sternum %.1f other %.1f\n", vol[int(Tissue::Bone)],
+                vol[int(Tissue::Cartilage)], vol[int(Tissue::Sternum)], vol[0]);
     if (!vtu.empty()) fe::writeVtu(vtu, a.mesh, &a.result);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());

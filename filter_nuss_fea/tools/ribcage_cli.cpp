@@ -41,8 +41,8 @@ int main(int argc, char** argv) {
   const auto lms = generateRibCage(p, m, &st);
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   const auto h = measureHaller(m);
-  std::printf("edge %.2f grid %.3f: %d faces (%zu raw), %d vertices, %.2f s (calibration %.2f, extract %.2f, decimate %.2f, label %.2f)\n",
-              p.edgeLength, st.gridSpacing, m.fn, st.rawFaces, m.vn, secs, st.secondsField, st.secondsExtract,
+  std::printf("edge %.2f grid %.3f: %d faces (%zu raw, %d decimation retries), %d vertices, %.2f s (calibration %.2f, extract %.2f, decimate %.2f, label %.2f)\n",
+              p.edgeLength, st.gridSpacing, m.fn, st.rawFaces, st.decimationRetries, m.vn, secs, st.secondsField, st.secondsExtract,
               st.secondsDecimate, st.secondsLabel);
   std::printf("Haller requested %.4f model %.4f mesh %.4f (T %.2f AP %.2f at z %.1f), rest %.3f, depth %.2f mm\n",
               p.hallerIndex, st.hallerModel, h ? h->index : -1.0, h ? h->transverse : -1.0, h ? h->ap : -1.0,

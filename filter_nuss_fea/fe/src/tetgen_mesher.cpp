@@ -10,6 +10,7 @@
 
 #include "pectus/errors.h"
 #include "pectus/grid_cell.h"
+#include "pectus/self_intersections.h"
 
 namespace pectus::fe {
 
@@ -53,93 +54,6 @@ struct Grid {
   }
 };
 
-inline double orient(const Vector3d& a, const Vector3d& b, const Vector3d& c, const Vector3d& d) {
-  return (b - a).cross(c - a).dot(d - a);
-}
-
-// does segment pq cross triangle abc? (non-coplanar case, touching counts, tolerance eps on volumes)
-bool segTri(const Vector3d& p, const Vector3d& q, const Vector3d& a, const Vector3d& b, const Vector3d& c, double eps) {
-  const double op = orient(a, b, c, p), oq = orient(a, b, c, q);
-  if ((op > eps && oq > eps) || (op < -eps && oq < -eps)) return false;
-  if (std::abs(op) <= eps && std::abs(oq) <= eps) return false;  // coplanar: handled separately
-  const double s1 = orient(p, q, a, b), s2 = orient(p, q, b, c), s3 = orient(p, q, c, a);
-  return (s1 >= -eps && s2 >= -eps && s3 >= -eps) || (s1 <= eps && s2 <= eps && s3 <= eps);
-}
-
-// 2D helpers for coplanar triangles
-inline double cross2(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c) {
-  return (b - a).x() * (c - a).y() - (b - a).y() * (c - a).x();
-}
-bool segSeg2Proper(const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c, const Eigen::Vector2d& d, double eps) {
-  const double d1 = cross2(a, b, c), d2 = cross2(a, b, d), d3 = cross2(c, d, a), d4 = cross2(c, d, b);
-  return ((d1 > eps && d2 < -eps) || (d1 < -eps && d2 > eps)) && ((d3 > eps && d4 < -eps) || (d3 < -eps && d4 > eps));
-}
-bool inTri2Strict(const Eigen::Vector2d& p, const Eigen::Vector2d& a, const Eigen::Vector2d& b, const Eigen::Vector2d& c, double eps) {
-  const double s = cross2(a, b, c) > 0 ? 1 : -1;
-  return s * cross2(a, b, p) > eps && s * cross2(b, c, p) > eps && s * cross2(c, a, p) > eps;
-}
-
-bool trianglesIntersect(const SurfaceMesh& s, int f, int g, double lenEps) {
-  const auto& F = s.faces[f];
-  const auto& G = s.faces[g];
-  int shared = 0;
-  for (int a : F)
-    for (int b : G) shared += a == b;
-  const Vector3d P[3] = {s.vertices[F[0]], s.vertices[F[1]], s.vertices[F[2]]};
-  const Vector3d Q[3] = {s.vertices[G[0]], s.vertices[G[1]], s.vertices[G[2]]};
-  const Vector3d nf = (P[1] - P[0]).cross(P[2] - P[0]);
-  const double scale = std::max(nf.norm(), (Q[1] - Q[0]).cross(Q[2] - Q[0]).norm());
-  const double eps = 1e-10 * scale * std::sqrt(scale);  // volume tolerance
-  bool coplanar = true;
-  for (const auto& q : Q) coplanar = coplanar && std::abs(orient(P[0], P[1], P[2], q)) <= 1e-7 * scale * std::sqrt(scale);
-  if (coplanar && nf.norm() > 0) {
-    // project to the dominant plane
-    int ax = 0;
-    nf.cwiseAbs().maxCoeff(&ax);
-    auto pr = [ax](const Vector3d& v) { return Eigen::Vector2d(v((ax + 1) % 3), v((ax + 2) % 3)); };
-    Eigen::Vector2d p[3], q[3];
-    for (int i = 0; i < 3; ++i) p[i] = pr(P[i]), q[i] = pr(Q[i]);
-    const double e2 = 1e-9 * scale;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        if (segSeg2Proper(p[i], p[(i + 1) % 3], q[j], q[(j + 1) % 3], e2)) return true;
-    for (int i = 0; i < 3; ++i) {
-      if (inTri2Strict(p[i], q[0], q[1], q[2], e2) || inTri2Strict(q[i], p[0], p[1], p[2], e2)) return true;
-    }
-    // centroid of one inside the other (identical triangles)
-    const Eigen::Vector2d cp = (p[0] + p[1] + p[2]) / 3;
-    return shared < 2 && inTri2Strict(cp, q[0], q[1], q[2], e2);
-  }
-  if (shared >= 2) return false;  // two non-coplanar faces sharing an edge only touch along it
-  if (shared == 1) {
-    // the intersection can only be a segment starting at the shared vertex; it leaves through the
-    // opposite edge of one of the triangles
-    int sf = -1, sg = -1;
-    for (int i = 0; i < 3; ++i)
-      for (int j = 0; j < 3; ++j)
-        if (F[i] == G[j]) sf = i, sg = j;
-    const Vector3d& pa = P[(sf + 1) % 3];
-    const Vector3d& pb = P[(sf + 2) % 3];
-    const Vector3d& qa = Q[(sg + 1) % 3];
-    const Vector3d& qb = Q[(sg + 2) % 3];
-    auto cross = [&](const Vector3d& a, const Vector3d& b, const Vector3d* T, const Vector3d& shared3) {
-      if (!segTri(a, b, T[0], T[1], T[2], eps)) return false;
-      // hit point away from the shared vertex
-      const Vector3d n = (T[1] - T[0]).cross(T[2] - T[0]);
-      const double da = n.dot(a - T[0]), db = n.dot(b - T[0]);
-      if (std::abs(da - db) < 1e-300) return false;
-      const Vector3d x = a + (b - a) * (da / (da - db));
-      return (x - shared3).norm() > lenEps;
-    };
-    return cross(pa, pb, Q, P[sf]) || cross(qa, qb, P, Q[sg]);
-  }
-  for (int i = 0; i < 3; ++i) {
-    if (segTri(P[i], P[(i + 1) % 3], Q[0], Q[1], Q[2], eps)) return true;
-    if (segTri(Q[i], Q[(i + 1) % 3], P[0], P[1], P[2], eps)) return true;
-  }
-  return false;
-}
-
 Vector3d closestOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d& b, const Vector3d& c) {
   // Ericson, Real-Time Collision Detection 5.1.5
   const Vector3d ab = b - a, ac = c - a, ap = p - a;
@@ -164,27 +78,9 @@ Vector3d closestOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d&
 }  // namespace
 
 std::optional<std::pair<int, int>> findSelfIntersection(const SurfaceMesh& s) {
-  if (s.faces.empty()) return std::nullopt;
-  Grid grid;
-  grid.build(s);
-  Eigen::AlignedBox3d box;
-  for (const auto& v : s.vertices) box.extend(v);
-  const double lenEps = 1e-9 * box.diagonal().norm();
-  std::vector<int> stamp(s.faces.size(), -1);
-  std::optional<std::pair<int, int>> best;
-  for (int f = 0; f < static_cast<int>(s.faces.size()); ++f) {
-    int a[3], b[3];
-    grid.range(s, f, a, b);
-    for (int k = a[2]; k <= b[2]; ++k)
-      for (int j = a[1]; j <= b[1]; ++j)
-        for (int i = a[0]; i <= b[0]; ++i)
-          for (int g : grid.cells[grid.idx(i, j, k)]) {
-            if (g <= f || stamp[g] == f) continue;
-            stamp[g] = f;
-            if (trianglesIntersect(s, f, g, lenEps)) return std::make_pair(f, g);
-          }
-  }
-  return best;
+  const auto pairs = pectus::selfIntersections(s.vertices, s.faces);
+  if (pairs.empty()) return std::nullopt;
+  return std::make_pair(pairs.front().a, pairs.front().b);
 }
 
 void checkSurfaceForTetgen(const SurfaceMesh& s) {
@@ -215,8 +111,12 @@ void checkSurfaceForTetgen(const SurfaceMesh& s) {
     const auto& a = s.faces[p->first];
     const Vector3d c = (s.vertices[a[0]] + s.vertices[a[1]] + s.vertices[a[2]]) / 3;
     std::ostringstream m;
-    m << "The surface intersects itself: faces " << p->first << " and " << p->second << " cross (near " << c.transpose()
-      << " mm). Remove the self-intersection (e.g. MeshLab's 'Select Self Intersecting Faces') before meshing.";
+    if (p->first == p->second)
+      m << "Face " << p->first << " is degenerate: its three corners are collinear (near " << c.transpose()
+        << " mm). Remove zero-area faces (Cleaning: Remove Zero Area Faces) before meshing.";
+    else
+      m << "The surface intersects itself: faces " << p->first << " and " << p->second << " cross (near " << c.transpose()
+        << " mm). Remove the self-intersection (e.g. MeshLab's 'Select Self Intersecting Faces') before meshing.";
     throw InputError(m.str());
   }
 }

@@ -85,6 +85,32 @@ TEST(FeMesher, FoldedVertexIsASelfIntersection) {
   EXPECT_TRUE(findSelfIntersection(s).has_value());
 }
 
+TEST(FeMesher, CollinearFaceIsNamedBeforeTetgen) {
+  SurfaceMesh s = boxSurface({0, 0, 0}, {10, 10, 10}, 4, 4, 2, 100);  // the top centre's neighbours are inner points
+  // move the centre vertex of the top face onto the line through two of its neighbours: its faces there
+  // become collinear (zero area) without any face crossing another
+  int top = -1;
+  for (size_t i = 0; i < s.vertices.size(); ++i)
+    if ((s.vertices[i] - Vector3d(5, 5, 10)).norm() < 1e-9) top = static_cast<int>(i);
+  ASSERT_GE(top, 0);
+  for (const auto& f : s.faces)  // onto the midpoint of the opposite edge of one of its faces (the top stays flat)
+    for (int k = 0; k < 3; ++k)
+      if (f[k] == top) {
+        s.vertices[top] = 0.5 * (s.vertices[f[(k + 1) % 3]] + s.vertices[f[(k + 2) % 3]]);
+        goto moved;
+      }
+moved:
+  const auto p = findSelfIntersection(s);
+  ASSERT_TRUE(p.has_value());
+  EXPECT_EQ(p->first, p->second);
+  try {
+    checkSurfaceForTetgen(s);
+    FAIL() << "no exception";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("Face " + std::to_string(p->first) + " is degenerate"), std::string::npos) << e.what();
+  }
+}
+
 TEST(FeMesher, OpenSurfaceIsAnError) {
   SurfaceMesh s = boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 100);
   s.faces.pop_back();

@@ -23,7 +23,9 @@ struct TetgenOptions {
 };
 
 /// The first pair of faces (a < b) of the surface that intersect each other (touching through a shared
-/// vertex or edge is not an intersection), found with a uniform grid; nullopt if none.
+/// vertex or edge is not an intersection; a == b: a degenerate face with collinear corners), by the
+/// project's one exact check (pectus/self_intersections.h, CGAL); nullopt if none. The surface must be
+/// closed (as checkSurfaceForTetgen checks first).
 std::optional<std::pair<int, int>> findSelfIntersection(const SurfaceMesh& s);
 
 /// Checks the surface is closed (every edge in exactly two faces), has valid indices, one label per

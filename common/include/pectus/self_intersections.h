@@ -1,0 +1,31 @@
+// The one self-intersection check of the project: CGAL's Polygon_mesh_processing::self_intersections
+// (exact predicates) on a triangle surface given as points + triangles. Faces sharing a vertex or an
+// edge are tested too (a fold through a neighbour counts), and a degenerate face (three collinear
+// points) is reported as intersecting itself. Used by the rib cage generator (after every decimation),
+// the FE mesher (before TetGen, which crashes on self-intersecting input) and the tissue-layer join.
+// Host-free: Eigen in, indices out (CGAL stays inside the .cpp).
+#pragma once
+#include <array>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace pectus {
+
+/// A pair of intersecting triangles (indices into the triangle list, a <= b; a == b: a degenerate face).
+struct FacePair {
+  int a = -1, b = -1;
+};
+
+/// Every pair of triangles of the surface that intersect other than along their shared edge or vertex,
+/// sorted, the degenerate faces first. The triangles must form a 2-manifold surface (closed or not; orientation is fixed here, and
+/// a vertex where two sheets touch is split first); an index out of range or a triangle repeating a
+/// vertex is reported as degenerate (a == b).
+std::vector<FacePair> selfIntersections(const std::vector<Eigen::Vector3d>& points,
+                                        const std::vector<std::array<int, 3>>& triangles);
+
+/// The triangles (sorted, unique indices) taking part in any of the pairs.
+std::vector<int> facesOf(const std::vector<FacePair>& pairs);
+
+}  // namespace pectus
