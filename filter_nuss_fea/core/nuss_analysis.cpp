@@ -1,6 +1,7 @@
 #include "nuss_analysis.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <cmath>
@@ -308,6 +309,24 @@ void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const
   s.secondShare = pl.secondShare;
 }
 
+// what to tell when the stiffness matrix cannot be factorised although every piece is held: TetGen without
+// quality refinement leaves nearly flat tets (slivers) between nearly coplanar surface points (the cage's
+// midline, coarse edges); their stiffness makes the matrix numerically indefinite
+std::string slivers(const Analysis& a) {
+  double mean = 0;
+  for (int t = 0; t < a.mesh.numTets(); ++t) mean += std::abs(a.mesh.tetVolume(t)) / a.mesh.numTets();
+  int n = 0, flattest = -1;
+  for (int t = 0; t < a.mesh.numTets(); ++t)
+    if (std::abs(a.mesh.tetVolume(t)) < 1e-6 * mean) {
+      ++n;
+      if (flattest < 0 || std::abs(a.mesh.tetVolume(t)) < std::abs(a.mesh.tetVolume(flattest))) flattest = t;
+    }
+  if (!n) return "";
+  return " Here the tet mesh has " + std::to_string(n) + " nearly flat tets (slivers below 1e-6 of the mean tet volume; the "
+         "flattest in the " + partName(a.mesh.tissue[flattest], a.tetPart[flattest]) + " at " + pointText(a.mesh.centroid(flattest)) +
+         "): set a tet quality (radius-edge ratio, e.g. 1.6) or use a smaller edge length.";
+}
+
 // connected components of the tet mesh; every one must hold a fixed node
 int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, const std::vector<int>& fixedNodes) {
   std::vector<int> parent(mesh.numNodes());
@@ -323,6 +342,45 @@ int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, co
       throw InputError("A part of the model is not held by any costovertebral joint (the connected piece containing the " +
                        partName(mesh.tissue[t], tetPart[t]) +
                        "): the system would be singular. Connect it to the cage, remove it, or add its joint landmark.");
+  // pieces that hang on the rest by a node or an edge only (tets sharing no face with it) turn about that
+  // hinge freely: every piece of face-connected tets needs a fixed node of its own
+  std::vector<int> tp(mesh.tets.size());
+  std::iota(tp.begin(), tp.end(), 0);
+  std::map<std::array<int, 3>, int> faceTet;
+  static const int kFaces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
+  for (int t = 0; t < mesh.numTets(); ++t)
+    for (const auto& f : kFaces) {
+      std::array<int, 3> key{mesh.tets[t][f[0]], mesh.tets[t][f[1]], mesh.tets[t][f[2]]};
+      std::sort(key.begin(), key.end());
+      const auto [it, fresh] = faceTet.emplace(key, t);
+      if (!fresh) tp[find(tp, t)] = find(tp, it->second);
+    }
+  std::vector<char> fixed(mesh.numNodes(), 0);
+  for (int n : fixedNodes) fixed[n] = 1;
+  std::map<int, bool> held;
+  for (int t = 0; t < mesh.numTets(); ++t) {
+    bool& h = held[find(tp, t)];
+    for (int k = 0; k < mesh.nodesPerTet(); ++k) h = h || fixed[mesh.tets[t][k]];
+  }
+  for (const auto& [root, h] : held)
+    if (!h) {
+      int n = 0;
+      for (int t = 0; t < mesh.numTets(); ++t) n += find(tp, t) == root;
+      throw InputError("A piece of the model (" + std::to_string(n) + " tets of the " + partName(mesh.tissue[root], tetPart[root]) +
+                       " near " + pointText(mesh.centroid(root)) +
+                       ") hangs on the rest by a single node or edge, no tet face: it turns freely about it and the system "
+                       "would be singular. The surface is too coarse there (a thin part a few elements across, or two parts "
+                       "touching at a point): use a smaller edge length or a maximum tet volume.");
+    }
+  // a node of no tet (a surface vertex TetGen left out) has no stiffness at all
+  std::vector<char> used(mesh.numNodes(), 0);
+  for (const auto& t : mesh.tets)
+    for (int k = 0; k < mesh.nodesPerTet(); ++k) used[t[k]] = 1;
+  for (int n = 0; n < mesh.numNodes(); ++n)
+    if (!used[n])
+      throw InputError("Node " + std::to_string(n) + " at " + pointText(mesh.nodes[n]) +
+                       " belongs to no tetrahedron (TetGen left this surface vertex out): the system would be singular. "
+                       "Remove near-duplicate vertices there (Cleaning: Merge Close Vertices) or use another edge length.");
   return static_cast<int>(compTet.size());
 }
 
@@ -417,7 +475,12 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
   progress(15, "Factorising (CHOLMOD)");
   fe::Problem prob = problemAt(a, opt, 1.0);  // unit Fe; the solves scale it
   fe::Solver solver(prob);
-  const fe::Result lin1 = solver.solveLinear(1.0);
+  fe::Result lin1;
+  try {
+    lin1 = solver.solveLinear(1.0);
+  } catch (const InputError& e) {
+    throw InputError(std::string(e.what()) + slivers(a));
+  }
   a.linearCompliance = elevationOf(lin1.u, a, dir);
   if (!(a.linearCompliance > 0))
     throw InputError("The sternum does not move along the force direction under the elevating force (compliance " +
