@@ -333,8 +333,8 @@ void FilterNussFeaPlugin::initNussFea(MeshDocument& md, RichParameterList& par) 
                         "from the layer name ('cartilag' -> costal cartilage; 'stern', 'manubr', 'xiph' -> sternum; 'rib', "
                         "'bone', 'costa' -> bone), else from the layer's face labels if all one tissue. Hide layers that are "
                         "not part of the cage. The layers are joined by a CGAL corefinement union into one conforming volume; "
-                        "each tet takes the tissue of the layer containing it, cartilage winning over sternum and sternum "
-                        "over bone where layers overlap. Parts: a labelled layer keeps its own; else each piece of a bone "
+                        "each tet takes the tissue of the layer containing it, where layers overlap the one it lies deeper "
+                        "in (the interface in the middle of the overlap). Parts: a labelled layer keeps its own; else each piece of a bone "
                         "layer is the rib of the nearest costovertebral joint landmark, cartilage faces take the nearest "
                         "rib's number, sternum faces are the sternum body. The joined surface is the result layer."));
   addLandmarkParam(md, par);

@@ -36,7 +36,7 @@ using Primitive = CGAL::AABB_face_graph_triangle_primitive<Mesh>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 using Inside = CGAL::Side_of_triangle_mesh<Mesh, K>;
 
-// overlap priority: lower wins (cartilage over sternum over bone)
+// tie priority in an overlap, lower wins (cartilage over sternum over bone)
 int priority(Tissue t) { return t == Tissue::Cartilage ? 0 : t == Tissue::Sternum ? 1 : 2; }
 
 struct Solid {
@@ -259,12 +259,15 @@ CageSurface joinTissueLayers(const std::vector<TissueLayer>& layers, const std::
     for (int t = 0; t < mesh.numTets(); ++t) {
       const Eigen::Vector3d c = mesh.centroid(t);
       const Point p(c.x(), c.y(), c.z());
+      const Solid* in = nullptr;
+      double depth = -1;
       for (const Solid* s : byPriority)
-        if ((*s->inside)(p) != CGAL::ON_UNBOUNDED_SIDE) {
-          mesh.tissue[std::size_t(t)] = int(s->tissue);
-          tetPart[std::size_t(t)] = s->nearest(p).second;
-          break;
-        }  // in no solid (a rounding sliver at the union's surface): the nearest face's label stays
+        if ((*s->inside)(p) != CGAL::ON_UNBOUNDED_SIDE)
+          if (const double d = s->tree->squared_distance(p); d > depth) in = s, depth = d;  // ties: priority
+      if (in) {  // in no solid (a rounding sliver at the union's surface): the nearest face's label stays
+        mesh.tissue[std::size_t(t)] = int(in->tissue);
+        tetPart[std::size_t(t)] = in->nearest(p).second;
+      }
     }
   };
   return cage;
