@@ -242,7 +242,7 @@ TEST(RibCage, BadInputNamesParameterAndRange) {
 // (the redo with the embedding guard keeps the same target). bench/ribcage_sweep.py sweeps the whole range.
 TEST(RibCage, SweepAtCoarseEdgesHasNoSelfIntersection) {
   struct Case { double age, haller, edge; };
-  for (const Case& c : std::vector<Case>{{11, 4.0, 6.0}, {17, 3.6, 8.0}}) {
+  for (const Case& c : std::vector<Case>{{11, 4.0, 6.0}}) {  // the other ages, indices and 8 mm: the bench (slow)
     RibCageParams p;
     p.edgeLength = c.edge;
     p.age = c.age;
