@@ -185,14 +185,28 @@ struct Mesh {
   std::vector<Vec3> X;                  // current positions (compact indices)
   std::vector<Element> E;               // compact vertex indices
   std::vector<std::vector<int>> vE;     // node -> elements
+  std::vector<Vec3> N;                  // unit normal of the C1 surface at each node's current position
 };
+
+/// an element at positions p is not folded: its signed area (a quad: every Knupp corner area, and the quad
+/// valid in itself) is positive along the surface normal at each of its nodes - `nrm` for node n (the
+/// candidate's), M.N for the others - so no node's move can fold an element against another node's normal
+bool unfolded(const Mesh& M, const Element& e, const Vec3* p, int n, const Vec3& nrm) {
+  for (int k = 0; k < e.nv; ++k) {
+    const Vec3& nk = e.v[k] == n ? nrm : M.N[std::size_t(e.v[k])];
+    if (!(e.nv == 3 ? triangleAlphaSigned(p[0], p[1], p[2], nk) > 1e-12
+                    : quadBetaWithNormal(p[0], p[1], p[2], p[3], nk) > 1e-12))
+      return false;
+  }
+  return true;
+}
 
 /// fitness of node n at position x with surface normal nrm: sum of element qualities (cap > 0, the final
 /// pass: the worst element's quality up to the cap, plus kCapSumWeight times the sum) if none is folded
-/// against nrm and the worst is not below the guard, else below any valid value. Invalid stars rank
+/// (unfolded() above) and the worst is not below the guard, else below any valid value. Invalid stars rank
 /// lexicographically: first by the elements invalid in themselves (a reflex, folded or degenerate quad
 /// along its own normal, a degenerate triangle), then by those folded only against the surface normal at
-/// the node, then by the sum; so a star that starts with an element folded against the node's normal
+/// a node, then by the sum; so a star that starts with an element folded against the node's normal
 /// (a nearly flat corner on a curved surface) can never trade it for an element invalid in itself.
 constexpr double kCapSumWeight = 0.01;
 double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double guard, double cap = 0,
@@ -203,15 +217,8 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
   for (int ei : M.vE[std::size_t(n)]) {
     const Element& e = M.E[std::size_t(ei)];
     for (int k = 0; k < e.nv; ++k) p[k] = e.v[k] == n ? x : M.X[std::size_t(e.v[k])];
-    double q;
-    bool ok;
-    if (e.nv == 3) {
-      q = triangleAlpha(p[0], p[1], p[2]);
-      ok = triangleAlphaSigned(p[0], p[1], p[2], nrm) > 1e-12;
-    } else {
-      q = quadBeta(p[0], p[1], p[2], p[3]);
-      ok = q > 1e-12 && quadBetaWithNormal(p[0], p[1], p[2], p[3], nrm) > 1e-12;
-    }
+    const double q = e.nv == 3 ? triangleAlpha(p[0], p[1], p[2]) : quadBeta(p[0], p[1], p[2], p[3]);
+    const bool ok = q > 1e-12 && unfolded(M, e, p, n, nrm);
     if (!(q > 1e-12)) ++broken;
     else if (!ok) ++invalid;
     sum += q;
@@ -224,6 +231,18 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
 }
 
 QualityStats stats(const Mesh& M) { return summarizeQuality(elementQualities(M.E, M.X), 10); }
+
+/// elements folded against the surface normal at one of their nodes, or invalid in themselves
+std::size_t foldedElements(const Mesh& M) {
+  std::size_t folded = 0;
+  Vec3 p[4];
+  for (const auto& e : M.E) {
+    for (int k = 0; k < e.nv; ++k) p[k] = M.X[std::size_t(e.v[k])];
+    const double q = e.nv == 3 ? triangleAlpha(p[0], p[1], p[2]) : quadBeta(p[0], p[1], p[2], p[3]);
+    folded += !(q > 1e-12 && unfolded(M, e, p, -1, p[0]));
+  }
+  return folded;
+}
 
 /// One node's search: where it starts, the guard, and the best candidate found so far.
 struct NodeSearch {
@@ -535,6 +554,12 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
       L.t = k == 2 ? 1 : 0;
     }
 
+  M.N.resize(nv);
+  for (std::size_t i = 0; i < nv; ++i) {
+    const Loc& l = loc[i];
+    M.N[i] = l.face >= 0 ? S.at(l.face, Vec3(1 - l.s - l.t, l.s, l.t)).normal : Vec3(0, 0, 1);
+  }
+
   // greedy colouring: nodes sharing an element get different colours
   std::vector<int> colour(nv, -1);
   std::vector<std::vector<int>> classes;
@@ -581,7 +606,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         if (!maxMin && !active[std::size_t(n)]) continue;
         const Vec3 x0 = M.X[std::size_t(n)];
         const Loc l0 = loc[std::size_t(n)];
-        const Vec3 n0 = S.at(l0.face, Vec3(1 - l0.s - l0.t, l0.s, l0.t)).normal;
+        const Vec3 n0 = M.N[std::size_t(n)];
         double curMin = 0;
         const double cap = maxMin ? opt.minPassBelow : 0.0;
         double fit0 = fitnessAt(M, n, x0, n0, -1.0, cap, &curMin);
@@ -598,12 +623,14 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         // the node moves after its own search: neighbours of the same colour do not see it, and
         // no node of this colour reads it (they share no element)
         M.X[std::size_t(n)] = ns.bestX;
+        M.N[std::size_t(n)] = S.at(ns.bestLoc.face, Vec3(1 - ns.bestLoc.s - ns.bestLoc.t, ns.bestLoc.s, ns.bestLoc.t)).normal;
         loc[std::size_t(n)] = ns.bestLoc;
         projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], ns.bestDist);
         if (!maxMin) gained[std::size_t(n)] = ns.bestFit - fit0 > activeTol * double(M.vE[std::size_t(n)].size());
       }
     }
   };
+  res.foldedBefore = foldedElements(M);
   bool stopped = false;
   for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
     sweepOnce(sweep, false);
@@ -642,6 +669,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
     }
 
   res.after = stats(M);
+  res.foldedAfter = foldedElements(M);
   res.evaluations = std::accumulate(evaluations.begin(), evaluations.end(), std::size_t(0));
   res.maxProjectionDistance = *std::max_element(projDist.begin(), projDist.end());
   res.positions.resize(m.vert.size());

@@ -86,6 +86,8 @@ struct Result {
   QualityStats before, after;    ///< over elements: alpha (triangles) or beta (quads; lone triangles alpha)
   std::vector<double> perFace;   ///< element quality after, per m.face index (deleted faces: 0)
   std::size_t elements = 0, quads = 0;
+  /// elements folded against the C1 surface normal at one of their nodes, before and after
+  std::size_t foldedBefore = 0, foldedAfter = 0;
   std::size_t freeNodes = 0, boundaryNodes = 0, featureNodes = 0, singularNodes = 0, userFixedNodes = 0;
   std::size_t evaluations = 0;       ///< fitness evaluations (both methods)
   std::size_t nodesMoved = 0;

@@ -251,6 +251,9 @@ TEST(MgaSmooth, NeverFoldsAVeryBadMesh) {
     EXPECT_GT((b - a).cross(c - a).z(), 0);
   }
   EXPECT_GE(r.after.min, r.before.min);
+  // the same, counted by the core against the surface normal at every node of every element
+  EXPECT_EQ(r.foldedBefore, 0u);
+  EXPECT_EQ(r.foldedAfter, 0u);
 }
 
 double maxSaddleDeviation(const std::vector<Vec3>& P) {
