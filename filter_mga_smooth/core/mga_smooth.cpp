@@ -188,22 +188,40 @@ struct Mesh {
   std::vector<Vec3> N;                  // unit normal of the C1 surface at each node's current position
 };
 
-/// an element at positions p is not folded: its signed area (a quad: every Knupp corner area, and the quad
-/// valid in itself) is positive along the surface normal at each of its nodes - `nrm` for node n (the
-/// candidate's), M.N for the others - so no node's move can fold an element against another node's normal
-bool unfolded(const Mesh& M, const Element& e, const Vec3* p, int n, const Vec3& nrm) {
-  for (int k = 0; k < e.nv; ++k) {
-    const Vec3& nk = e.v[k] == n ? nrm : M.N[std::size_t(e.v[k])];
-    if (!(e.nv == 3 ? triangleAlphaSigned(p[0], p[1], p[2], nk) > 1e-12
-                    : quadBetaWithNormal(p[0], p[1], p[2], p[3], nk) > 1e-12))
-      return false;
+/// the normal to test node k of element e against: `nrm` for node n (the candidate's), M.N for the others
+inline const Vec3& nodeNormal(const Mesh& M, const Element& e, int k, int n, const Vec3& nrm) {
+  return e.v[k] == n ? nrm : M.N[std::size_t(e.v[k])];
+}
+
+/// quality of the element at positions p (alpha, or beta for a quad) and whether it is unfolded: valid in
+/// itself and its signed area (a quad: every Knupp corner area) positive along the surface normal at each
+/// of its nodes, so that no node's move can fold an element against another node's normal. A triangle
+/// computes its cross product and edge sum once (the same arithmetic as triangleAlpha/triangleAlphaSigned).
+inline double elementQuality(const Mesh& M, const Element& e, const Vec3* p, int n, const Vec3& nrm, bool& ok) {
+  static const double kTwoSqrt3 = 2.0 * std::sqrt(3.0);
+  ok = false;
+  if (e.nv == 3) {
+    const Vec3 cr = (p[1] - p[0]).cross(p[2] - p[0]);
+    const double denom = (p[1] - p[0]).squaredNorm() + (p[2] - p[1]).squaredNorm() + (p[0] - p[2]).squaredNorm();
+    if (!(denom > 0.0)) return 0.0;
+    const double q = kTwoSqrt3 * cr.norm() / denom;
+    if (!(q > 1e-12)) return q;
+    for (int k = 0; k < 3; ++k)
+      if (!(kTwoSqrt3 * cr.dot(nodeNormal(M, e, k, n, nrm)) / denom > 1e-12)) return q;
+    ok = true;
+    return q;
   }
-  return true;
+  const double q = quadBeta(p[0], p[1], p[2], p[3]);
+  if (!(q > 1e-12)) return q;
+  for (int k = 0; k < 4; ++k)
+    if (!(quadBetaWithNormal(p[0], p[1], p[2], p[3], nodeNormal(M, e, k, n, nrm)) > 1e-12)) return q;
+  ok = true;
+  return q;
 }
 
 /// fitness of node n at position x with surface normal nrm: sum of element qualities (cap > 0, the final
 /// pass: the worst element's quality up to the cap, plus kCapSumWeight times the sum) if none is folded
-/// (unfolded() above) and the worst is not below the guard, else below any valid value. Invalid stars rank
+/// (elementQuality() above) and the worst is not below the guard, else below any valid value. Invalid stars rank
 /// lexicographically: first by the elements invalid in themselves (a reflex, folded or degenerate quad
 /// along its own normal, a degenerate triangle), then by those folded only against the surface normal at
 /// a node, then by the sum; so a star that starts with an element folded against the node's normal
@@ -217,8 +235,8 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
   for (int ei : M.vE[std::size_t(n)]) {
     const Element& e = M.E[std::size_t(ei)];
     for (int k = 0; k < e.nv; ++k) p[k] = e.v[k] == n ? x : M.X[std::size_t(e.v[k])];
-    const double q = e.nv == 3 ? triangleAlpha(p[0], p[1], p[2]) : quadBeta(p[0], p[1], p[2], p[3]);
-    const bool ok = q > 1e-12 && unfolded(M, e, p, n, nrm);
+    bool ok;
+    const double q = elementQuality(M, e, p, n, nrm, ok);
     if (!(q > 1e-12)) ++broken;
     else if (!ok) ++invalid;
     sum += q;
@@ -238,8 +256,9 @@ std::size_t foldedElements(const Mesh& M) {
   Vec3 p[4];
   for (const auto& e : M.E) {
     for (int k = 0; k < e.nv; ++k) p[k] = M.X[std::size_t(e.v[k])];
-    const double q = e.nv == 3 ? triangleAlpha(p[0], p[1], p[2]) : quadBeta(p[0], p[1], p[2], p[3]);
-    folded += !(q > 1e-12 && unfolded(M, e, p, -1, p[0]));
+    bool ok;
+    elementQuality(M, e, p, -1, p[0], ok);
+    folded += !ok;
   }
   return folded;
 }
