@@ -213,8 +213,25 @@ inline double elementQuality(const Mesh& M, const Element& e, const Vec3* p, int
   }
   const double q = quadBeta(p[0], p[1], p[2], p[3]);
   if (!(q > 1e-12)) return q;
-  for (int k = 0; k < 4; ++k)
-    if (!(quadBetaWithNormal(p[0], p[1], p[2], p[3], nodeNormal(M, e, k, n, nrm)) > 1e-12)) return q;
+  // quadBetaWithNormal(p, normal of node k) > 1e-12 for each k, with the corner cross products and edge
+  // sums computed once
+  Vec3 cr[4];
+  double len[4];
+  for (int c = 0; c < 4; ++c) {
+    const Vec3 e1 = p[(c + 1) % 4] - p[c], e2 = p[(c + 3) % 4] - p[c];
+    cr[c] = e1.cross(e2);
+    len[c] = e1.squaredNorm() + e2.squaredNorm();
+  }
+  for (int k = 0; k < 4; ++k) {
+    const Vec3& nk = nodeNormal(M, e, k, n, nrm);
+    double sum = 0.0;
+    for (int c = 0; c < 4; ++c) {
+      const double ak = cr[c].dot(nk);
+      if (!(ak > 0.0)) return q;
+      sum += len[c] / ak;
+    }
+    if (!std::isfinite(sum) || !(sum > 0.0) || !(8.0 / sum > 1e-12)) return q;
+  }
   ok = true;
   return q;
 }
