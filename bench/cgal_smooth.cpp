@@ -29,6 +29,7 @@
 #include <string>
 #include <vector>
 
+#include "off_reader.h"
 #include "pectus/quality.h"
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -37,36 +38,10 @@ using Mesh = CGAL::Surface_mesh<Point>;
 using Primitive = CGAL::AABB_face_graph_triangle_primitive<Mesh>;
 using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Primitive>>;
 namespace PMP = CGAL::Polygon_mesh_processing;
+using pectus::bench::Off;
+using pectus::bench::readOff;
 
 namespace {
-
-struct Off {
-  std::vector<pectus::Vec3> V;
-  std::vector<std::vector<int>> F;
-};
-
-Off readOff(const std::string& path) {
-  std::ifstream in(path);
-  std::string head;
-  in >> head;
-  if (head != "OFF") throw std::runtime_error(path + ": not an OFF file");
-  std::size_t nv = 0, nf = 0, ne = 0;
-  in >> nv >> nf >> ne;
-  Off o;
-  o.V.resize(nv);
-  for (auto& p : o.V) in >> p.x() >> p.y() >> p.z();
-  o.F.resize(nf);
-  for (auto& f : o.F) {
-    int k = 0;
-    in >> k;
-    f.resize(std::size_t(k));
-    for (auto& v : f) in >> v;
-    std::string rest;
-    std::getline(in, rest);  // colours, if any
-  }
-  if (!in) throw std::runtime_error(path + ": truncated OFF file");
-  return o;
-}
 
 Mesh readMesh(const std::string& path) {
   Mesh m;

@@ -181,7 +181,7 @@ def main():
             p += 1 + k
         inputs.append((name, V, F, False))
 
-    rows = []
+    rows, folded_input = [], {}  # folded_input: the input's folded elements, from our first row's Log
     load0 = os.getloadavg()
     for label, V, F, is_saddle in inputs:
         base = os.path.join(work, re.sub(r"\W+", "_", label))
@@ -214,12 +214,16 @@ def main():
             runs += [("ours: Gradient, to convergence (40 sw max)", ("ml", elems, ours(False, 40)))]
         for name, how in runs:
             out = base + "_" + re.sub(r"\W+", "_", name) + ".off"
-            secs = 0.0
+            secs, folded = 0.0, "-"
             try:
                 if how is None:
                     out = elems
                 elif how[0] == "ml":
-                    secs, _ = b.meshlab(how[1], out, how[2])
+                    secs, log = b.meshlab(how[1], out, how[2])
+                    m = re.search(r"folded against a node's surface normal (\d+) -> (\d+)", "\n".join(log))
+                    folded = m.group(2) if m else "-"
+                    if m:
+                        folded_input[label] = m.group(1)
                 elif how[0] == "om":
                     t0 = time.perf_counter()
                     p = subprocess.run(["OpenMesh-Smoothing", "-t", "10", how[1], out], stdout=subprocess.PIPE,
@@ -238,24 +242,26 @@ def main():
                     dev = float(np.max(np.abs(W[:, 2] - saddle(W[:, 0], W[:, 1]))))
                 else:
                     dev = float(b.tool_out("distance", elems, out).split()[1])
-                rows.append((label, name, qmin, qmean, dev, secs, len(V), len(F)))
+                rows.append((label, name, qmin, qmean, dev, secs, len(V), len(F), folded))
             except Exception as e:  # noqa: BLE001  (a failed peer is a row, not the end of the table)
-                rows.append((label, name, None, None, None, None, len(V), len(F), str(e)[:90]))
+                rows.append((label, name, None, None, None, None, len(V), len(F), "-", str(e)[:90]))
             print(f"  {label:18s} {name:46s} done", file=sys.stderr, flush=True)
 
     print(f"load average before/after the run: {load0[0]:.1f} / {os.getloadavg()[0]:.1f} ({os.cpu_count()} cores; "
           "other jobs on the machine inflate the times)")
-    print(f"{'method':48s} {'q min':>7s} {'q mean':>7s} {'max dev':>9s} {'time s':>8s}")
+    print(f"{'method':48s} {'q min':>7s} {'q mean':>7s} {'max dev':>9s} {'time s':>8s} {'folded':>6s}")
     last = None
     for r in rows:
         if r[0] != last:
             print(f"{r[0]} ({r[6]} nodes, {r[7]} {'quads, beta' if 'quads' in r[0] else 'triangles, alpha'})")
         last = r[0]
         if r[2] is None:
-            print(f"  {r[1]:46s} failed: {r[8]}")
+            print(f"  {r[1]:46s} failed: {r[9]}")
         else:
-            print(f"  {r[1]:46s} {r[2]:7.4f} {r[3]:7.4f} {r[4]:9.2e} {r[5]:8.2f}")
+            folded = folded_input.get(r[0], "-") if r[1] == "input" else r[8]
+            print(f"  {r[1]:46s} {r[2]:7.4f} {r[3]:7.4f} {r[4]:9.2e} {r[5]:8.2f} {folded:>6s}")
     print("max dev: saddle rows |z - saddle(x, y)|; femur/bunny rows distance to the input surface / bbox diagonal")
+    print("folded: input and our rows, elements folded against the C1 surface normal at one of their nodes (our Log)")
     for r in rows:
         if r[1].startswith("ours: MGA, defaults") and r[5]:
             print(f"MGA time per element on {r[0]}: {1e3 * r[5] / r[7]:.3f} ms (thesis: 150 s / 51354 triangles "

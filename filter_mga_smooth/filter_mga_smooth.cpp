@@ -282,7 +282,8 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
   ctx.log(what + ": fixed nodes: " + std::to_string(r.boundaryNodes) + " boundary, " +
           std::to_string(r.featureNodes) + " feature, " + std::to_string(r.singularNodes) + " singular, " +
           std::to_string(r.userFixedNodes) + " by the selection; " + std::to_string(r.colours) + " colours; " +
-          std::to_string(r.evaluations) + " fitness evaluations");
+          std::to_string(r.evaluations) + " fitness evaluations; elements folded against a node's surface normal " +
+          std::to_string(r.foldedBefore) + " -> " + std::to_string(r.foldedAfter));
 }
 
 MESHLAB_PLUGIN_NAME_EXPORTER(FilterMgaSmoothPlugin)

@@ -185,14 +185,63 @@ struct Mesh {
   std::vector<Vec3> X;                  // current positions (compact indices)
   std::vector<Element> E;               // compact vertex indices
   std::vector<std::vector<int>> vE;     // node -> elements
+  std::vector<Vec3> N;                  // unit normal of the C1 surface at each node's current position
 };
+
+/// the normal to test node k of element e against: `nrm` for node n (the candidate's), M.N for the others
+inline const Vec3& nodeNormal(const Mesh& M, const Element& e, int k, int n, const Vec3& nrm) {
+  return e.v[k] == n ? nrm : M.N[std::size_t(e.v[k])];
+}
+
+/// quality of the element at positions p (alpha, or beta for a quad) and whether it is unfolded: valid in
+/// itself and its signed area (a quad: every Knupp corner area) positive along the surface normal at each
+/// of its nodes, so that no node's move can fold an element against another node's normal. A triangle
+/// computes its cross product and edge sum once (the same arithmetic as triangleAlpha/triangleAlphaSigned).
+inline double elementQuality(const Mesh& M, const Element& e, const Vec3* p, int n, const Vec3& nrm, bool& ok) {
+  static const double kTwoSqrt3 = 2.0 * std::sqrt(3.0);
+  ok = false;
+  if (e.nv == 3) {
+    const Vec3 cr = (p[1] - p[0]).cross(p[2] - p[0]);
+    const double denom = (p[1] - p[0]).squaredNorm() + (p[2] - p[1]).squaredNorm() + (p[0] - p[2]).squaredNorm();
+    if (!(denom > 0.0)) return 0.0;
+    const double q = kTwoSqrt3 * cr.norm() / denom;
+    if (!(q > 1e-12)) return q;
+    for (int k = 0; k < 3; ++k)
+      if (!(kTwoSqrt3 * cr.dot(nodeNormal(M, e, k, n, nrm)) / denom > 1e-12)) return q;
+    ok = true;
+    return q;
+  }
+  const double q = quadBeta(p[0], p[1], p[2], p[3]);
+  if (!(q > 1e-12)) return q;
+  // quadBetaWithNormal(p, normal of node k) > 1e-12 for each k, with the corner cross products and edge
+  // sums computed once
+  Vec3 cr[4];
+  double len[4];
+  for (int c = 0; c < 4; ++c) {
+    const Vec3 e1 = p[(c + 1) % 4] - p[c], e2 = p[(c + 3) % 4] - p[c];
+    cr[c] = e1.cross(e2);
+    len[c] = e1.squaredNorm() + e2.squaredNorm();
+  }
+  for (int k = 0; k < 4; ++k) {
+    const Vec3& nk = nodeNormal(M, e, k, n, nrm);
+    double sum = 0.0;
+    for (int c = 0; c < 4; ++c) {
+      const double ak = cr[c].dot(nk);
+      if (!(ak > 0.0)) return q;
+      sum += len[c] / ak;
+    }
+    if (!std::isfinite(sum) || !(sum > 0.0) || !(8.0 / sum > 1e-12)) return q;
+  }
+  ok = true;
+  return q;
+}
 
 /// fitness of node n at position x with surface normal nrm: sum of element qualities (cap > 0, the final
 /// pass: the worst element's quality up to the cap, plus kCapSumWeight times the sum) if none is folded
-/// against nrm and the worst is not below the guard, else below any valid value. Invalid stars rank
+/// (elementQuality() above) and the worst is not below the guard, else below any valid value. Invalid stars rank
 /// lexicographically: first by the elements invalid in themselves (a reflex, folded or degenerate quad
 /// along its own normal, a degenerate triangle), then by those folded only against the surface normal at
-/// the node, then by the sum; so a star that starts with an element folded against the node's normal
+/// a node, then by the sum; so a star that starts with an element folded against the node's normal
 /// (a nearly flat corner on a curved surface) can never trade it for an element invalid in itself.
 constexpr double kCapSumWeight = 0.01;
 double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double guard, double cap = 0,
@@ -203,15 +252,8 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
   for (int ei : M.vE[std::size_t(n)]) {
     const Element& e = M.E[std::size_t(ei)];
     for (int k = 0; k < e.nv; ++k) p[k] = e.v[k] == n ? x : M.X[std::size_t(e.v[k])];
-    double q;
     bool ok;
-    if (e.nv == 3) {
-      q = triangleAlpha(p[0], p[1], p[2]);
-      ok = triangleAlphaSigned(p[0], p[1], p[2], nrm) > 1e-12;
-    } else {
-      q = quadBeta(p[0], p[1], p[2], p[3]);
-      ok = q > 1e-12 && quadBetaWithNormal(p[0], p[1], p[2], p[3], nrm) > 1e-12;
-    }
+    const double q = elementQuality(M, e, p, n, nrm, ok);
     if (!(q > 1e-12)) ++broken;
     else if (!ok) ++invalid;
     sum += q;
@@ -224,6 +266,19 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
 }
 
 QualityStats stats(const Mesh& M) { return summarizeQuality(elementQualities(M.E, M.X), 10); }
+
+/// elements folded against the surface normal at one of their nodes, or invalid in themselves
+std::size_t foldedElements(const Mesh& M) {
+  std::size_t folded = 0;
+  Vec3 p[4];
+  for (const auto& e : M.E) {
+    for (int k = 0; k < e.nv; ++k) p[k] = M.X[std::size_t(e.v[k])];
+    bool ok;
+    elementQuality(M, e, p, -1, p[0], ok);
+    folded += !ok;
+  }
+  return folded;
+}
 
 /// One node's search: where it starts, the guard, and the best candidate found so far.
 struct NodeSearch {
@@ -535,6 +590,12 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
       L.t = k == 2 ? 1 : 0;
     }
 
+  M.N.resize(nv);
+  for (std::size_t i = 0; i < nv; ++i) {
+    const Loc& l = loc[i];
+    M.N[i] = l.face >= 0 ? S.at(l.face, Vec3(1 - l.s - l.t, l.s, l.t)).normal : Vec3(0, 0, 1);
+  }
+
   // greedy colouring: nodes sharing an element get different colours
   std::vector<int> colour(nv, -1);
   std::vector<std::vector<int>> classes;
@@ -581,7 +642,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         if (!maxMin && !active[std::size_t(n)]) continue;
         const Vec3 x0 = M.X[std::size_t(n)];
         const Loc l0 = loc[std::size_t(n)];
-        const Vec3 n0 = S.at(l0.face, Vec3(1 - l0.s - l0.t, l0.s, l0.t)).normal;
+        const Vec3 n0 = M.N[std::size_t(n)];
         double curMin = 0;
         const double cap = maxMin ? opt.minPassBelow : 0.0;
         double fit0 = fitnessAt(M, n, x0, n0, -1.0, cap, &curMin);
@@ -598,12 +659,14 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         // the node moves after its own search: neighbours of the same colour do not see it, and
         // no node of this colour reads it (they share no element)
         M.X[std::size_t(n)] = ns.bestX;
+        M.N[std::size_t(n)] = S.at(ns.bestLoc.face, Vec3(1 - ns.bestLoc.s - ns.bestLoc.t, ns.bestLoc.s, ns.bestLoc.t)).normal;
         loc[std::size_t(n)] = ns.bestLoc;
         projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], ns.bestDist);
         if (!maxMin) gained[std::size_t(n)] = ns.bestFit - fit0 > activeTol * double(M.vE[std::size_t(n)].size());
       }
     }
   };
+  res.foldedBefore = foldedElements(M);
   bool stopped = false;
   for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
     sweepOnce(sweep, false);
@@ -642,6 +705,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
     }
 
   res.after = stats(M);
+  res.foldedAfter = foldedElements(M);
   res.evaluations = std::accumulate(evaluations.begin(), evaluations.end(), std::size_t(0));
   res.maxProjectionDistance = *std::max_element(projDist.begin(), projDist.end());
   res.positions.resize(m.vert.size());

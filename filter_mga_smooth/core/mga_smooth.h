@@ -8,7 +8,8 @@
 // local projection (Gauss-Newton on the patch the node currently lies on, walking to neighbour patches,
 // falling back to the global closestPoint). Fitness = sum of alpha (eq. 3-21) or beta (eq. 3-24) over the
 // node's elements. An element that is inverted or folded with respect to the surface normal at the
-// candidate (signed area / Knupp corner areas not positive) makes the candidate worse than any valid one,
+// candidate or at any other of its nodes (signed area / Knupp corner areas not positive; the other nodes'
+// normals are kept per node) makes the candidate worse than any valid one, so no move folds a neighbour's element,
 // and r2 = 0 (the node's current position, exactly) is the seed of every search, so a node never gets
 // worse and a valid configuration never folds. The best over the adjacent elements is kept.
 // Guard on the worst element (not in the thesis, which maximizes the plain sum): a candidate is also
@@ -86,6 +87,8 @@ struct Result {
   QualityStats before, after;    ///< over elements: alpha (triangles) or beta (quads; lone triangles alpha)
   std::vector<double> perFace;   ///< element quality after, per m.face index (deleted faces: 0)
   std::size_t elements = 0, quads = 0;
+  /// elements folded against the C1 surface normal at one of their nodes, before and after
+  std::size_t foldedBefore = 0, foldedAfter = 0;
   std::size_t freeNodes = 0, boundaryNodes = 0, featureNodes = 0, singularNodes = 0, userFixedNodes = 0;
   std::size_t evaluations = 0;       ///< fitness evaluations (both methods)
   std::size_t nodesMoved = 0;

@@ -70,6 +70,8 @@ for ex in EXAMPLES:
     check(re.search(r"nodes moved \d+ of 81 free; sweeps \d+; time", log) is not None, f"{ex}: Log: nodes moved, sweeps, time", log)
     check(re.search(ex + r" smoothing: fixed nodes: 40 boundary, 0 feature, 0 singular, 0 by the selection", log)
           is not None, f"{ex}: Log: fixed nodes by class", log)
+    check(re.search(r"elements folded against a node's surface normal 0 -> 0", log) is not None,
+          f"{ex}: Log: no folded element before or after", log)
     results[ex] = W
     print(log)
 
