@@ -10,7 +10,8 @@
 using namespace pectus;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  fuzz::Input in(data, size, fuzz::limits(6, false));
+  // (per input: at most 5 x 5 = 25 vertices and a few hundred tets)
+  fuzz::Input in(data, size, fuzz::limits(4, false));
   fuzz::Reader& r = in.r;
   const fuzz::Mesh& fm = in.mesh;
   CMeshO m;
@@ -27,11 +28,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   fe::TetgenOptions to;
   to.radiusEdgeRatio = r.flag() ? 0.0 : r.real(1.2, 3);
-  to.maxVolume = r.real(0.002, 0.5);
+  const double tetFraction = r.real(0.004, 0.2);  // max tet volume / the surface's bounding box volume
   to.order = r.range(1, 2);
   to.preserveSurface = r.flag();
   try {
     const auto cage = nuss::cageFromMesh(m);
+    Eigen::AlignedBox3d box;
+    for (const auto& v : cage.surface.vertices) box.extend(v);
+    to.maxVolume = tetFraction * box.sizes().prod();
     PECTUS_FUZZ_CHECK(cage.surface.faces.size() == cage.surface.faceTissue.size());
     PECTUS_FUZZ_CHECK(cage.facePart.size() == cage.surface.faces.size());
     PECTUS_FUZZ_CHECK(cage.nodeOfVertex.size() == m.vert.size());
