@@ -40,8 +40,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       p.nLong = r.range(0, 5);
       p.mAround = r.range(2, 8);
       p.initialStep = r.flag() ? 0.0 : r.real(0, 50);
-      p.minStep = r.real(0, 5);
-      if (p.minStep < 0.05) p.minStep = 0.5;  // keep the run short: the step halves down to this
+      p.minStep = r.real(0.5, 8);  // keep the run short: the step halves down to this (0.05 by default)
       p.smoothing = r.flag();
       if (r.flag()) p.sternumEnd = r.vec3(-100, 100) + Eigen::Vector3d(0, 0, 100);
       p.binsPerPatch = r.range(1, 4);
