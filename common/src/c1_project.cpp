@@ -32,13 +32,22 @@ void clampST(double& s, double& t) {
   }
 }
 
-double boxDist2(const Vec3& p, const Vec3& a, const Vec3& b) {
+/// squared distance from p to the box [a, b], of the distances scaled by `scale`
+double boxDist2(const Vec3& p, const Vec3& a, const Vec3& b, double scale) {
   double d = 0;
   for (int k = 0; k < 3; ++k) {
-    const double e = p[k] < a[k] ? a[k] - p[k] : (p[k] > b[k] ? p[k] - b[k] : 0.0);
+    const double e = scale * (p[k] < a[k] ? a[k] - p[k] : (p[k] > b[k] ? p[k] - b[k] : 0.0));
     d += e * e;
   }
   return d;
+}
+
+/// 1, or for a query so far from the surface that squared distances would overflow a double (beyond
+/// ~1e154; e.g. 1e300) the power of two that brings its offset to about 1: every squared distance the
+/// search compares is of the distances times this factor (exact, so the order is kept)
+double distanceScale(const Vec3& p, const Vec3& lo, const Vec3& hi) {
+  const double far = std::max((p - lo).cwiseAbs().maxCoeff(), (p - hi).cwiseAbs().maxCoeff());
+  return far > 1e100 ? std::ldexp(1.0, -std::ilogb(far)) : 1.0;
 }
 }  // namespace
 
@@ -118,10 +127,11 @@ SurfacePoint C1Surface::closestPoint(const Vec3& p) const {
   }
   if (++counter == 0) { std::fill(stamp.begin(), stamp.end(), 0); counter = 1; }
 
+  const double sc = distanceScale(p, ix.lo, ix.hi);
   double best = std::numeric_limits<double>::max();
   SurfacePoint res;
   auto tryFace = [&](int f) {
-    if (boxDist2(p, ix.bmin[f], ix.bmax[f]) >= best) return;
+    if (boxDist2(p, ix.bmin[f], ix.bmax[f], sc) >= best) return;
     // start: projection onto the flat triangle
     const auto& F = mesh_.F[f];
     const Vec3 a = mesh_.V[F[0]], e1 = mesh_.V[F[1]] - a, e2 = mesh_.V[F[2]] - a, d = p - a;
@@ -133,11 +143,13 @@ SurfacePoint C1Surface::closestPoint(const Vec3& p) const {
     }
     clampST(s, t);
     PatchJet j = jet(f, Vec3(1 - s - t, s, t));
-    double fv = (j.P - p).squaredNorm();
+    double fv = (sc * (j.P - p)).squaredNorm();
     for (int it = 0; it < 30; ++it) {
-      const Vec3 r = j.P - p;
+      // the residual scaled by sc, so the whole Newton system (J^T J + r.P'') d = -J^T r is scaled by sc
+      const Vec3 r = sc * (j.P - p);
       Eigen::Matrix2d H;
       H << j.Ps.dot(j.Ps), j.Ps.dot(j.Pt), j.Ps.dot(j.Pt), j.Pt.dot(j.Pt);
+      H *= sc;
       const Vec2 g(j.Ps.dot(r), j.Pt.dot(r));
       H += 1e-12 * (H.trace() + 1e-300) * Eigen::Matrix2d::Identity();
       // Newton: second derivatives of the patch by central differences of the first ones (Gauss-Newton
@@ -161,7 +173,7 @@ SurfacePoint C1Surface::closestPoint(const Vec3& p) const {
         double s2 = s + step.x(), t2 = t + step.y();
         clampST(s2, t2);
         const PatchJet j2 = jet(f, Vec3(1 - s2 - t2, s2, t2));
-        const double f2 = (j2.P - p).squaredNorm();
+        const double f2 = (sc * (j2.P - p)).squaredNorm();
         if (f2 < fv) {
           const double ds = std::abs(s2 - s) + std::abs(t2 - t);
           s = s2; t = t2; j = j2; fv = f2; moved = ds > 1e-13;
@@ -205,10 +217,10 @@ SurfacePoint C1Surface::closestPoint(const Vec3& p) const {
       if (hi[k] < ix.dim[k] - 1) { all = false; bound = std::min(bound, ix.lo[k] + (hi[k] + 1) * ix.cs - p[k]); }
     }
     if (all) break;
-    if (res.face >= 0 && bound > 0 && best <= bound * bound) break;
+    if (res.face >= 0 && bound > 0 && best <= (sc * bound) * (sc * bound)) break;
   }
   SurfacePoint out = at(res.face, res.bary);
-  out.distance = (out.point - p).norm();
+  out.distance = (sc * (out.point - p)).norm() / sc;
   return out;
 }
 

@@ -451,6 +451,25 @@ TEST(C1Surface, ClosestPointOfAFarQueryOnATinyMesh) {
   }
 }
 
+// beyond ~1e154 the squared distances overflow: the search used to find no face (face -1, then an
+// out-of-range read); it now compares distances scaled by a power of two
+TEST(C1Surface, ClosestPointOfAQueryAt1e300) {
+  TriMesh m;
+  m.V = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};
+  m.F = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  const C1Surface s(m);
+  for (const Vec3& q : {Vec3(0, 0, 1e300), Vec3(-1e300, 2e300, 0), Vec3(1e308, -1e308, 1e308), Vec3(0, -1e200, 0)}) {
+    const auto cp = s.closestPoint(q);
+    ASSERT_GE(cp.face, 0);
+    ASSERT_LT(cp.face, 4);
+    EXPECT_TRUE(cp.point.allFinite());
+    EXPECT_LT(cp.point.norm(), 2.0);
+    EXPECT_TRUE(std::isfinite(cp.distance));
+    EXPECT_NEAR(cp.distance, q.stableNorm(), 1e-9 * q.stableNorm());
+  }
+  // (which point: at 1e300 the surface's coordinates vanish in the rounding of q - P, every point ties)
+}
+
 TEST(C1Surface, HeightFieldRefusesAFoldedMesh) {
   TriMesh m;
   m.V = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {1, 1, 0}};

@@ -238,11 +238,15 @@ inline double elementQuality(const Mesh& M, const Element& e, const Vec3* p, int
 
 /// fitness of node n at position x with surface normal nrm: sum of element qualities (cap > 0, the final
 /// pass: the worst element's quality up to the cap, plus kCapSumWeight times the sum) if none is folded
-/// (elementQuality() above) and the worst is not below the guard, else below any valid value. Invalid stars rank
-/// lexicographically: first by the elements invalid in themselves (a reflex, folded or degenerate quad
-/// along its own normal, a degenerate triangle), then by those folded only against the surface normal at
-/// a node, then by the sum; so a star that starts with an element folded against the node's normal
-/// (a nearly flat corner on a curved surface) can never trade it for an element invalid in itself.
+/// (elementQuality() above) and the worst is not below the guard, else below any valid value. A worst
+/// element below the guard ranks below everything else, invalid stars included: the node's start respects
+/// its guard, so the guard holds whatever the star (found by fuzzing: a star starting with two elements
+/// folded against the surface normal traded one of them for an element of alpha 1.5e-5, below the guard).
+/// Invalid stars rank lexicographically: first by the elements invalid in themselves (a reflex, folded or
+/// degenerate quad along its own normal, a degenerate triangle), then by those folded only against the
+/// surface normal at a node, then by the sum; so a star that starts with an element folded against the
+/// node's normal (a nearly flat corner on a curved surface) can never trade it for an element invalid in
+/// itself.
 constexpr double kCapSumWeight = 0.01;
 double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double guard, double cap = 0,
                  double* minQ = nullptr) {
@@ -260,8 +264,8 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
     lo = std::min(lo, q);
   }
   if (minQ) *minQ = lo;
+  if (lo < guard) return -1e9 + 0.01 * sum;
   if (broken || invalid) return -1e4 * broken - 100.0 * invalid + 0.01 * sum;
-  if (lo < guard) return -50.0 + 0.01 * sum;
   return cap > 0 ? std::min(lo, cap) + kCapSumWeight * sum : sum;
 }
 

@@ -15,7 +15,9 @@
 // Guard on the worst element (not in the thesis, which maximizes the plain sum): a candidate is also
 // rejected if the worst of the node's elements would drop below min(its current value,
 // Options::worstGuard), so the sum cannot buy a better mean with one very poor element; the mesh minimum
-// therefore never drops below min(initial minimum, worstGuard). worstGuard = 0: the thesis' plain sum.
+// therefore never drops below min(initial minimum, worstGuard). The guard comes before the fold rule: a
+// node whose star is folded may unfold only without dropping its worst element below the guard.
+// worstGuard = 0: the thesis' plain sum.
 // Optional final pass (not in the thesis; off by default): after the sweeps, up to minPassSweeps sweeps
 // over the nodes whose worst element is below minPassBelow, each maximising that worst element (ties
 // broken by the sum), with the same search, projection and fold rules.

@@ -286,6 +286,37 @@ TEST(MgaSmooth, FoldedElementsNeverIncrease) {
   }
 }
 
+TEST(MgaSmooth, GuardHoldsForAFoldedStar) {
+  // found by fuzzing (tests/fuzz/corpus/mga/guard-folded-bipyramid): a jittered triangular bipyramid
+  // whose ring node 3 starts with two faces folded against the C1 surface normal there; the search traded
+  // one fold for a face of alpha 1.5e-5, below the guard, because an invalid star ignored the guard
+  TriMesh t;
+  t.V = {{0, 0, -0.81244373235675593},
+         {0.87372298579091856, -0.21003524895910325, 0.35645207301319376},
+         {-0.25778572278177087, 0.86084445914148167, 0.35645207301319376},
+         {0.073600970919801029, -0.89559452811212104, 0.35645207301319376},
+         {0, 0, 0.81244373235675593}};
+  t.F = {{0, 2, 1}, {0, 3, 2}, {0, 1, 3}, {4, 1, 2}, {4, 2, 3}, {4, 3, 1}};
+  const auto mp = toMesh(t);
+  sm::Options o;
+  o.maxSweeps = 2;
+  o.generations = 3;
+  o.restarts = 0;
+  o.population = 3;
+  o.featureAngleDeg = o.singularAngleDeg = 177.88235294117646;  // no fixed node
+  o.worstGuard = 0.0012054627298390174;
+  o.cgIterations = 1;
+  o.seed = 0;
+  for (const auto method : {sm::Method::ConjugateGradient, sm::Method::MicroGA})
+    for (const double guard : {o.worstGuard, 0.35}) {
+      o.method = method;
+      o.worstGuard = guard;
+      const auto r = sm::smoothMesh(*mp, o);
+      EXPECT_GE(r.after.min, std::min(r.before.min, guard))
+          << (method == sm::Method::MicroGA ? "MGA" : "CG") << ", guard " << guard;
+    }
+}
+
 double maxSaddleDeviation(const std::vector<Vec3>& P) {
   double dev = 0;
   for (const auto& p : P) dev = std::max(dev, std::abs(p.z() - saddle(p.x(), p.y())));

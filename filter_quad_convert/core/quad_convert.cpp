@@ -124,6 +124,13 @@ ConvertResult convertToQuads(const c1::TriMesh& tri, const ConvertOptions& o) {
       if (!tri.V[std::size_t(v)].allFinite())
         throw InputError("vertex " + std::to_string(v) + " has a NaN or infinite coordinate; remove it first");
     }
+  // (found by fuzzing: a triangle with a repeated vertex went through as a leftover element with that
+  // vertex twice)
+  for (std::size_t f = 0; f < tri.F.size(); ++f) {
+    const auto& t = tri.F[f];
+    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
+      throw InputError("triangle " + std::to_string(f) + " uses a vertex twice (a collapsed face); remove it first");
+  }
   ConvertResult r;
   const auto cand = quadCandidates(tri, o);
   r.candidates = cand.size();

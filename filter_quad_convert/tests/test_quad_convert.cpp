@@ -215,6 +215,12 @@ TEST(quad_convert, BadInput) {
     bad.F[1][2] = -1;
     EXPECT_THROW(convertToQuads(bad, o), InputError);
     EXPECT_EQ(convertToQuads(pair, o).merged, 1u);
+    // found by fuzzing (tests/fuzz/corpus/quad/collapsed-leftover-triangle): a triangle with a vertex twice
+    // went through as a leftover element with that vertex twice
+    auto collapsed = pair;
+    collapsed.V.push_back({0.5, -1, 0.3});
+    collapsed.F.push_back({4, 4, 1});
+    EXPECT_THROW(convertToQuads(collapsed, o), InputError);
   }
 }
 

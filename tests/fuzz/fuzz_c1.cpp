@@ -7,7 +7,7 @@
 using namespace pectus;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  fuzz::Input in(data, size, fuzz::limits(8, true));
+  fuzz::Input in(data, size, fuzz::limits(6, true));
   fuzz::Reader& r = in.r;
   const fuzz::Mesh& fm = in.mesh;
   c1::Options opt;

@@ -2,7 +2,7 @@
 // (weld, labels) -> surface checks (closed, self-intersection) -> TetGen -> TET10 -> boundary faces - on
 // small, possibly broken closed meshes.
 // Properties: every tet has valid, distinct nodes, a tissue label and positive volume; the input vertices
-// keep their indices.
+// keep their indices and are in a tet.
 #include "fuzz_mesh.h"
 #include "nuss_analysis.h"
 #include "pectus/errors.h"
@@ -10,7 +10,8 @@
 using namespace pectus;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  fuzz::Input in(data, size, fuzz::limits(6, false));
+  // (per input: at most 5 x 5 = 25 vertices and a few hundred tets)
+  fuzz::Input in(data, size, fuzz::limits(4, false));
   fuzz::Reader& r = in.r;
   const fuzz::Mesh& fm = in.mesh;
   CMeshO m;
@@ -27,11 +28,14 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   }
   fe::TetgenOptions to;
   to.radiusEdgeRatio = r.flag() ? 0.0 : r.real(1.2, 3);
-  to.maxVolume = r.real(0.002, 0.5);
+  const double tetFraction = r.real(0.004, 0.2);  // max tet volume / the surface's bounding box volume
   to.order = r.range(1, 2);
   to.preserveSurface = r.flag();
   try {
     const auto cage = nuss::cageFromMesh(m);
+    Eigen::AlignedBox3d box;
+    for (const auto& v : cage.surface.vertices) box.extend(v);
+    to.maxVolume = tetFraction * box.sizes().prod();
     PECTUS_FUZZ_CHECK(cage.surface.faces.size() == cage.surface.faceTissue.size());
     PECTUS_FUZZ_CHECK(cage.facePart.size() == cage.surface.faces.size());
     PECTUS_FUZZ_CHECK(cage.nodeOfVertex.size() == m.vert.size());
@@ -42,11 +46,16 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     for (std::size_t i = 0; i < cage.surface.vertices.size(); ++i)
       PECTUS_FUZZ_CHECK((tm.nodes[i] - cage.surface.vertices[i]).norm() <= 1e-9 * (1 + cage.surface.vertices[i].norm()));
     PECTUS_FUZZ_CHECK(tm.tissue.size() == tm.tets.size() && tetFace.size() == tm.tets.size());
+    std::vector<char> inTet(std::size_t(nn), 0);
     for (int t = 0; t < tm.numTets(); ++t) {
-      for (int k = 0; k < tm.nodesPerTet(); ++k) PECTUS_FUZZ_CHECK(tm.tets[t][k] >= 0 && tm.tets[t][k] < nn);
+      for (int k = 0; k < tm.nodesPerTet(); ++k) {
+        PECTUS_FUZZ_CHECK(tm.tets[t][k] >= 0 && tm.tets[t][k] < nn);
+        inTet[std::size_t(tm.tets[t][k])] = 1;
+      }
       PECTUS_FUZZ_CHECK(tetFace[t] >= 0 && tetFace[t] < int(cage.surface.faces.size()));
       PECTUS_FUZZ_CHECK(tm.tetVolume(t) > 0);
     }
+    for (std::size_t i = 0; i < cage.surface.vertices.size(); ++i) PECTUS_FUZZ_CHECK(inTet[i]);
     const auto bf = fe::boundaryFaces(tm);
     PECTUS_FUZZ_CHECK(tm.tets.empty() || !bf.empty());
   } catch (const InputError&) {

@@ -1,6 +1,8 @@
 // Fuzz target: thoracic volume cores - slice method, Ferguson envelope, pectus index, divergence volume -
 // on small, possibly broken meshes scaled to a chest's size (mm) with a measured range from the bytes.
 // Properties: results are finite and non-negative where they are volumes/areas.
+#include <algorithm>
+
 #include "fuzz_mesh.h"
 #include "pectus/errors.h"
 #include "thoracic_volume.h"
@@ -8,7 +10,7 @@
 using namespace pectus;
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
-  fuzz::Input in(data, size, fuzz::limits(8, false));
+  fuzz::Input in(data, size, fuzz::limits(6, false));
   fuzz::Reader& r = in.r;
   fuzz::Mesh& fm = in.mesh;
   const Eigen::Vector3d scale = r.vec3(10, 200).cwiseProduct(Eigen::Vector3d(1, 1, 1.5));
@@ -25,9 +27,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     vol::Range range{zmin + std::min(a, b) * (zmax - zmin), zmin + std::max(a, b) * (zmax - zmin)};
     if (what == 0) {
       vol::SliceParams p;
-      p.spacing = r.real(0.5, 40);  // (finer planes are legal but make single runs of minutes)
-      p.resolution = r.range(8, 48);
-      p.rays = r.range(8, 64);
+      // at most ~24 planes, small rasters (finer is legal, only slower: the code paths are the same)
+      p.spacing = std::max(r.real(0.5, 40), (range.zHi - range.zLo) / 24);
+      p.resolution = r.range(8, 32);
+      p.rays = r.range(8, 32);
       vol::requireRange(range, "fuzz");
       const auto res = vol::sliceVolume(s, range, p);
       PECTUS_FUZZ_CHECK(std::isfinite(res.volume) && res.volume >= 0);
@@ -37,8 +40,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       p.nLong = r.range(0, 5);
       p.mAround = r.range(2, 8);
       p.initialStep = r.flag() ? 0.0 : r.real(0, 50);
-      p.minStep = r.real(0, 5);
-      if (p.minStep < 0.05) p.minStep = 0.5;  // keep the run short: the step halves down to this
+      p.minStep = r.real(0.5, 8);  // keep the run short: the step halves down to this (0.05 by default)
       p.smoothing = r.flag();
       if (r.flag()) p.sternumEnd = r.vec3(-100, 100) + Eigen::Vector3d(0, 0, 100);
       p.binsPerPatch = r.range(1, 4);
@@ -56,8 +58,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       if (r.flag()) in.midlineX = r.real(-100, 100);
       if (r.flag()) in.spineY = r.real(-100, 100);
       in.searchRange = range;
-      in.searchSpacing = r.real(1, 60);
-      in.rays = r.range(16, 64);
+      in.searchSpacing = std::max(r.real(1, 60), (range.zHi - range.zLo) / 16);
+      in.rays = r.range(16, 40);
       const auto pi = vol::pectusIndex(s, in);
       PECTUS_FUZZ_CHECK(std::isfinite(pi.transverse) && std::isfinite(pi.apMin) && std::isfinite(pi.apMax));
     } else {

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <map>
+#include <numeric>
 #include <sstream>
 
 #include <tetgen.h>
@@ -73,6 +74,41 @@ Vector3d closestOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d&
   if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) return b + (d4 - d3) / ((d4 - d3) + (d5 - d6)) * (c - b);
   const double den = 1.0 / (va + vb + vc);
   return a + ab * (vb * den) + ac * (vc * den);
+}
+
+/// New index of each TetGen output point such that surface vertex i is node i (the promise of
+/// tetrahedralize) and the other points follow in TetGen's order. TetGen drops input points it does not
+/// mesh (a point in no face outside the volume, a duplicate) and numbers the rest consecutively (found by
+/// fuzzing); it keeps the coordinates of the points it keeps, so they are matched exactly. Throws
+/// InputError if a surface vertex is not among them.
+std::vector<int> inputVerticesFirst(const SurfaceMesh& s, const tetgenio& out) {
+  const int nv = static_cast<int>(s.vertices.size()), np = out.numberofpoints;
+  std::vector<int> node(np, -1);
+  bool identity = np >= nv;
+  for (int i = 0; i < nv && identity; ++i)
+    for (int d = 0; d < 3; ++d) identity = identity && out.pointlist[3 * i + d] == s.vertices[i](d);
+  if (identity) {
+    std::iota(node.begin(), node.end(), 0);
+    return node;
+  }
+  std::map<std::array<double, 3>, int> at;  // output point by its exact coordinates (the first of equal ones)
+  for (int j = np - 1; j >= 0; --j) at[{out.pointlist[3 * j], out.pointlist[3 * j + 1], out.pointlist[3 * j + 2]}] = j;
+  for (int i = 0; i < nv; ++i) {
+    const auto it = at.find({s.vertices[i](0), s.vertices[i](1), s.vertices[i](2)});
+    if (it == at.end() || node[it->second] >= 0) {
+      std::ostringstream msg;
+      msg << "TetGen left out surface vertex " << i << " (at " << s.vertices[i].transpose() << " mm): it coincides with "
+          << (it == at.end() ? "another vertex" : "vertex " + std::to_string(node[it->second]))
+          << " or lies outside the volume. Merge close vertices (e.g. MeshLab's 'Merge Close Vertices') and remove "
+             "unreferenced ones.";
+      throw InputError(msg.str());
+    }
+    node[it->second] = i;
+  }
+  int next = nv;
+  for (int& n : node)
+    if (n < 0) n = next++;
+  return node;
 }
 
 }  // namespace
@@ -191,20 +227,32 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vect
     throw InputError("TetGen failed on the surface: check it is closed, not self-intersecting and without tiny features.");
   }
   if (out.numberoftetrahedra <= 0) throw InputError("TetGen produced no tetrahedra (is the surface closed?).");
+  const std::vector<int> node = inputVerticesFirst(s, out);
   TetMesh m;
   m.order = 1;
   m.nodes.resize(out.numberofpoints);
   for (int i = 0; i < out.numberofpoints; ++i)
-    m.nodes[i] = Vector3d(out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2]);
+    m.nodes[node[i]] = Vector3d(out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2]);
   m.tets.resize(out.numberoftetrahedra);
   std::vector<Vector3d> centroids(out.numberoftetrahedra);
+  std::vector<char> inTet(s.vertices.size(), 0);
   for (int t = 0; t < out.numberoftetrahedra; ++t) {
     std::array<int, 10> e{};
-    for (int k = 0; k < 4; ++k) e[k] = out.tetrahedronlist[t * out.numberofcorners + k];
+    for (int k = 0; k < 4; ++k) {
+      e[k] = node[out.tetrahedronlist[t * out.numberofcorners + k]];
+      if (e[k] < static_cast<int>(inTet.size())) inTet[e[k]] = 1;
+    }
     m.tets[t] = e;
     if (m.tetVolume(t) < 0) std::swap(m.tets[t][1], m.tets[t][2]);
     centroids[t] = m.centroid(t);
   }
+  for (size_t i = 0; i < inTet.size(); ++i)
+    if (!inTet[i]) {
+      std::ostringstream msg;
+      msg << "Surface vertex " << i << " (at " << s.vertices[i].transpose() << " mm) is in no tetrahedron: it lies outside "
+          << "the meshed volume. Remove it (e.g. MeshLab's 'Remove Unreferenced Vertices').";
+      throw InputError(msg.str());
+    }
   const std::vector<int> nf = nearestFaces(s, centroids);
   m.tissue.resize(m.tets.size());
   for (size_t t = 0; t < m.tets.size(); ++t) m.tissue[t] = s.faceTissue[nf[t]];

@@ -123,6 +123,34 @@ TEST(FeMesher, OpenSurfaceIsAnError) {
   }
 }
 
+TEST(FeMesher, SurfaceVertexIsNodeOfTheSameIndex) {
+  // TetGen drops an input point it does not mesh and numbers the rest consecutively, so node i was
+  // another point than surface vertex i after it (an FE load or a deformed-layer vertex on the wrong node)
+  const SurfaceMesh box = boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 100);
+  TetgenOptions o;
+  o.maxVolume = 20;
+  SurfaceMesh inside = box;  // a point in no face inside the volume: TetGen meshes it
+  inside.vertices.insert(inside.vertices.begin() + 3, Vector3d(5, 2.5, 5));
+  for (auto& f : inside.faces)
+    for (int& v : f) v += v >= 3;
+  const TetMesh m = tetrahedralize(inside, o);
+  std::vector<int> inTet(m.nodes.size(), 0);
+  for (const auto& t : m.tets)
+    for (int k = 0; k < 4; ++k) ++inTet[t[k]];
+  for (size_t i = 0; i < inside.vertices.size(); ++i) {
+    EXPECT_EQ((m.nodes[i] - inside.vertices[i]).norm(), 0.0) << "vertex " << i;
+    EXPECT_GT(inTet[i], 0) << "vertex " << i;
+  }
+  SurfaceMesh outside = inside;  // outside the volume: TetGen drops it
+  outside.vertices[3] = Vector3d(30, 5, 5);
+  try {
+    tetrahedralize(outside, o);
+    FAIL() << "no throw";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("surface vertex 3 "), std::string::npos) << e.what();
+  }
+}
+
 TEST(FeMesher, TetgenBoxLabelsVolumeAndSeriesBar) {
   const SurfaceMesh s = boxSurface({0, 0, 0}, {10, 10, 40}, 2, 2, 8, 20);
   TetgenOptions o;

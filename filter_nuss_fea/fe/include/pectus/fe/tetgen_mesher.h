@@ -36,8 +36,11 @@ void checkSurfaceForTetgen(const SurfaceMesh& s);
 /// self-intersecting input). Each tet is labelled with the tissue of the surface face nearest to its
 /// centroid (region points are not needed, so a single closed surface whose faces carry the labels —
 /// as the rib cage generator writes it — works; for thin parts the nearest face is the part's own
-/// surface). Input vertices keep their indices: surface vertex i is mesh node i. `tetFace`, if given,
-/// receives that nearest surface face per tet (e.g. to carry further face labels onto the tets).
+/// surface). Input vertices keep their indices: surface vertex i is mesh node i, at its input position and
+/// in at least one tet (TetGen numbers the points it keeps consecutively and drops a point in no face
+/// outside the volume or a duplicate: the nodes are renumbered back, and a vertex TetGen left out or no tet
+/// uses throws InputError). `tetFace`, if given, receives that nearest surface face per tet (e.g. to carry
+/// further face labels onto the tets).
 TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt = {}, std::vector<int>* tetFace = nullptr);
 
 /// Index of the face of s nearest to each query point (uniform grid search).
