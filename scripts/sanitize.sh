@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The cores' GoogleTests and the fuzz corpus replays under AddressSanitizer + UndefinedBehaviorSanitizer
 # (CMake preset `asan`: gcc, no MeshLab plugins, build dir build-asan/). Any report fails the run.
-#   scripts/sanitize.sh          # configure, build, ctest (what scripts/test.sh runs in CI)
+#   scripts/sanitize.sh          # configure, build, ctest (not in CI: too slow for its budget, see README)
 #   scripts/sanitize.sh tsan     # the same under ThreadSanitizer (clang + libomp + Archer), not in CI
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"

@@ -22,7 +22,10 @@ void planarGrid(int n, double jitter, std::vector<Vec2>& xy, std::vector<std::ar
   for (int j = 0; j <= n; ++j)
     for (int i = 0; i <= n; ++i) {
       Vec2 p(double(i) / n, double(j) / n);
-      if (i > 0 && i < n && j > 0 && j < n) p += Vec2(U(rng), U(rng)) / n;
+      if (i > 0 && i < n && j > 0 && j < n) {
+        const double dy = U(rng), dx = U(rng);  // fixed order (gcc's): argument order is unspecified
+        p += Vec2(dx, dy) / n;
+      }
       xy.push_back(p);
     }
   for (int j = 0; j < n; ++j)
@@ -350,7 +353,8 @@ TEST(C1Surface, ClosestPointMatchesDenseSampling) {
   std::mt19937 rng(3);
   std::uniform_real_distribution<double> U(-1.3, 1.3);
   for (int q = 0; q < 60; ++q) {
-    const Vec3 p(U(rng), U(rng), U(rng));
+    const double z = U(rng), y = U(rng), x = U(rng);  // fixed order (gcc's): argument order is unspecified
+    const Vec3 p(x, y, z);
     const auto cp = s.closestPoint(p);
     double brute = 1e9;
     for (const auto& x : samples) brute = std::min(brute, (x - p).norm());

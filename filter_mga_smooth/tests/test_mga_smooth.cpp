@@ -26,7 +26,12 @@ TriMesh grid(int n, double jitter, unsigned seed, std::vector<std::array<int, 4>
   for (int j = 0; j < n; ++j)
     for (int i = 0; i < n; ++i) {
       Vec3 p(i, j, 0);
-      if (i > 0 && j > 0 && i < n - 1 && j < n - 1) p += Vec3(u(rng), u(rng), 0);
+      if (i > 0 && j > 0 && i < n - 1 && j < n - 1) {
+        // drawn in a fixed order (y first, as gcc evaluated the former Vec3(u(rng), u(rng), 0)): the order of
+        // function arguments is unspecified and clang's differs, which gave the TSan build another grid
+        const double dy = u(rng), dx = u(rng);
+        p += Vec3(dx, dy, 0);
+      }
       t.V.push_back(p);
     }
   for (int j = 0; j + 1 < n; ++j)

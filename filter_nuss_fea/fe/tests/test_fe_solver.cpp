@@ -22,7 +22,10 @@ TetMesh perturbedBox(int order, unsigned seed) {
   std::uniform_real_distribution<double> d(-0.15, 0.15);
   for (auto& p : m.nodes) {
     const bool interior = p.x() > 1e-9 && p.x() < 2 - 1e-9 && p.y() > 1e-9 && p.y() < 3 - 1e-9 && p.z() > 1e-9 && p.z() < 4 - 1e-9;
-    if (interior) p += Vector3d(d(rng) * 2 / 3, d(rng), d(rng) * 4 / 3);
+    if (interior) {
+      const double dz = d(rng), dy = d(rng), dx = d(rng);  // fixed order (gcc's): argument order is unspecified
+      p += Vector3d(dx * 2 / 3, dy, dz * 4 / 3);
+    }
   }
   return order == 2 ? toQuadratic(m) : m;
 }
