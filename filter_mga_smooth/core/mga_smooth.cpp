@@ -28,6 +28,11 @@ struct Loc {
   double s = 0, t = 0;
 };
 
+/// unit normal of the C1 surface at a location (+z for a node not located on the surface)
+Vec3 normalAt(const C1Surface& S, const Loc& l) {
+  return l.face >= 0 ? S.at(l.face, Vec3(1 - l.s - l.t, l.s, l.t)).normal : Vec3(0, 0, 1);
+}
+
 /// Local projection onto the C1 surface. A walk over the flat triangles of the original mesh first finds
 /// the triangle whose plane projection of q has non-negative barycentric coordinates (no patch
 /// evaluation), then Gauss-Newton on that patch from those coordinates, walking across edges if the
@@ -195,43 +200,24 @@ inline const Vec3& nodeNormal(const Mesh& M, const Element& e, int k, int n, con
 
 /// quality of the element at positions p (alpha, or beta for a quad) and whether it is unfolded: valid in
 /// itself and its signed area (a quad: every Knupp corner area) positive along the surface normal at each
-/// of its nodes, so that no node's move can fold an element against another node's normal. A triangle
-/// computes its cross product and edge sum once (the same arithmetic as triangleAlpha/triangleAlphaSigned).
+/// of its nodes, so that no node's move can fold an element against another node's normal. The element's
+/// shape (TriangleShape / QuadCorners) is computed once for its quality and all its fold tests.
 inline double elementQuality(const Mesh& M, const Element& e, const Vec3* p, int n, const Vec3& nrm, bool& ok) {
-  static const double kTwoSqrt3 = 2.0 * std::sqrt(3.0);
   ok = false;
   if (e.nv == 3) {
-    const Vec3 cr = (p[1] - p[0]).cross(p[2] - p[0]);
-    const double denom = (p[1] - p[0]).squaredNorm() + (p[2] - p[1]).squaredNorm() + (p[0] - p[2]).squaredNorm();
-    if (!(denom > 0.0)) return 0.0;
-    const double q = kTwoSqrt3 * cr.norm() / denom;
+    const TriangleShape t(p[0], p[1], p[2]);
+    const double q = t.alpha();
     if (!(q > 1e-12)) return q;
     for (int k = 0; k < 3; ++k)
-      if (!(kTwoSqrt3 * cr.dot(nodeNormal(M, e, k, n, nrm)) / denom > 1e-12)) return q;
+      if (!(t.alphaSigned(nodeNormal(M, e, k, n, nrm)) > 1e-12)) return q;
     ok = true;
     return q;
   }
-  const double q = quadBeta(p[0], p[1], p[2], p[3]);
+  const QuadCorners c(p[0], p[1], p[2], p[3]);
+  const double q = c.beta();
   if (!(q > 1e-12)) return q;
-  // quadBetaWithNormal(p, normal of node k) > 1e-12 for each k, with the corner cross products and edge
-  // sums computed once
-  Vec3 cr[4];
-  double len[4];
-  for (int c = 0; c < 4; ++c) {
-    const Vec3 e1 = p[(c + 1) % 4] - p[c], e2 = p[(c + 3) % 4] - p[c];
-    cr[c] = e1.cross(e2);
-    len[c] = e1.squaredNorm() + e2.squaredNorm();
-  }
-  for (int k = 0; k < 4; ++k) {
-    const Vec3& nk = nodeNormal(M, e, k, n, nrm);
-    double sum = 0.0;
-    for (int c = 0; c < 4; ++c) {
-      const double ak = cr[c].dot(nk);
-      if (!(ak > 0.0)) return q;
-      sum += len[c] / ak;
-    }
-    if (!std::isfinite(sum) || !(sum > 0.0) || !(8.0 / sum > 1e-12)) return q;
-  }
+  for (int k = 0; k < 4; ++k)
+    if (!(c.betaWithNormal(nodeNormal(M, e, k, n, nrm)) > 1e-12)) return q;
   ok = true;
   return q;
 }
@@ -595,10 +581,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
     }
 
   M.N.resize(nv);
-  for (std::size_t i = 0; i < nv; ++i) {
-    const Loc& l = loc[i];
-    M.N[i] = l.face >= 0 ? S.at(l.face, Vec3(1 - l.s - l.t, l.s, l.t)).normal : Vec3(0, 0, 1);
-  }
+  for (std::size_t i = 0; i < nv; ++i) M.N[i] = normalAt(S, loc[i]);
 
   // greedy colouring: nodes sharing an element get different colours
   std::vector<int> colour(nv, -1);
@@ -663,7 +646,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         // the node moves after its own search: neighbours of the same colour do not see it, and
         // no node of this colour reads it (they share no element)
         M.X[std::size_t(n)] = ns.bestX;
-        M.N[std::size_t(n)] = S.at(ns.bestLoc.face, Vec3(1 - ns.bestLoc.s - ns.bestLoc.t, ns.bestLoc.s, ns.bestLoc.t)).normal;
+        M.N[std::size_t(n)] = normalAt(S, ns.bestLoc);
         loc[std::size_t(n)] = ns.bestLoc;
         projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], ns.bestDist);
         if (!maxMin) gained[std::size_t(n)] = ns.bestFit - fit0 > activeTol * double(M.vE[std::size_t(n)].size());
