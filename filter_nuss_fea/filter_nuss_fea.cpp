@@ -181,9 +181,8 @@ void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
   std::optional<pectus::ribcage::HallerMeasure> measured;
   int faces = 0, vertices = 0;
   if (perTissue) {
-    const char* names[3] = {"ribs", "costal cartilage", "sternum"};
     for (int k = 0; k < 3; ++k) {
-      const MeshModel& mm = addLabelled(names[k], tissues[std::size_t(k)]);
+      const MeshModel& mm = addLabelled(pectus::ribcage::kTissueLayerNames[std::size_t(k)], tissues[std::size_t(k)]);
       faces += mm.cm.fn, vertices += mm.cm.vn;
     }
   } else {

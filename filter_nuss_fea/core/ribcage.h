@@ -60,10 +60,14 @@ Dimensions validate(const RibCageParams& p);
 std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCageStats* stats = nullptr,
                                       const std::function<void(int, const char*)>& progress = {});
 
+/// Names of generateTissueLayers' out[0..2]: the layer names the generator writes and the join reads.
+inline constexpr std::array<const char*, 3> kTissueLayerNames{"ribs", "costal cartilage", "sternum"};
+
 /// The same cage as one closed, labelled surface per tissue, as CT segmentation tools export them:
 /// out[0] the ribs (bone), out[1] the costal cartilages, out[2] the sternum. Bone and cartilage overlap
 /// by a few mm at the costochondral junctions and the cartilages reach into the sternum; there is no
-/// smooth-union fillet between the tissues. Same landmarks as generateRibCage.
+/// smooth-union fillet between the tissues. Same landmarks as generateRibCage. The layers' names, in that
+/// order, are kTissueLayerNames (names joinTissueLayers reads the tissue from).
 std::vector<Landmark> generateTissueLayers(const RibCageParams& p, std::array<CMeshO, 3>& out, RibCageStats* stats = nullptr,
                                            const std::function<void(int, const char*)>& progress = {});
 

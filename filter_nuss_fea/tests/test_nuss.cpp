@@ -171,8 +171,8 @@ TEST(NussAnalysis, TissueLayersJoinedIntoTheCagesVolume) {
   const auto lms = ribcage::generateTissueLayers(p, layers);
   CMeshO joined;
   nuss::JoinStats st;
-  const auto surf = nuss::joinTissueLayers({{"ribs", &layers[0]}, {"costal cartilage", &layers[1]}, {"sternum", &layers[2]}}, lms,
-                                           joined, &st);
+  const auto& name = ribcage::kTissueLayerNames;
+  const auto surf = nuss::joinTissueLayers({{name[0], &layers[0]}, {name[1], &layers[1]}, {name[2], &layers[2]}}, lms, joined, &st);
   EXPECT_LT(st.unionVolume, st.sumVolume);  // the layers overlap
   EXPECT_EQ(st.components, 5);
   const auto a = nuss::analyze(surf, lms, coarse());

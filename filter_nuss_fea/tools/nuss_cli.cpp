@@ -54,9 +54,8 @@ int main(int argc, char** argv) {
     const auto lms = layers ? ribcage::generateTissueLayers(rp, tissues) : ribcage::generateRibCage(rp, cage);
     nuss::CageSurface surf;
     if (layers) {
-      const char* names[3] = {"ribs", "costal cartilage", "sternum"};
       std::vector<nuss::TissueLayer> tl;
-      for (std::size_t k = 0; k < 3; ++k) tl.push_back({names[k], &tissues[k]});
+      for (std::size_t k = 0; k < 3; ++k) tl.push_back({ribcage::kTissueLayerNames[k], &tissues[k]});
       nuss::JoinStats js;
       surf = nuss::joinTissueLayers(tl, lms, cage, &js);
       std::printf("joined %d layers: %.1f mm3 in the layers, %.1f mm3 in the union, %d components\n", js.layers,
