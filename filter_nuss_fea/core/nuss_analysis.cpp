@@ -489,7 +489,12 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
   // one solve at force F; records the curve at every curveStep when `curve` is given
   auto solveAt = [&](double F, std::vector<std::pair<double, double>>* curve, const fe::Observer& observe) {
     if (!opt.nonlinear) {
-      fe::Result r = solver.solveLinear(F);
+      // small strain: the solve at F is F times the unit-force solve (forces and prescribed displacements
+      // both scale with the load), von Mises stress and equivalent strain |F| times theirs
+      fe::Result r = lin1;
+      r.u *= F;
+      for (double& s : r.vonMises) s *= std::abs(F);
+      for (double& e : r.eqStrain) e *= std::abs(F);
       if (curve) {
         curve->assign(1, {0.0, 0.0});
         for (double f = opt.curveStep; f < F - 1e-9; f += opt.curveStep) curve->push_back({f, a.linearCompliance * f});

@@ -1,9 +1,12 @@
 // Command-line driver of the Nuss FE analysis core (bench/nuss_convergence.py, quick studies):
 //   pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]
 //                   [--target mm | --force N] [--linear] [--space s] [--threads n] [--vtu out.vtu] [--layers]
+//                   [--inp deck.inp]
 // Builds the default rib cage (--layers: as one layer per tissue, joined as the filter's 'One layer per
-// tissue' input does), runs the analysis and prints one line of key=value figures and the tets' volume
-// per tissue.
+// tissue' input does), runs the analysis and prints one line of key=value figures, the mean displacement
+// of the sternal load patch's nodes and the tets' volume per tissue. --inp writes the same model at the
+// final force as a CalculiX deck (as the filter's BASE.inp), printing the sternal patch's nodes, which is
+// what bench/fe_vs_ccx.py --cases cage compares.
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -25,7 +28,7 @@ int main(int argc, char** argv) {
   rp.edgeLength = 4.0;
   nuss::Options o;
   o.targetElevation = 0;
-  std::string vtu;
+  std::string vtu, inp;
   bool layers = false;
   for (int i = 1; i < argc; ++i) {
     auto next = [&]() -> const char* {
@@ -45,6 +48,7 @@ int main(int argc, char** argv) {
     else if (a == "--space") o.place.intercostalSpace = std::atoi(next());
     else if (a == "--vtu") vtu = next();
     else if (a == "--layers") layers = true;
+    else if (a == "--inp") inp = next();
     else { std::fprintf(stderr, "usage: see the header of tools/nuss_cli.cpp (unknown argument %s)\n", argv[i]); return 2; }
   }
   try {
@@ -86,7 +90,18 @@ int main(int argc, char** argv) {
     for (int t = 0; t < a.mesh.numTets(); ++t) vol[std::clamp(a.mesh.tissue[std::size_t(t)], 0, 3)] += std::abs(a.mesh.tetVolume(t));
     std::printf("tet volume mm3: bone %.1f cartilage %.1f sternum %.1f other %.1f\n", vol[int(Tissue::Bone)],
                 vol[int(Tissue::Cartilage)], vol[int(Tissue::Sternum)], vol[0]);
+    Eigen::Vector3d um = Eigen::Vector3d::Zero();
+    for (int n : a.sternumNodes) um += a.result.u.segment<3>(3 * n);
+    if (!a.sternumNodes.empty()) um /= double(a.sternumNodes.size());
+    std::printf("sternal patch mean displacement mm: %.6e %.6e %.6e (%zu nodes)\n", um.x(), um.y(), um.z(),
+                a.sternumNodes.size());
     if (!vtu.empty()) fe::writeVtu(vtu, a.mesh, &a.result);
+    if (!inp.empty()) {
+      fe::InpOptions io;
+      io.nlgeom = o.nonlinear;
+      io.printNodes = a.sternumNodes;
+      fe::writeCalculixInp(inp, nuss::problemAt(a, o, a.force), io);
+    }
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;

@@ -7,6 +7,9 @@
 #include <cstdlib>
 #include <sstream>
 
+#include <dlfcn.h>
+#include <omp.h>
+
 #include <Eigen/CholmodSupport>
 #include <Eigen/Dense>
 #include <Eigen/Sparse>
@@ -85,6 +88,29 @@ double eqStrainOf(const Matrix3d& e, double nu) {
          (1.0 + nu);
 }
 
+// CHOLMOD's supernodal factorisation calls the BLAS for its dense blocks. Debian's OpenBLAS (pthreads
+// build) starts its own busy-waiting threads for every call; beside this program's OpenMP threads, or on a
+// machine whose cores are taken by other jobs, they oversubscribe the cores and a factorisation of the rib
+// cage's systems (small supernodes, ~1e8-1e9 flops) became 5-10x slower than on one BLAS thread (measured:
+// 2.94 s against 0.27 s for a 127k-dof cage). So the BLAS gets one thread for small factorisations and
+// OpenMP's thread count from kBlasThreadFlops on (the long cantilever benchmark: 2e11 flops). The call is
+// looked up at run time (the BLAS behind libblas.so.3 is chosen by Debian's alternatives; the reference
+// BLAS has no threads to set). PECTUS_BLAS_THREADS=n forces n.
+constexpr double kBlasThreadFlops = 2e10;
+void setBlasThreads(double flops) {
+  using SetThreads = void (*)(int);
+  static const SetThreads set = [] {
+    for (const char* lib : {"libopenblas.so.0", "libblas.so.3", "libopenblas.so"})
+      if (void* h = dlopen(lib, RTLD_LAZY | RTLD_NOLOAD))
+        if (void* f = dlsym(h, "openblas_set_num_threads")) return reinterpret_cast<SetThreads>(f);
+    return reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
+  }();
+  if (!set) return;
+  int n = flops >= kBlasThreadFlops ? omp_get_max_threads() : 1;
+  if (const char* e = std::getenv("PECTUS_BLAS_THREADS")) n = std::max(1, std::atoi(e));
+  set(n);
+}
+
 class Cholmod : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
  public:
   double rcond() { return m_cholmodFactor ? cholmod_rcond(m_cholmodFactor, &cholmod()) : 0.0; }
@@ -106,6 +132,7 @@ struct Solver::Impl {
   Eigen::SparseMatrix<double> K;               // free x free, lower triangle
   Cholmod chol;
   bool analysed = false;
+  bool linearFactor = false;                   // chol holds the factor of the small-strain stiffness
   std::vector<std::vector<int>> colors;        // tets by colour (colorTets), for the assembly
 
   int nFree = 0;
@@ -262,6 +289,8 @@ struct Solver::Impl {
       chol.analyzePattern(K);
       analysed = true;
     }
+    setBlasThreads(chol.cholmod().fl);
+    linearFactor = false;
     chol.factorize(K);
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (std::getenv("PECTUS_FE_VERBOSE"))
@@ -417,15 +446,20 @@ Result Solver::solveLinear(double scale) {
   Eigen::VectorXd fint;
   I.assemble(res.u, false, fint);
   Eigen::VectorXd r = I.freePart(scale * I.fext - fint);
-  I.factorize(lastFactorSeconds_);
+  // the small-strain stiffness does not depend on the load: a factor of it from an earlier linear solve
+  // (the analysis' unit-force solve, then the solve at Fe) is used again
+  if (!I.linearFactor) {
+    I.factorize(lastFactorSeconds_);
+    I.linearFactor = true;
+  }
   const Eigen::VectorXd du = I.solveFree(r);
   for (size_t d = 0; d < I.freeIndex.size(); ++d)
     if (I.freeIndex[d] >= 0) res.u(d) += du(I.freeIndex[d]);
-  // residual check: catches near-singular systems the factorisation let through
-  Eigen::VectorXd fint2;
-  I.assemble(res.u, false, fint2);
-  const double rn = I.freePart(scale * I.fext - fint2).norm();
-  const double ref = std::max({I.freePart(scale * I.fext).norm(), fint2.norm(), 1e-30});
+  // residual check: catches near-singular systems the factorisation let through. The stiffness is linear,
+  // so the free part of the internal force at u is the one at the prescribed displacements plus K du.
+  const Eigen::VectorXd Kdu = I.K.selfadjointView<Eigen::Lower>() * du;
+  const double rn = (r - Kdu).norm();
+  const double ref = std::max({r.norm(), Kdu.norm(), 1e-30});
   if (!(rn <= 1e-6 * ref))
     throw InputError("The linear system could not be solved accurately (relative residual " + std::to_string(rn / ref) +
                      "): the model is nearly singular; fix more nodes.");
