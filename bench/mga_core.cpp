@@ -3,7 +3,7 @@
 //
 //   bench_mga_core in.off [key=value ...] [out=path.off]
 //     method=mga|cg  sweeps=10  tol=1e-4  acc=1e-3  gens=20  restarts=4  pop=5  feature=60  singular=90
-//     guard=0.35  pass=0  active=1  seed=1  cgits=10  quads=0 (faces with 4 nodes stay quads)
+//     guard=0.35  pass=0  active=1  all=1 (0: guided element search)  seed=1  cgits=10  quads=0 (faces with 4 nodes stay quads)
 //
 // Prints one line: "mean_before min_before mean_after min_after sweeps searches evaluations wall_s cpu_s"
 // plus the fixed-node counts, and (progress=1) the mean after every sweep.
@@ -60,6 +60,7 @@ int main(int argc, char** argv) try {
   o.worstGuard = num("guard", o.worstGuard);
   o.minPassBelow = num("pass", o.minPassBelow);
   o.activeSet = num("active", 1) != 0;
+  o.searchAllElements = num("all", 1) != 0;
   o.seed = std::uint64_t(num("seed", 1));
   o.cgIterations = int(num("cgits", o.cgIterations));
   const bool quads = num("quads", 0) != 0;

@@ -303,49 +303,90 @@ struct NodeSearch {
   }
 };
 
-/// thesis steps 3-7: the micro-GA inside each triangle around the node (a quad gives two)
-void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed) {
+/// thesis steps 3-7: the micro-GA inside each triangle around the node (a quad gives two). allElements:
+/// every triangle, as the thesis; else the guided order of Options::searchAllElements.
+void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, bool allElements) {
   static const std::vector<mga::Range> ranges{{0.0, 1.0}, {0.0, 0.5}};
   static const std::vector<double> seedPoint{0.0, 0.0};
   const Mesh& M = ns.M;
   const int n = ns.n;
-  int tri = 0;
+  // the triangles of the node's elements: V1 = node, (V2, V3) in boundary order
+  std::vector<std::pair<int, int>> fan;
+  fan.reserve(12);
   for (int ei : M.vE[std::size_t(n)]) {
     const Element& e = M.E[std::size_t(ei)];
     int k = 0;
     while (e.v[k] != n) ++k;
-    // the triangles of the element around the node: V1 = node, (V2, V3) in boundary order
-    std::array<std::pair<int, int>, 2> fan;
-    int nfan = 1;
     if (e.nv == 3) {
-      fan[0] = {e.v[(k + 1) % 3], e.v[(k + 2) % 3]};
+      fan.push_back({e.v[(k + 1) % 3], e.v[(k + 2) % 3]});
     } else {
-      fan[0] = {e.v[(k + 1) % 4], e.v[(k + 2) % 4]};
-      fan[1] = {e.v[(k + 2) % 4], e.v[(k + 3) % 4]};
-      nfan = 2;
+      fan.push_back({e.v[(k + 1) % 4], e.v[(k + 2) % 4]});
+      fan.push_back({e.v[(k + 2) % 4], e.v[(k + 3) % 4]});
     }
-    for (int fi = 0; fi < nfan; ++fi, ++tri) {
-      const Vec3 V2 = M.X[std::size_t(fan[std::size_t(fi)].first)];
-      const Vec3 V3 = M.X[std::size_t(fan[std::size_t(fi)].second)];
-      auto candidate = [&](const std::vector<double>& r) {
-        return (1 - r[1]) * ns.x0 + r[1] * (1 - r[0]) * V2 + r[0] * r[1] * V3;
-      };
-      auto fitness = [&](const std::vector<double>& r) {
-        if (r[1] <= 0) return ns.startFit;  // r2 = 0: the node itself, exactly
-        Vec3 P;
-        Loc L;
-        return ns.eval(candidate(r), P, L);
-      };
-      mga::Options o = mo;
-      o.seed = mga::itemSeed(nodeSeed, std::uint64_t(tri));
-      const mga::Result r = mga::optimize(ranges, fitness, o, &seedPoint);
-      if (r.fitness > ns.bestFit && r.x[1] > 0) {
-        Vec3 P;
-        Loc L;
-        const Vec3 q = candidate(r.x);
-        ns.offer(ns.eval(q, P, L), P, L, q);
-      }
+  }
+  const int nf = int(fan.size());
+  // the micro-GA in fan triangle i; returns its best (r1, r2)
+  auto search = [&](int i) {
+    const Vec3 V2 = M.X[std::size_t(fan[std::size_t(i)].first)];
+    const Vec3 V3 = M.X[std::size_t(fan[std::size_t(i)].second)];
+    auto candidate = [&](const std::vector<double>& r) {
+      return (1 - r[1]) * ns.x0 + r[1] * (1 - r[0]) * V2 + r[0] * r[1] * V3;
+    };
+    auto fitness = [&](const std::vector<double>& r) {
+      if (r[1] <= 0) return ns.startFit;  // r2 = 0: the node itself, exactly
+      Vec3 P;
+      Loc L;
+      return ns.eval(candidate(r), P, L);
+    };
+    mga::Options o = mo;
+    o.seed = mga::itemSeed(nodeSeed, std::uint64_t(i));
+    const mga::Result r = mga::optimize(ranges, fitness, o, &seedPoint);
+    if (r.fitness > ns.bestFit && r.x[1] > 0) {
+      Vec3 P;
+      Loc L;
+      const Vec3 q = candidate(r.x);
+      ns.offer(ns.eval(q, P, L), P, L, q);
     }
+    return std::array<double, 2>{r.x[0], r.x[1]};
+  };
+  if (allElements || nf < 2) {
+    for (int i = 0; i < nf; ++i) search(i);
+    return;
+  }
+  // Guided: start in the triangle whose sector (seen along the node's normal) holds the direction to
+  // the centroid of the node's neighbours; while the best point of a triangle lies on one of its two
+  // edges through the node (r1 within kEdgeR1 of 0 or 1), go on into the triangle across that edge; stop
+  // at an optimum inside a triangle. A triangle where no move gains (r2 ~ 0) sends the search to every
+  // triangle, as the thesis does.
+  constexpr double kEdgeR1 = 0.05;
+  Vec3 c(0, 0, 0);
+  for (const auto& f : fan) c += M.X[std::size_t(f.first)] + M.X[std::size_t(f.second)];
+  c = c / double(2 * nf) - ns.x0;
+  int cur = 0;
+  for (int i = 0; i < nf; ++i) {
+    const Vec3 d2 = M.X[std::size_t(fan[std::size_t(i)].first)] - ns.x0;
+    const Vec3 d3 = M.X[std::size_t(fan[std::size_t(i)].second)] - ns.x0;
+    if (ns.n0.dot(d2.cross(c)) >= 0 && ns.n0.dot(c.cross(d3)) >= 0) {
+      cur = i;
+      break;
+    }
+  }
+  std::vector<char> done(std::size_t(nf), 0);
+  auto across = [&](int i, int v) {  // the other fan triangle with the edge (node, v)
+    for (int j = 0; j < nf; ++j)
+      if (j != i && (fan[std::size_t(j)].first == v || fan[std::size_t(j)].second == v)) return j;
+    return -1;
+  };
+  while (cur >= 0 && !done[std::size_t(cur)]) {
+    done[std::size_t(cur)] = 1;
+    const auto x = search(cur);
+    if (x[1] < 2 * mo.accuracy) {  // no gain in this triangle: all the others
+      for (int i = 0; i < nf; ++i)
+        if (!done[std::size_t(i)]) search(i);
+      return;
+    }
+    cur = x[0] < kEdgeR1 ? across(cur, fan[std::size_t(cur)].first)
+        : x[0] > 1 - kEdgeR1 ? across(cur, fan[std::size_t(cur)].second) : -1;
   }
 }
 
@@ -639,7 +680,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         if (fit0 >= 0) fit0 = fitnessAt(M, n, x0, n0, guard, cap);
         NodeSearch ns{M, proj, n, x0, n0, l0, guard, cap, fit0, fit0, x0, l0};
         if (opt.method == Method::MicroGA)
-          searchMga(ns, mo, mga::itemSeed(sweepSeed, std::uint64_t(toM[std::size_t(n)])));
+          searchMga(ns, mo, mga::itemSeed(sweepSeed, std::uint64_t(toM[std::size_t(n)])), opt.searchAllElements);
         else
           searchGradient(ns, opt.cgIterations);
         evaluations[std::size_t(n)] += ns.evaluations;

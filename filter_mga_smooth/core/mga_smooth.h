@@ -78,6 +78,10 @@ struct Options {
   int minPassSweeps = 3;        ///< at most this many final max-min sweeps (stops when the minimum stalls)
   double singularAngleDeg = 90; ///< normal-cone angle of a node's faces above which it is singular (180: none)
   bool activeSet = true;         ///< after the first sweep, search only nodes whose star still gains (see above)
+  /// MicroGA: true = search every adjacent element (thesis step 3); false = guided (searchMga in
+  /// mga_smooth.cpp): start in the element towards the centroid of the node's neighbours, go on across an
+  /// edge while the best point lies on it, stop at an optimum inside an element
+  bool searchAllElements = true;
   int cgIterations = 10;        ///< ConjugateGradient: CG iterations per node and sweep
   std::uint64_t seed = 1;
   /// called after every sweep with (sweep, mean quality); return false to stop
