@@ -86,6 +86,13 @@ class Solver {
   double lastFactorSeconds_ = 0;
 };
 
+/// Loops over tets (a colour of the assembly, the stresses) shorter than this run in one OpenMP thread
+/// (default 2048): a parallel region costs a barrier, which on a busy machine waits for a descheduled
+/// thread. Results do not depend on it (the sums are formed in colour order); tests set 1 to run the
+/// parallel paths on small meshes.
+void setMinParallelTets(int tets);
+int minParallelTets();
+
 inline Result solveLinear(const Problem& p) { return Solver(p).solveLinear(); }
 inline Result solveNonlinear(const Problem& p, const NewtonOptions& o = {}) { return Solver(p).solveNonlinear(o); }
 
