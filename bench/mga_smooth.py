@@ -129,7 +129,7 @@ def taubin():
 ENUM3 = ["Auto", "Triangles (alpha)", "Quads (beta)"]
 
 
-def ours(mga, sweeps, guard=0.35, min_pass=0.0, feature=60.0, singular=90.0):
+def ours(mga, sweeps, guard=0.35, min_pass=0.0, feature=60.0, singular=90.0, guided=False):
     common = dict(elementType=mlx.Enum(0, ENUM3), maxSweeps=mlx.Int(sweeps), tolerance=mlx.Float(1e-4))
     tail = dict(worstGuard=mlx.Float(guard), minPassBelow=mlx.Float(min_pass), featureAngle=mlx.Float(feature),
                 singularAngle=mlx.Float(singular),
@@ -137,7 +137,9 @@ def ours(mga, sweeps, guard=0.35, min_pass=0.0, feature=60.0, singular=90.0):
     if mga:
         return [mlx.Filter("MGA Surface Mesh Smoothing", **common, accuracy=mlx.Float(1e-3), generations=mlx.Int(20),
                            restarts=mlx.Int(4), population=mlx.Int(5),
-                           selection=mlx.Enum(0, ["Roulette wheel", "Tournament"]), **tail, seed=mlx.Int(1))]
+                           selection=mlx.Enum(0, ["Roulette wheel", "Tournament"]),
+                           elementSearch=mlx.Enum(int(guided), ["Every adjacent element (thesis)", "Guided (faster)"]),
+                           **tail, seed=mlx.Int(1))]
     return [mlx.Filter("Gradient Surface Mesh Smoothing (Baseline)", **common, cgIterations=mlx.Int(10), **tail)]
 
 
@@ -197,7 +199,9 @@ def main():
                  ("CGAL tangential_relaxation (10 its, projected)", ("cgal", tris, "tangential")),
                  ("CGAL angle_and_area_smoothing (10 its)", ("cgal", tris, "angle_area")),
                  (f"ours: Gradient baseline, defaults{' (3 sweeps)' if large else ''}", ("ml", elems, ours(False, sweeps_cg))),
-                 (f"ours: MGA, defaults{' (3 sweeps)' if large else ''}", ("ml", elems, ours(True, sweeps_mga)))]
+                 (f"ours: MGA, defaults{' (3 sweeps)' if large else ''}", ("ml", elems, ours(True, sweeps_mga))),
+                 (f"ours: MGA, guided search{' (3 sweeps)' if large else ''}",
+                  ("ml", elems, ours(True, sweeps_mga, guided=True)))]
         # settings beyond the defaults, the same for both methods where both are run (named in the row)
         if label == "saddle, triangles":
             runs += [("ours: Gradient, 30 sw, guard .3, pass .32", ("ml", elems, ours(False, 30, 0.3, 0.32))),
@@ -209,7 +213,9 @@ def main():
         elif label == "femur":
             # the peers fix no feature node: the same here, plain sum (guard 0) and a final pass below 0.2
             runs += [("ours: Gradient, no feature, guard 0, pass .2", ("ml", elems, ours(False, 40, 0.0, 0.2, 180, 180))),
-                     ("ours: MGA, no feature, guard 0, pass .2", ("ml", elems, ours(True, 30, 0.0, 0.2, 180, 180)))]
+                     ("ours: MGA, no feature, guard 0, pass .2", ("ml", elems, ours(True, 30, 0.0, 0.2, 180, 180))),
+                     ("ours: MGA guided, no feature, guard 0, pass .2",
+                      ("ml", elems, ours(True, 30, 0.0, 0.2, 180, 180, guided=True)))]
         elif large:
             runs += [("ours: Gradient, to convergence (40 sw max)", ("ml", elems, ours(False, 40)))]
         for name, how in runs:
