@@ -233,10 +233,10 @@ TEST(quad_convert, BadInput) {
 }
 
 TEST(quad_convert, UnusedInfVertexIsRefused) {
-  // found by fuzzing (tests/fuzz/corpus/quad/unused-inf-vertex: a sphere of 40 triangles whose vertex 12, used
-  // by no triangle after a weld, had z = Inf): the NaN check only looked at the vertices the triangles use, and
-  // the conversion copies every vertex into its output, so the Inf went through (MeshLab's layer check refuses
-  // it, a direct caller got it back)
+  // found by fuzzing (tests/fuzz/corpus/quad/unused-inf-vertex: a 3 x 4 torus whose vertex 4, welded into
+  // vertex 10 so no triangle uses it, had z = Inf): the NaN check only looked at the vertices the triangles use,
+  // and the conversion copies every vertex into its output, so the Inf went through (MeshLab's layer check
+  // refuses it; a direct caller got it back)
   auto t = squarePair();
   t.V.push_back({0.63, -0.0094, std::numeric_limits<double>::infinity()});
   for (const ConvertOptions& o : kBothModes) {
