@@ -9,6 +9,7 @@
 #include <vcg/complex/complex.h>
 
 #include "pectus/elements.h"
+#include "pectus/errors.h"
 
 namespace pectus::quad {
 
@@ -21,6 +22,33 @@ std::size_t PolyMesh::quads() const {
 double polyQuality(const PolyMesh& m, const Poly& p) {
   const auto& X = m.V;
   return p.nv == 4 ? quadBeta(X[p.v[0]], X[p.v[1]], X[p.v[2]], X[p.v[3]]) : triangleAlpha(X[p.v[0]], X[p.v[1]], X[p.v[2]]);
+}
+
+void requireFiniteVertices(const std::vector<Vec3>& V) {
+  for (std::size_t i = 0; i < V.size(); ++i)
+    if (!V[i].allFinite())
+      throw InputError("vertex " + std::to_string(i) + " has a NaN or infinite coordinate; remove it first (unused "
+                       "vertices too)");
+}
+
+void requireElementIndices(const char* kind, std::size_t index, const int* v, int nv, std::size_t vertices) {
+  const std::string what = std::string(kind) + " " + std::to_string(index);
+  for (int k = 0; k < nv; ++k) {
+    if (v[k] < 0 || std::size_t(v[k]) >= vertices)
+      throw InputError(what + " uses vertex index " + std::to_string(v[k]) + ", out of range");
+    for (int l = 0; l < k; ++l)
+      if (v[k] == v[l]) throw InputError(what + " uses a vertex twice (a collapsed face); remove it first");
+  }
+}
+
+void requirePolyMesh(const PolyMesh& m) {
+  requireFiniteVertices(m.V);
+  for (std::size_t f = 0; f < m.F.size(); ++f) {
+    if (m.F[f].nv != 3 && m.F[f].nv != 4)
+      throw InputError("element " + std::to_string(f) + " has " + std::to_string(m.F[f].nv) +
+                       " vertices; only triangles and quads are supported");
+    requireElementIndices("element", f, m.F[f].v.data(), m.F[f].nv, m.V.size());
+  }
 }
 
 void valences(const PolyMesh& m, std::vector<int>& valence, std::vector<char>& boundary) {

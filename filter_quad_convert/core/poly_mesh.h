@@ -48,6 +48,16 @@ PolyMesh fromCMesh(const CMeshO& m, bool quads, std::vector<int>* vertexIndex = 
 /// shared edge v0-v2 faux in both (what vcg::tri::PolygonSupport and MeshLab's OFF importer produce).
 void toCMesh(const PolyMesh& p, CMeshO& m);
 
+/// Input checks of the cores (a direct caller has no MeshLab layer check before it; found by fuzzing).
+/// Throws InputError naming the first vertex with a NaN or infinite coordinate, used by an element or not (the
+/// conversion keeps every vertex, so an unused one went through into its output).
+void requireFiniteVertices(const std::vector<Vec3>& V);
+/// Throws InputError unless element `index` (`kind`: "triangle", "element") has `nv` vertex indices in
+/// [0, vertices) and no vertex twice.
+void requireElementIndices(const char* kind, std::size_t index, const int* v, int nv, std::size_t vertices);
+/// Both checks over a polygon mesh, and every element a triangle or a quad.
+void requirePolyMesh(const PolyMesh& m);
+
 /// Rotates a quad so its faux diagonal v0-v2 is the one whose two triangles have the larger minimum alpha.
 void chooseDiagonal(const PolyMesh& m, Poly& q);
 

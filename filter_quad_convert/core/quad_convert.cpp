@@ -115,22 +115,10 @@ PolyMesh splitToQuads(const PolyMesh& m, const PlaceFn& place, std::size_t* newN
 ConvertResult convertToQuads(const c1::TriMesh& tri, const ConvertOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   if (tri.F.empty()) throw InputError("the mesh has no triangle to convert");
-  // (found by fuzzing: the core passed a NaN vertex through into its output and read out of range on a bad
-  // index; the MeshLab adapter checks its layer first, a direct caller did not)
-  for (std::size_t f = 0; f < tri.F.size(); ++f)
-    for (int v : tri.F[f]) {
-      if (v < 0 || v >= int(tri.V.size()))
-        throw InputError("triangle " + std::to_string(f) + " uses vertex index " + std::to_string(v) + ", out of range");
-      if (!tri.V[std::size_t(v)].allFinite())
-        throw InputError("vertex " + std::to_string(v) + " has a NaN or infinite coordinate; remove it first");
-    }
-  // (found by fuzzing: a triangle with a repeated vertex went through as a leftover element with that
-  // vertex twice)
-  for (std::size_t f = 0; f < tri.F.size(); ++f) {
-    const auto& t = tri.F[f];
-    if (t[0] == t[1] || t[1] == t[2] || t[0] == t[2])
-      throw InputError("triangle " + std::to_string(f) + " uses a vertex twice (a collapsed face); remove it first");
-  }
+  // (found by fuzzing: a NaN vertex, used or not, went through into the output; a bad index was read out of
+  // range; a triangle with a repeated vertex went through as a leftover element with that vertex twice)
+  requireFiniteVertices(tri.V);
+  for (std::size_t f = 0; f < tri.F.size(); ++f) requireElementIndices("triangle", f, tri.F[f].data(), 3, tri.V.size());
   ConvertResult r;
   const auto cand = quadCandidates(tri, o);
   r.candidates = cand.size();

@@ -91,6 +91,16 @@ PolyMesh asPoly(const c1::TriMesh& t) {
   return p;
 }
 
+/// the unit square as two triangles sharing the diagonal 0-2: one quad
+c1::TriMesh squarePair() {
+  c1::TriMesh pair;
+  pair.V = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
+  pair.F = {{0, 1, 2}, {0, 2, 3}};
+  return pair;
+}
+
+const ConvertOptions kBothModes[] = {ConvertOptions{Pairing::Greedy, Leftovers::QuadDominant}, ConvertOptions{}};
+
 }  // namespace
 
 TEST(quad_matching, MaxCardinalityMaxWeightEqualsBruteForce) {
@@ -202,10 +212,8 @@ TEST(quad_convert, BadInput) {
     EXPECT_NE(std::string(e.what()).find("isolated"), std::string::npos);
   }
   // found by fuzzing: a NaN vertex went through into the output, a bad index was read out of range
-  c1::TriMesh pair;
-  pair.V = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}};
-  pair.F = {{0, 1, 2}, {0, 2, 3}};
-  for (const ConvertOptions& o : {ConvertOptions{Pairing::Greedy, Leftovers::QuadDominant}, ConvertOptions{}}) {
+  const auto pair = squarePair();
+  for (const ConvertOptions& o : kBothModes) {
     auto nan = pair;
     nan.V[3].y() = std::numeric_limits<double>::quiet_NaN();
     EXPECT_THROW(convertToQuads(nan, o), InputError);
@@ -221,6 +229,30 @@ TEST(quad_convert, BadInput) {
     collapsed.V.push_back({0.5, -1, 0.3});
     collapsed.F.push_back({4, 4, 1});
     EXPECT_THROW(convertToQuads(collapsed, o), InputError);
+  }
+}
+
+TEST(quad_convert, UnusedInfVertexIsRefused) {
+  // found by fuzzing (tests/fuzz/corpus/quad/unused-inf-vertex: a 3 x 4 torus whose vertex 4, welded into
+  // vertex 10 so no triangle uses it, had z = Inf): the NaN check only looked at the vertices the triangles use,
+  // and the conversion copies every vertex into its output, so the Inf went through (MeshLab's layer check
+  // refuses it; a direct caller got it back)
+  auto t = squarePair();
+  t.V.push_back({0.63, -0.0094, std::numeric_limits<double>::infinity()});
+  for (const ConvertOptions& o : kBothModes) {
+    try {
+      const auto r = convertToQuads(t, o);
+      FAIL() << "no throw; output vertex 4 = " << r.mesh.V[4].transpose();
+    } catch (const InputError& e) {
+      EXPECT_NE(std::string(e.what()).find("vertex 4 has a NaN or infinite coordinate"), std::string::npos) << e.what();
+    }
+  }
+  t.V[4].z() = 0.5;  // a finite unused vertex is kept as it is
+  for (const ConvertOptions& o : kBothModes) {
+    const auto r = convertToQuads(t, o);
+    EXPECT_EQ(r.merged, 1u);
+    ASSERT_EQ(r.mesh.V.size(), 5u);
+    EXPECT_EQ(r.mesh.V[4], t.V[4]);
   }
 }
 
@@ -370,6 +402,19 @@ TEST(quad_structure, QuadOperators) {
   EXPECT_EQ(r.after.valence[3], 0u);
   EXPECT_GT(r.after.beta.min, r.before.beta.min);
   EXPECT_EQ(r.after.invalidQuads, 0u);
+}
+
+TEST(quad_structure, BadInputIsRefused) {
+  // the structure operators had no input check: a NaN node went through into the output, a bad index or a
+  // pentagon was read out of range
+  StructureOptions o;
+  PolyMesh nan = quadGrid(3), badIndex = quadGrid(3), repeated = quadGrid(3), pentagon = quadGrid(3);
+  nan.V[5].x() = std::numeric_limits<double>::quiet_NaN();  // an interior node
+  badIndex.F[4].v[2] = int(badIndex.V.size());
+  repeated.F[4].v[2] = repeated.F[4].v[0];
+  pentagon.F[4].nv = 5;
+  for (const PolyMesh* q : {&nan, &badIndex, &repeated, &pentagon}) EXPECT_THROW(improveStructure(*q, nullptr, o), InputError);
+  EXPECT_EQ(improveStructure(quadGrid(3), nullptr, o).mesh.F.size(), 9u);
 }
 
 TEST(quad_structure, QuadEdgeSwapTowardValence4) {
