@@ -134,6 +134,7 @@ Dimensions validate(const RibCageParams& p) {
   if (!(p.ribPairs >= 10 && p.ribPairs <= 12)) bad("ribPairs", "in [10, 12]", p.ribPairs);
   if (!(p.hallerIndex >= 1 && p.hallerIndex <= 12)) bad("hallerIndex", "in [1, 12] (normal ~2.5, pectus excavatum > 3.25)", p.hallerIndex);
   if (!(p.edgeLength >= 0.4 && p.edgeLength <= 8)) bad("edgeLength", "in [0.4, 8] mm", p.edgeLength);
+  if (!(p.blend < 0 || p.blend <= 10)) bad("blend", "in [0, 10] mm (negative: automatic)", p.blend);
   if (!(p.funnelWidth >= 20 && p.funnelWidth <= d.chestWidth))
     bad("funnelWidth", "in [20, " + num(d.chestWidth) + "] mm (at most the chest's inner width)", p.funnelWidth,
         "a funnel cannot be wider than the chest");
@@ -219,7 +220,9 @@ void extractSurface(const CageModel& model, const CageField& field, const RibCag
   const double h = resolution(p, model.d);
   auto t0 = Clock::now();
   SparseGrid g;
-  const double hg = std::min(h, 0.95 * (1.0 + model.blend) / std::sqrt(3.0));
+  // the grid follows the automatic fillet radius even when an explicit (smaller) one is given, so that
+  // cages differing only in the fillet are extracted on the same grid
+  const double hg = std::min(h, 0.95 * (1.0 + std::max(model.blend, autoBlend(model.d))) / std::sqrt(3.0));
   g.h = hg;
   g.block = 8;
   const Vec3 lo = field.boxMin() - Vec3::Constant(2 * hg), hi = field.boxMax() + Vec3::Constant(2 * hg);

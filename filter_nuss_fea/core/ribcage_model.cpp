@@ -97,6 +97,8 @@ double CageModel::funnel(double x, double y, double z) const {
   return bump((x - fx) / (0.5 * fw)) * bump((z - fzAbs) / (0.5 * fh)) * aw;
 }
 
+double autoBlend(const Dimensions& d) { return std::clamp(0.45 * d.ribThickness, 1.2, 3.0); }
+
 CageModel buildModel(const Dimensions& d, const RibCageParams& p, double funnelDepth, double spacing) {
   CageModel m;
   m.d = d;
@@ -107,7 +109,7 @@ CageModel buildModel(const Dimensions& d, const RibCageParams& p, double funnelD
   m.fw = p.funnelWidth;
   m.fh = p.funnelHeight;
   m.spacing = spacing;
-  m.blend = std::clamp(0.45 * d.ribThickness, 1.2, 3.0);
+  m.blend = p.blend < 0 ? autoBlend(d) : p.blend;
   const double L = d.spineHeight, T = d.chestWidth, D0 = d.chestDepth;
   const double dl = L / 12.0;
   m.delta = dl;
@@ -332,7 +334,7 @@ double CageField::operator()(const Vec3& p) const {
     const double v = best[c];
     if (!std::isfinite(v)) continue;
     if (!std::isfinite(r)) { r = v; continue; }
-    const double h = std::max(k - std::abs(r - v), 0.0) / k;
+    const double h = k > 0 ? std::max(k - std::abs(r - v), 0.0) / k : 0.0;  // k = 0: plain union
     r = std::min(r, v) - h * h * k * 0.25;
   }
   return std::isfinite(r) ? std::min(r, 1.0 + k) : 1.0;

@@ -27,12 +27,15 @@ struct CageModel {
   double delta = 0;                     ///< vertebral level spacing
   double zNotch = 0, zMS = 0, zXJ = 0, zTip = 0;  ///< sternum: jugular notch, manubriosternal, xiphisternal, tip
   double funnelDepth = 0, fx = 0, fz = 0, fw = 0, fh = 0;
-  double blend = 2;                     ///< smooth-union radius
+  double blend = 2;                     ///< smooth-union radius (mm), 0: plain union
   double spacing = 1.5;                 ///< polyline sampling
   std::vector<Curve> curves;            ///< ribs (both sides) then the sternum (last)
   /// funnel displacement weight at rest position (x, y, z)
   double funnel(double x, double y, double z) const;
 };
+
+/// the automatic smooth-union radius (RibCageParams::blend < 0) of a cage of these dimensions (mm)
+double autoBlend(const Dimensions& d);
 
 CageModel buildModel(const Dimensions& d, const RibCageParams& p, double funnelDepth, double spacing);
 

@@ -234,6 +234,9 @@ TEST(RibCage, BadInputNamesParameterAndRange) {
   p = coarse();
   p.ribPairs = 9;
   expectError(p, "ribPairs");
+  p = coarse();
+  p.blend = 11;
+  expectError(p, "blend");
 }
 
 // The generator at coarse edges where the decimation used to fold the surface (age 11, index 4.0 at 6 mm: three

@@ -1,7 +1,7 @@
 // Command-line driver of the Nuss FE analysis core (bench/nuss_convergence.py, quick studies):
 //   pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]
 //                   [--target mm | --force N] [--linear] [--space s] [--threads n] [--vtu out.vtu] [--layers]
-//                   [--inp deck.inp]
+//                   [--inp deck.inp] [--blend mm]
 // Builds the default rib cage (--layers: as one layer per tissue, joined as the filter's 'One layer per
 // tissue' input does), runs the analysis and prints one line of key=value figures, the mean displacement
 // of the sternal load patch's nodes and the tets' volume per tissue. --inp writes the same model at the
@@ -49,6 +49,7 @@ int main(int argc, char** argv) {
     else if (a == "--vtu") vtu = next();
     else if (a == "--layers") layers = true;
     else if (a == "--inp") inp = next();
+    else if (a == "--blend") rp.blend = std::atof(next());
     else { std::fprintf(stderr, "usage: see the header of tools/nuss_cli.cpp (unknown argument %s)\n", argv[i]); return 2; }
   }
   try {
