@@ -277,7 +277,9 @@ SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p,
   Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
   int nonEmpty = 0;
   for (const auto& r : regions) {
-    if (r.empty()) continue;
+    // a region whose polygon has no area (every ray stopped at the seed: found by fuzz_volume) sets no
+    // extent; with only such regions the pixel size would be 0 / resolution
+    if (r.empty() || !(std::abs(r.polygonArea()) > 0)) continue;
     ++nonEmpty;
     for (const auto& q : r.polygon) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
   }

@@ -193,3 +193,29 @@ TEST(ThoracicVolumeSlice, RasterResolutionIsUsed) {
   EXPECT_GT(std::abs(c.volume - c.polygonVolume), std::abs(f.volume - f.polygonVolume));
   EXPECT_LT(std::abs(f.volume - f.polygonVolume) / f.polygonVolume, 5e-4);
 }
+
+// found by fuzz_volume (UBSan: NaN cast to int): an open, wavy sheet whose one slice region collapsed to a
+// point (every ray stopped at the seed), so the slices' common box had no extent and the pixel size was
+// 0 / resolution. A region without area now counts as empty, and a range with only such regions is refused.
+TEST(ThoracicVolumeSlice, RegionsWithoutAreaAreRefused) {
+  Soup s;
+  s.V = {{-41.4578, -4.26848, 1.37812},  {17.7676, -4.26848, -0.121875}, {76.9887, -4.26848, 5.87741},
+         {-41.4578, -1.75761, -0.847018}, {-14.0338, -2.87322, -2.2232},  {44.939, -3.00651, 0.0107159},
+         {-41.6801, 0.0573667, 1.54273},  {0.848867, -0.322695, -1.98586}, {46.4187, -0.117251, 0.330441},
+         {-51.9267, 2.46185, 0.82637},    {-11.2283, 3.03103, -2.04545},  {51.4089, 2.60888, 0.942296},
+         {-70.3036, 4.82974, 1.68156},    {-4.23783, 4.88865, -3.62321},  {72.1574, 5.14288, 0.455202}};
+  s.F = {{0, 1, 4},   {0, 4, 3},   {1, 2, 5},   {1, 5, 4},   {3, 4, 7},   {3, 7, 6},
+         {4, 5, 8},   {4, 8, 7},   {6, 7, 10},  {6, 10, 9},  {7, 8, 11},  {7, 11, 10},
+         {9, 10, 13}, {9, 13, 12}, {10, 11, 14}, {10, 14, 13}, {0, 3, 13}};
+  SliceParams p;
+  p.spacing = 20;  // one plane, at the middle of the range
+  p.rays = 18;
+  p.resolution = 16;
+  const Range range{-2.35515, 7.77753};
+  try {
+    const SliceResult r = sliceVolume(s, range, p);
+    ADD_FAILURE() << "no error; pixel " << r.pixel << ", volume " << r.volume;
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("no geometry in the measured range"), std::string::npos) << e.what();
+  }
+}
