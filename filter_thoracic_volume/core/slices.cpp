@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "pectus/errors.h"
+#include "pectus/grid_cell.h"
 #include "thoracic_volume.h"
 
 namespace pectus::vol {
@@ -234,7 +235,9 @@ long long rasterCount(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vec
   std::vector<double> xs;
   double ylo = 1e300, yhi = -1e300;
   for (const auto& p : poly) ylo = std::min(ylo, p.y()), yhi = std::max(yhi, p.y());
-  const int r0 = std::max(0, int(std::floor((ylo - o.y()) / h - 0.5))), r1 = std::min(rows - 1, int(std::ceil((yhi - o.y()) / h)));
+  // rows and columns clamped to the grid in floating point before any cast: a polygon far outside the
+  // grid (relative to the pixel size) would overflow int (found by fuzz_volume)
+  const int r0 = clampedCell((ylo - o.y()) / h - 0.5, rows), r1 = clampedCell(std::ceil((yhi - o.y()) / h), rows);
   const std::size_t n = poly.size();
   for (int r = r0; r <= r1; ++r) {
     const double y = o.y() + (r + 0.5) * h;
@@ -246,9 +249,9 @@ long long rasterCount(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vec
     }
     std::sort(xs.begin(), xs.end());
     for (std::size_t i = 0; i + 1 < xs.size(); i += 2) {
-      long a = long(std::ceil((xs[i] - o.x()) / h - 0.5)), b = long(std::ceil((xs[i + 1] - o.x()) / h - 0.5)) - 1;
-      a = std::max(a, 0L), b = std::min(b, long(cols - 1));
-      if (b >= a) count += b - a + 1;
+      const double a = std::max(std::ceil((xs[i] - o.x()) / h - 0.5), 0.0);
+      const double b = std::min(std::ceil((xs[i + 1] - o.x()) / h - 0.5) - 1, double(cols - 1));
+      if (b >= a) count += static_cast<long long>(b - a) + 1;
     }
   }
   return count;
@@ -297,7 +300,7 @@ SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p,
   res.area.assign(N, 0.0);
   for (int k = 0; k < N; ++k) {
     const auto& r = regions[k];
-    if (r.empty()) {
+    if (r.empty() || !(std::abs(r.polygonArea()) > 0)) {  // no area: as in the box above
       ++res.emptySlices;
       continue;
     }
