@@ -289,7 +289,8 @@ SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p,
   if (nonEmpty == 0) {
     std::ostringstream o;
     o << "no geometry in the measured range: none of the " << N << " planes between z = " << range.zLo << " and z = "
-      << range.zHi << " mm cuts the layer (check the range, the landmarks, or that the layer is the rib cage)";
+      << range.zHi << " mm cuts the layer in a section that encloses an area (check the range, the landmarks, or "
+         "that the layer is the rib cage)";
     throw InputError(o.str());
   }
   const double ext = std::max(hi.x() - lo.x(), hi.y() - lo.y());
