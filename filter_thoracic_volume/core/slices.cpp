@@ -273,18 +273,22 @@ SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p,
   if (progress) progress(5, "cutting the planes");
   auto cuts = cutPlanes(s, res.z);
   std::vector<SliceRegion> regions(N);
+  std::vector<double> polyArea(N, 0.0);
   for (int k = 0; k < N; ++k) {
     regions[k] = regionFromSegments(res.z[k], std::move(cuts[k]), p.rays);
+    if (!regions[k].empty()) polyArea[k] = regions[k].polygonArea();
     if (progress && k % std::max(1, N / 10) == 0) progress(10 + 60 * k / N, "slice regions");
   }
+  // a region whose polygon has no area (every ray stopped at the seed: found by fuzz_volume) counts as
+  // empty: it would set no extent (with only such regions the pixel size would be 0 / resolution) and
+  // lie anywhere outside the raster
+  auto hasArea = [&](int k) { return !regions[k].empty() && std::abs(polyArea[k]) > 0; };
   Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
   int nonEmpty = 0;
-  for (const auto& r : regions) {
-    // a region whose polygon has no area (every ray stopped at the seed: found by fuzz_volume) sets no
-    // extent; with only such regions the pixel size would be 0 / resolution
-    if (r.empty() || !(std::abs(r.polygonArea()) > 0)) continue;
+  for (int k = 0; k < N; ++k) {
+    if (!hasArea(k)) continue;
     ++nonEmpty;
-    for (const auto& q : r.polygon) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+    for (const auto& q : regions[k].polygon) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
   }
   if (nonEmpty == 0) {
     std::ostringstream o;
@@ -301,14 +305,14 @@ SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p,
   res.area.assign(N, 0.0);
   for (int k = 0; k < N; ++k) {
     const auto& r = regions[k];
-    if (r.empty() || !(std::abs(r.polygonArea()) > 0)) {  // no area: as in the box above
+    if (!hasArea(k)) {
       ++res.emptySlices;
       continue;
     }
     res.minCoverage = std::min(res.minCoverage, r.coverage());
     res.area[k] = double(rasterCount(r.polygon, o, px, cols, rows)) * px * px;
     res.volume += res.area[k] * h;
-    res.polygonVolume += r.polygonArea() * h;
+    res.polygonVolume += polyArea[k] * h;
     if (progress && k % std::max(1, N / 10) == 0) progress(70 + 30 * k / N, "rasterising");
   }
   return res;
