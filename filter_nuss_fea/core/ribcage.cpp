@@ -134,7 +134,7 @@ Dimensions validate(const RibCageParams& p) {
   if (!(p.ribPairs >= 10 && p.ribPairs <= 12)) bad("ribPairs", "in [10, 12]", p.ribPairs);
   if (!(p.hallerIndex >= 1 && p.hallerIndex <= 12)) bad("hallerIndex", "in [1, 12] (normal ~2.5, pectus excavatum > 3.25)", p.hallerIndex);
   if (!(p.edgeLength >= 0.4 && p.edgeLength <= 8)) bad("edgeLength", "in [0.4, 8] mm", p.edgeLength);
-  if (!(p.blend < 0 || p.blend <= 10)) bad("blend", "in [0, 10] mm (negative: automatic)", p.blend);
+  if (!(p.blend <= 10)) bad("blend", "in [0, 10] mm (negative: automatic)", p.blend);
   if (!(p.funnelWidth >= 20 && p.funnelWidth <= d.chestWidth))
     bad("funnelWidth", "in [20, " + num(d.chestWidth) + "] mm (at most the chest's inner width)", p.funnelWidth,
         "a funnel cannot be wider than the chest");
