@@ -139,7 +139,6 @@ struct Solver::Impl {
   Eigen::SparseMatrix<double> K;               // free x free, lower triangle
   Cholmod chol;
   bool analysed = false;
-  bool linearFactor = false;                   // chol holds the factor of the small-strain stiffness
   std::vector<std::vector<int>> colors;        // tets by colour (colorTets), for the assembly
 
   int nFree = 0;
@@ -301,7 +300,6 @@ struct Solver::Impl {
       analysed = true;
     }
     setBlasThreads(chol.cholmod().fl);
-    linearFactor = false;
     chol.factorize(K);
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (std::getenv("PECTUS_FE_VERBOSE"))
@@ -457,12 +455,7 @@ Result Solver::solveLinear(double scale) {
   Eigen::VectorXd fint;
   I.assemble(res.u, false, fint);
   Eigen::VectorXd r = I.freePart(scale * I.fext - fint);
-  // the small-strain stiffness does not depend on the load: a factor of it from an earlier linear solve
-  // (the analysis' unit-force solve, then the solve at Fe) is used again
-  if (!I.linearFactor) {
-    I.factorize(lastFactorSeconds_);
-    I.linearFactor = true;
-  }
+  I.factorize(lastFactorSeconds_);
   const Eigen::VectorXd du = I.solveFree(r);
   for (size_t d = 0; d < I.freeIndex.size(); ++d)
     if (I.freeIndex[d] >= 0) res.u(d) += du(I.freeIndex[d]);
