@@ -14,7 +14,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   fuzz::Input in(data, size, fuzz::limits(4, false));
   fuzz::Reader& r = in.r;
   const fuzz::Mesh& fm = in.mesh;
-  CMeshO m;
+  OwnedMesh m;  // frees the face labels' attributes
   fuzz::toCMesh(fm, m, false);
   if (r.u8() % 8 != 0) {  // else: no labels
     std::vector<int> tissue, part;

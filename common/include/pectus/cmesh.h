@@ -28,4 +28,14 @@ inline std::vector<int> liveVertices(const CMeshO& m, std::vector<Eigen::Vector3
   }
   return map;
 }
+
+/// A CMeshO owned by the program (a test, a fuzz target, a tool) rather than by MeshLab's document: vcglib
+/// 2020.09's TriMesh destructor calls Clear() but not ClearAttributes(), so the named attributes of a plain
+/// CMeshO (the tissue/part face labels) leak when it goes out of scope; this one frees them.
+struct OwnedMesh : CMeshO {
+  OwnedMesh() = default;
+  OwnedMesh(const OwnedMesh&) = delete;
+  OwnedMesh& operator=(const OwnedMesh&) = delete;
+  ~OwnedMesh() { ClearAttributes(); }
+};
 }  // namespace pectus
