@@ -121,6 +121,50 @@ void setBlasThreads(double flops) {
 class Cholmod : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
  public:
   double rcond() { return m_cholmodFactor ? cholmod_rcond(m_cholmodFactor, &cholmod()) : 0.0; }
+
+  // Symbolic analysis of K (lower triangle) with a fill-reducing ordering that METIS finds on the graph of
+  // the nodes instead of the dofs: `nodeOuter`/`nodeInner` is the lower-triangular pattern of the nodes
+  // that have free dofs, the free dofs of node k are firstDof[k] .. firstDof[k + 1] - 1. The graph is 3x
+  // smaller (9x fewer edges) than K's, so it is ordered faster, and no separator cuts through a node.
+  // CHOLMOD then postorders the given ordering and finds the supernodes as usual. False if METIS failed
+  // (the caller falls back to CHOLMOD's own choice).
+  bool analyzeByNodes(const Eigen::SparseMatrix<double>& K, std::vector<int>& nodeOuter, std::vector<int>& nodeInner,
+                      const std::vector<int>& firstDof) {
+    cholmod_common& c = cholmod();
+    const int nn = static_cast<int>(nodeOuter.size()) - 1;
+    cholmod_sparse G{};
+    G.nrow = G.ncol = static_cast<size_t>(nn);
+    G.nzmax = nodeInner.size();
+    G.p = nodeOuter.data();
+    G.i = nodeInner.data();
+    G.stype = -1;  // lower triangle
+    G.itype = CHOLMOD_INT;
+    G.xtype = CHOLMOD_PATTERN;
+    G.dtype = CHOLMOD_DOUBLE;
+    G.sorted = 1;
+    G.packed = 1;
+    std::vector<int> nodePerm(static_cast<size_t>(nn));
+    if (nn == 0 || !cholmod_metis(&G, nullptr, 0, 1, nodePerm.data(), &c)) return false;
+    std::vector<int> perm;
+    perm.reserve(static_cast<size_t>(K.rows()));
+    for (int k : nodePerm)
+      for (int d = firstDof[std::size_t(k)]; d < firstDof[std::size_t(k) + 1]; ++d) perm.push_back(d);
+    if (static_cast<Eigen::Index>(perm.size()) != K.rows()) return false;
+    if (m_cholmodFactor) cholmod_free_factor(&m_cholmodFactor, &c);
+    const int nmethods = c.nmethods, ordering = c.method[0].ordering;
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_GIVEN;
+    cholmod_sparse A = Eigen::viewAsCholmod(K.selfadjointView<Eigen::Lower>());
+    m_cholmodFactor = cholmod_analyze_p(&A, perm.data(), nullptr, 0, &c);
+    c.nmethods = nmethods;
+    c.method[0].ordering = ordering;
+    if (!m_cholmodFactor) return false;
+    m_isInitialized = true;
+    m_info = Eigen::Success;
+    m_analysisIsOk = true;
+    m_factorizationIsOk = false;
+    return true;
+  }
 };
 
 }  // namespace
@@ -140,11 +184,16 @@ struct Solver::Impl {
   Cholmod chol;
   bool analysed = false;
   std::vector<std::vector<int>> colors;        // tets by colour (colorTets), for the assembly
+  // graph of the nodes with free dofs (lower triangle, compact node numbers) and their first free dof:
+  // the input of the ordering (Cholmod::analyzeByNodes), dropped after the analysis
+  std::vector<int> nodeOuter, nodeInner, nodeFirstDof;
+  bool orderByNodes = true;                    // PECTUS_FE_ORDERING=amd|metis|nesdis: CHOLMOD orders the dofs
 
   int nFree = 0;
   Impl() {
     chol.cholmod().print = 0;  // errors are reported by exceptions, not on stderr
     if (const char* o = std::getenv("PECTUS_FE_ORDERING")) {  // experiments: amd | metis | nesdis
+      orderByNodes = false;
       chol.cholmod().nmethods = 1;
       const std::string s(o);
       chol.cholmod().method[0].ordering = s == "metis" ? CHOLMOD_METIS : s == "nesdis" ? CHOLMOD_NESDIS : CHOLMOD_AMD;
@@ -295,17 +344,23 @@ struct Solver::Impl {
 
   void factorize(double& seconds) {
     auto t0 = std::chrono::steady_clock::now();
+    double analyseSeconds = 0;
     if (!analysed) {
-      chol.analyzePattern(K);
+      if (!orderByNodes || !chol.analyzeByNodes(K, nodeOuter, nodeInner, nodeFirstDof)) chol.analyzePattern(K);
+      std::vector<int>().swap(nodeOuter);
+      std::vector<int>().swap(nodeInner);
+      std::vector<int>().swap(nodeFirstDof);
       analysed = true;
+      analyseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
     setBlasThreads(chol.cholmod().fl);
     chol.factorize(K);
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (std::getenv("PECTUS_FE_VERBOSE"))
-      std::fprintf(stderr, "[pectus_fe] n=%d nnz(A)=%ld nnz(L)=%.0f flops=%.3g ordering=%d factor %.3f s\n", nFree,
-                   static_cast<long>(K.nonZeros()), chol.cholmod().lnz, chol.cholmod().fl, chol.cholmod().selected >= 0 ?
-                   chol.cholmod().method[chol.cholmod().selected].ordering : -1, seconds);
+      std::fprintf(stderr, "[pectus_fe] n=%d nnz(A)=%ld nnz(L)=%.0f flops=%.3g ordering=%d analyse %.3f s factor %.3f s\n",
+                   nFree, static_cast<long>(K.nonZeros()), chol.cholmod().lnz, chol.cholmod().fl,
+                   chol.cholmod().selected >= 0 ? chol.cholmod().method[chol.cholmod().selected].ordering : -1,
+                   analyseSeconds, seconds);
     if (chol.info() != Eigen::Success)
       throw InputError(
           "The stiffness matrix is singular or not positive definite: the model is not held enough (fix more "
@@ -418,12 +473,28 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
   std::vector<int> outer(I.nFree + 1, 0);
   std::vector<int> inner;
   inner.reserve(static_cast<size_t>(I.nFree) * 40);
-  std::vector<std::vector<int>> colRows;
+  // compact numbers of the nodes with free dofs (their free dofs are consecutive: node-major numbering)
+  std::vector<int> compact(n, -1);
+  for (int i = 0; i < n; ++i)
+    for (int d = 0; d < 3; ++d)
+      if (I.freeIndex[3 * i + d] >= 0) {
+        if (compact[i] < 0) {
+          compact[i] = static_cast<int>(I.nodeFirstDof.size());
+          I.nodeFirstDof.push_back(I.freeIndex[3 * i + d]);
+        }
+      }
+  I.nodeFirstDof.push_back(I.nFree);
+  I.nodeOuter.assign(1, 0);
   int col = 0;
   for (int i = 0; i < n; ++i) {
     auto& a = adj[i];
     std::sort(a.begin(), a.end());
     a.erase(std::unique(a.begin(), a.end()), a.end());
+    if (compact[i] >= 0) {
+      for (int j : a)
+        if (j >= i && compact[j] >= 0) I.nodeInner.push_back(compact[j]);
+      I.nodeOuter.push_back(static_cast<int>(I.nodeInner.size()));
+    }
     for (int d = 0; d < 3; ++d) {
       const int fc = I.freeIndex[3 * i + d];
       if (fc < 0) continue;

@@ -120,6 +120,27 @@ TEST(FeSolver, SameResultWithOneAndTwoThreads) {
 }
 TEST(FeSolver, PatchTestTet10) { patchTest(2); }
 
+// the default ordering (METIS on the node graph, each node's free dofs kept together) solves the same
+// system as CHOLMOD's own orderings of the dofs: same displacements to round-off, also with nodes that
+// have only some dofs fixed (rollers on the side y = 0: their x and z dofs stay free)
+TEST(FeSolver, NodeOrderingSolvesTheSameSystemAsCholmodsOwn) {
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 2, 2, 16, 1));
+  Problem p = cantilever(q, 20.0);
+  int rollers = 0;
+  for (int i = 0; i < q.numNodes(); ++i)
+    if (q.nodes[i].y() < 1e-9 && q.nodes[i].z() > 1e-9 && q.nodes[i].z() < 30) p.fixed.push_back({i, 1, 0.0}), ++rollers;
+  ASSERT_GT(rollers, 5);
+  const Eigen::VectorXd byNodes = solveLinear(p).u;
+  for (const char* ordering : {"amd", "metis"}) {
+    setenv("PECTUS_FE_ORDERING", ordering, 1);
+    const Eigen::VectorXd own = solveLinear(p).u;
+    unsetenv("PECTUS_FE_ORDERING");
+    ASSERT_EQ(own.size(), byNodes.size());
+    EXPECT_LT((own - byNodes).norm(), 1e-10 * byNodes.norm()) << ordering;
+  }
+  EXPECT_GT(byNodes.norm(), 0.1);
+}
+
 TEST(FeSolver, CantileverVsBeamTheory) {
   const double P = 20.0;
   const double ref = timoshenko(P);
