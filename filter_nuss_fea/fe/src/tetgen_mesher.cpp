@@ -7,6 +7,14 @@
 #include <numeric>
 #include <sstream>
 
+#include <cerrno>
+#include <csignal>
+#include <cstdint>
+#include <cstring>
+
+#include <sys/wait.h>
+#include <unistd.h>
+
 #include <tetgen.h>
 
 #include "pectus/errors.h"
@@ -81,18 +89,130 @@ Vector3d closestOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d&
 /// mesh (a point in no face outside the volume, a duplicate) and numbers the rest consecutively (found by
 /// fuzzing); it keeps the coordinates of the points it keeps, so they are matched exactly. Throws
 /// InputError if a surface vertex is not among them.
-std::vector<int> inputVerticesFirst(const SurfaceMesh& s, const tetgenio& out) {
-  const int nv = static_cast<int>(s.vertices.size()), np = out.numberofpoints;
+// What the mesher reads of TetGen's output: points (x, y, z) and linear tets (4 point indices each)
+struct TetgenOutput {
+  std::vector<double> points;
+  std::vector<int> tets;
+  int numPoints() const { return static_cast<int>(points.size() / 3); }
+  int numTets() const { return static_cast<int>(tets.size() / 4); }
+};
+
+const char* const kTetgenAdvice = "check it is closed, not self-intersecting and without tiny features.";
+
+// TetGen in this process; its errors (thrown ints) become InputError
+TetgenOutput tetgenHere(const std::string& switches, tetgenio& in) {
+  tetgenio out;
+  try {
+    ::tetrahedralize(const_cast<char*>(switches.c_str()), &in, &out);
+  } catch (int code) {
+    throw InputError("TetGen failed (error code " + std::to_string(code) + ") on the surface: " + kTetgenAdvice);
+  } catch (...) {
+    throw InputError(std::string("TetGen failed on the surface: ") + kTetgenAdvice);
+  }
+  TetgenOutput r;
+  r.points.assign(out.pointlist, out.pointlist + 3 * std::max(0, out.numberofpoints));
+  r.tets.resize(4 * std::size_t(std::max(0, out.numberoftetrahedra)));
+  for (int t = 0; t < out.numberoftetrahedra; ++t)
+    for (int k = 0; k < 4; ++k) r.tets[4 * std::size_t(t) + k] = out.tetrahedronlist[t * out.numberofcorners + k];
+  return r;
+}
+
+bool writeAll(int fd, const void* data, std::size_t n) {
+  const char* p = static_cast<const char*>(data);
+  while (n > 0) {
+    const ssize_t w = ::write(fd, p, n);
+    if (w < 0 && errno == EINTR) continue;
+    if (w <= 0) return false;
+    p += w, n -= std::size_t(w);
+  }
+  return true;
+}
+bool readAll(int fd, void* data, std::size_t n) {
+  char* p = static_cast<char*>(data);
+  while (n > 0) {
+    const ssize_t r = ::read(fd, p, n);
+    if (r < 0 && errno == EINTR) continue;
+    if (r <= 0) return false;
+    p += r, n -= std::size_t(r);
+  }
+  return true;
+}
+
+// TetGen in a child process. Debian's TetGen 1.5 keeps its assertions, and on some valid-looking surfaces
+// its Delaunay refinement stops on one (insertpoint: assert(0), found by fuzz_fe_model) or crashes: in this
+// process that would abort MeshLab with the user's unsaved work. The child (fork: a copy-on-write image of
+// this one, only the calling thread) runs TetGen and sends the points and tets back through a pipe; a
+// child that dies becomes an InputError. Without fork (no memory for the page tables) TetGen runs here.
+TetgenOutput runTetgen(const std::string& switches, tetgenio& in) {
+  int fd[2];
+  if (::pipe(fd) != 0) return tetgenHere(switches, in);
+  const pid_t pid = ::fork();
+  if (pid < 0) {
+    ::close(fd[0]), ::close(fd[1]);
+    return tetgenHere(switches, in);
+  }
+  if (pid == 0) {  // child: status, message length, message or sizes and arrays; then _exit (no atexit, no destructors)
+    ::close(fd[0]);
+    int status = 0;
+    std::string msg;
+    TetgenOutput r;
+    try {
+      r = tetgenHere(switches, in);
+    } catch (const std::exception& e) {
+      status = 1, msg = e.what();
+    }
+    const std::uint64_t len = msg.size(), np = r.points.size(), nt = r.tets.size();
+    const bool ok = writeAll(fd[1], &status, sizeof status) && writeAll(fd[1], &len, sizeof len) &&
+                    writeAll(fd[1], msg.data(), len) && writeAll(fd[1], &np, sizeof np) && writeAll(fd[1], &nt, sizeof nt) &&
+                    writeAll(fd[1], r.points.data(), np * sizeof(double)) && writeAll(fd[1], r.tets.data(), nt * sizeof(int));
+    ::_exit(ok ? 0 : 3);
+  }
+  ::close(fd[1]);
+  int status = -1;
+  std::uint64_t len = 0, np = 0, nt = 0;
+  std::string msg;
+  TetgenOutput r;
+  bool ok = readAll(fd[0], &status, sizeof status) && readAll(fd[0], &len, sizeof len) && len < (1u << 20);
+  if (ok) {
+    msg.resize(len);
+    ok = readAll(fd[0], msg.data(), len) && readAll(fd[0], &np, sizeof np) && readAll(fd[0], &nt, sizeof nt) &&
+         np % 3 == 0 && nt % 4 == 0;
+  }
+  if (ok && status == 0) {
+    r.points.resize(np);
+    r.tets.resize(nt);
+    ok = readAll(fd[0], r.points.data(), np * sizeof(double)) && readAll(fd[0], r.tets.data(), nt * sizeof(int));
+  }
+  ::close(fd[0]);
+  int ws = 0;
+  while (::waitpid(pid, &ws, 0) < 0 && errno == EINTR) {
+  }
+  if (WIFSIGNALED(ws)) {
+    const int sig = WTERMSIG(ws);
+    throw InputError(std::string("TetGen ") +
+                     (sig == SIGABRT ? "stopped on one of its internal assertions" : "crashed (" + std::string(strsignal(sig)) + ")") +
+                     " while meshing the surface (nothing else was affected): " + kTetgenAdvice +
+                     " A different maximum tet volume or tet quality may also get past it.");
+  }
+  if (ok && status == 1) throw InputError(msg);
+  if (!ok || status != 0 || !WIFEXITED(ws) || WEXITSTATUS(ws) != 0)
+    throw InputError("TetGen's process ended without a result (exit status " + std::to_string(WIFEXITED(ws) ? WEXITSTATUS(ws) : -1) + ").");
+  return r;
+}
+
+std::vector<int> inputVerticesFirst(const SurfaceMesh& s, const TetgenOutput& out) {
+  const int nv = static_cast<int>(s.vertices.size()), np = out.numPoints();
+  const double* pointlist = out.points.data();
   std::vector<int> node(np, -1);
   bool identity = np >= nv;
   for (int i = 0; i < nv && identity; ++i)
-    for (int d = 0; d < 3; ++d) identity = identity && out.pointlist[3 * i + d] == s.vertices[i](d);
+    for (int d = 0; d < 3; ++d) identity = identity && pointlist[3 * i + d] == s.vertices[i](d);
   if (identity) {
     std::iota(node.begin(), node.end(), 0);
     return node;
   }
   std::map<std::array<double, 3>, int> at;  // output point by its exact coordinates (the first of equal ones)
-  for (int j = np - 1; j >= 0; --j) at[{out.pointlist[3 * j], out.pointlist[3 * j + 1], out.pointlist[3 * j + 2]}] = j;
+  for (int j = np - 1; j >= 0; --j) at[{pointlist[3 * j], pointlist[3 * j + 1], pointlist[3 * j + 2]}] = j;
   for (int i = 0; i < nv; ++i) {
     const auto it = at.find({s.vertices[i](0), s.vertices[i](1), s.vertices[i](2)});
     if (it == at.end() || node[it->second] >= 0) {
@@ -192,7 +312,7 @@ std::vector<int> nearestFaces(const SurfaceMesh& s, const std::vector<Vector3d>&
 TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<int>* tetFace) {
   checkSurfaceForTetgen(s);
   if (opt.order != 1 && opt.order != 2) throw InputError("Element order must be 1 (TET4) or 2 (TET10).");
-  tetgenio in, out;
+  tetgenio in;
   in.firstnumber = 0;
   in.numberofpoints = static_cast<int>(s.vertices.size());
   in.pointlist = new REAL[3 * s.vertices.size()];
@@ -217,29 +337,23 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vect
   if (opt.preserveSurface) sw << "Y";
   if (opt.radiusEdgeRatio > 0) sw << "q" << opt.radiusEdgeRatio;
   if (opt.maxVolume > 0) sw << "a" << opt.maxVolume;
-  std::string sws = sw.str();
-  try {
-    ::tetrahedralize(const_cast<char*>(sws.c_str()), &in, &out);
-  } catch (int code) {
-    throw InputError("TetGen failed (error code " + std::to_string(code) +
-                     ") on the surface: check it is closed, not self-intersecting and without tiny features.");
-  } catch (...) {
-    throw InputError("TetGen failed on the surface: check it is closed, not self-intersecting and without tiny features.");
-  }
-  if (out.numberoftetrahedra <= 0) throw InputError("TetGen produced no tetrahedra (is the surface closed?).");
+  const TetgenOutput out = runTetgen(sw.str(), in);
+  if (out.numTets() <= 0) throw InputError("TetGen produced no tetrahedra (is the surface closed?).");
+  for (int v : out.tets)
+    if (v < 0 || v >= out.numPoints()) throw InputError("TetGen returned a tetrahedron with a node out of range.");
   const std::vector<int> node = inputVerticesFirst(s, out);
   TetMesh m;
   m.order = 1;
-  m.nodes.resize(out.numberofpoints);
-  for (int i = 0; i < out.numberofpoints; ++i)
-    m.nodes[node[i]] = Vector3d(out.pointlist[3 * i], out.pointlist[3 * i + 1], out.pointlist[3 * i + 2]);
-  m.tets.resize(out.numberoftetrahedra);
-  std::vector<Vector3d> centroids(out.numberoftetrahedra);
+  m.nodes.resize(out.numPoints());
+  for (int i = 0; i < out.numPoints(); ++i)
+    m.nodes[node[i]] = Vector3d(out.points[3 * i], out.points[3 * i + 1], out.points[3 * i + 2]);
+  m.tets.resize(out.numTets());
+  std::vector<Vector3d> centroids(out.numTets());
   std::vector<char> inTet(s.vertices.size(), 0);
-  for (int t = 0; t < out.numberoftetrahedra; ++t) {
+  for (int t = 0; t < out.numTets(); ++t) {
     std::array<int, 10> e{};
     for (int k = 0; k < 4; ++k) {
-      e[k] = node[out.tetrahedronlist[t * out.numberofcorners + k]];
+      e[k] = node[out.tets[4 * std::size_t(t) + k]];
       if (e[k] < static_cast<int>(inTet.size())) inTet[e[k]] = 1;
     }
     m.tets[t] = e;

@@ -201,3 +201,38 @@ TEST(FeMesher, TetgenBoxLabelsVolumeAndSeriesBar) {
   std::printf("[series bar] %d TET10, u_z %.5f mm, exact %.5f mm\n", q.numTets(), uz, exact);
   EXPECT_NEAR(uz / exact, 1.0, 0.03);  // the tissue interface inside is jagged (nearest-face labels)
 }
+
+// Debian's TetGen keeps its assertions: on this closed, self-intersection-free sphere (fuzz_fe_model's
+// first finding, corpus/fe_model/crash-tetgen-insertpoint-assert: two vertices 1e-6 apart at its centre,
+// where the surface pinches) its quality refinement stops on assert(0) in insertpoint. TetGen runs in a
+// child process, so that is an InputError here and not the end of the program (and of MeshLab).
+TEST(FeMesher, TetgenAssertionIsAnErrorNotAnAbort) {
+  SurfaceMesh s;
+  s.vertices = {
+      {0, 0, -1.340268611907959}, {0.76586496829986572, 0.2011294811964035, -0.8185495138168335},
+      {-0.2011294811964035, 0.76586496829986572, -0.8185495138168335}, {-0.76586496829986572,
+      -0.2011294811964035, -0.8185495138168335}, {-0.059666760265827179, -0.58226418495178223,
+      -1.086699366569519}, {0.94918078184127808, -0.31423431634902954, -0.023699482902884483},
+      {0.05971933901309967, 0.9979933500289917, -0.028206806629896164}, {-0.99547308683395386,
+      0.093056224286556244, -0.025913797318935394}, {-0.05872681736946106, -0.99735629558563232,
+      -0.057358786463737488}, {0.71474152803421021, 0.18770357966423035, 0.90297895669937134},
+      {-1.5512948436935403e-07, 5.9070521274406929e-07, 1.0612711776047945e-06}, {-0.59070521593093872,
+      -0.15512949228286743, 1.0612711906433105}, {1.5512948468576033e-25, -5.9070520880531568e-25,
+      1.0612711418728368e-24}, {0, 0, 1.340268611907959},};
+  s.faces = {
+      {0, 2, 1}, {0, 3, 2}, {0, 4, 3}, {0, 1, 4}, {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 4, 8}, {3,
+      8, 7}, {4, 1, 5}, {4, 5, 8}, {5, 6, 10}, {5, 10, 9}, {6, 7, 11}, {6, 11, 10}, {7, 8, 12}, {7, 12, 11},
+      {8, 5, 9}, {8, 9, 12}, {13, 9, 10}, {13, 10, 11}, {13, 11, 12}, {13, 12, 9},};
+  s.faceTissue.assign(s.faces.size(), 1);
+  TetgenOptions o;
+  o.radiusEdgeRatio = 1.2;
+  o.maxVolume = 0.041604772732396877;
+  try {
+    tetrahedralize(s, o);
+    FAIL() << "TetGen meshed it (this TetGen may not assert on it any more: the test then proves nothing)";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("TetGen stopped on one of its internal assertions"), std::string::npos) << e.what();
+  }
+  // the process goes on, and meshes a valid surface afterwards
+  EXPECT_GT(tetrahedralize(boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 5)).numTets(), 0);
+}
