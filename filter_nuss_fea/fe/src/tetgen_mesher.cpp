@@ -153,6 +153,8 @@ TetgenOutput runTetgen(const std::string& switches, tetgenio& in) {
   }
   if (pid == 0) {  // child: status, message length, message or sizes and arrays; then _exit (no atexit, no destructors)
     ::close(fd[0]);
+    // the host's crash handlers (MeshLab's, a fuzzer's, a sanitizer's) are not the child's: it just dies
+    for (int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL}) std::signal(sig, SIG_DFL);
     int status = 0;
     std::string msg;
     TetgenOutput r;
