@@ -162,8 +162,8 @@ void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
 
   const bool perTissue = ctx.enumIn("output", 2) == 1;
   const auto t0 = std::chrono::steady_clock::now();
-  CMeshO cage;
-  std::array<CMeshO, 3> tissues;
+  pectus::OwnedMesh cage;
+  std::array<pectus::OwnedMesh, 3> tissues;
   pectus::ribcage::RibCageStats st;
   auto prog = [&](int pc, const char* w) { ctx.progress(pc, w); };
   const auto lms = perTissue ? pectus::ribcage::generateTissueLayers(p, tissues, &st, prog)
@@ -390,7 +390,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
 
   // the model surface: the current labelled layer, or the visible tissue layers joined into `joined`
   const bool perTissue = ctx.enumIn("input", 2) == 1;
-  CMeshO joined;
+  pectus::OwnedMesh joined;
   std::string joinText;
   const auto cage = [&] {
     if (!perTissue) return nuss::cageFromMesh(cur.cm);

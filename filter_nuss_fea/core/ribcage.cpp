@@ -370,7 +370,7 @@ std::vector<Landmark> generateRibCage(const RibCageParams& p, CMeshO& out, RibCa
   return lms;
 }
 
-std::vector<Landmark> generateTissueLayers(const RibCageParams& p, std::array<CMeshO, 3>& out, RibCageStats* stats,
+std::vector<Landmark> generateTissueLayers(const RibCageParams& p, std::array<OwnedMesh, 3>& out, RibCageStats* stats,
                                            const std::function<void(int, const char*)>& progress) {
   auto prog = [&](int pc, const char* w) { if (progress) progress(pc, w); };
   RibCageStats st;

@@ -71,8 +71,9 @@ inline constexpr std::array<const char*, 3> kTissueLayerNames{"ribs", "costal ca
 /// out[0] the ribs (bone), out[1] the costal cartilages, out[2] the sternum. Bone and cartilage overlap
 /// by a few mm at the costochondral junctions and the cartilages reach into the sternum; there is no
 /// smooth-union fillet between the tissues. Same landmarks as generateRibCage. The layers' names, in that
-/// order, are kTissueLayerNames (names joinTissueLayers reads the tissue from).
-std::vector<Landmark> generateTissueLayers(const RibCageParams& p, std::array<CMeshO, 3>& out, RibCageStats* stats = nullptr,
+/// order, are kTissueLayerNames (names joinTissueLayers reads the tissue from). OwnedMesh: the caller owns
+/// the three meshes and their face labels are freed with them.
+std::vector<Landmark> generateTissueLayers(const RibCageParams& p, std::array<OwnedMesh, 3>& out, RibCageStats* stats = nullptr,
                                            const std::function<void(int, const char*)>& progress = {});
 
 }  // namespace pectus::ribcage

@@ -12,7 +12,7 @@
 namespace pectus::fixture {
 
 struct CoarseCage {
-  CMeshO mesh;
+  OwnedMesh mesh;  // frees its face labels at exit (LeakSanitizer)
   std::vector<Landmark> lms;
 };
 

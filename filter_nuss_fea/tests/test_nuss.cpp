@@ -114,7 +114,7 @@ TEST(NussAnalysis, LinearModelLoadsSupportsCalibrationAndBadInput) {
 }
 
 TEST(NussAnalysis, UnlabelledOrEmptyLayersAreRefused) {
-  CMeshO m;
+  pectus::OwnedMesh m;
   EXPECT_NE(errorOf([&] { nuss::cageFromMesh(m); }).find("no faces"), std::string::npos);
   vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(m, cage().mesh);  // copies geometry, not the label attributes
   m.face.DisableColor();
@@ -124,7 +124,7 @@ TEST(NussAnalysis, UnlabelledOrEmptyLayersAreRefused) {
 
 TEST(NussAnalysis, MicroEdgesAreWelded) {
   // a tetrahedron with one vertex split into two 1e-6 apart (a sliver tent): welded back to 4 faces
-  CMeshO m;
+  pectus::OwnedMesh m;
   auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, 5);
   const float P[5][3] = {{0, 0, 0}, {10, 0, 0}, {0, 10, 0}, {0, 0, 10}, {0, 0, 10.000001f}};
   for (int i = 0; i < 5; ++i) vi[i].P() = Point3m(P[i][0], P[i][1], P[i][2]);
@@ -147,7 +147,7 @@ TEST(NussAnalysis, UnreferencedVerticesAreDropped) {
   // the cage plus stray vertices no face uses (one far outside, one inside a rib): they are not FE nodes,
   // so the stiffness stays positive definite and the analysis gives the cage's own answer
   const auto ref = nuss::analyze(nuss::cageFromMesh(cage().mesh), cage().lms, coarse());
-  CMeshO m;
+  pectus::OwnedMesh m;
   copyLabelledMesh(m, cage().mesh);
   auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, 2);
   vi[0].P() = Point3m(500, 500, 500);
@@ -167,9 +167,9 @@ TEST(NussAnalysis, TissueLayersJoinedIntoTheCagesVolume) {
   // volume, all three tissues, and an analysis that runs on it
   ribcage::RibCageParams p;
   p.edgeLength = 6.0;
-  std::array<CMeshO, 3> layers;
+  std::array<pectus::OwnedMesh, 3> layers;
   const auto lms = ribcage::generateTissueLayers(p, layers);
-  CMeshO joined;
+  pectus::OwnedMesh joined;
   nuss::JoinStats st;
   const auto& name = ribcage::kTissueLayerNames;
   const auto surf = nuss::joinTissueLayers({{name[0], &layers[0]}, {name[1], &layers[1]}, {name[2], &layers[2]}}, lms, joined, &st);

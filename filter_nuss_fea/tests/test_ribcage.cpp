@@ -54,7 +54,7 @@ TEST(MarchingTets, SphereIsClosedOrientedAndAccurate) {
   const auto nb = g.blocks();
   g.active.assign(std::size_t(nb[0]) * nb[1] * nb[2], 1);
   const TriSoup s = marchingTets(g, [](const Eigen::Vector3d& p) { return p.norm() - 4.0; });
-  CMeshO m;
+  pectus::OwnedMesh m;
   auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, s.V.size());
   for (const auto& v : s.V) { vi->P() = toPoint(v); ++vi; }
   auto fi = vcg::tri::Allocator<CMeshO>::AddFaces(m, s.F.size());
@@ -84,7 +84,7 @@ std::vector<Landmark>* RibCageCoarse::lms = nullptr;
 RibCageStats RibCageCoarse::stats;
 
 TEST_F(RibCageCoarse, WatertightManifoldNoSelfIntersection) {
-  CMeshO m;
+  pectus::OwnedMesh m;
   vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(m, *mesh);
   const Topo t = topology(m);
   EXPECT_GT(m.fn, 2000);
@@ -163,7 +163,7 @@ TEST(RibCage, DeterministicAndOtherParameters) {
   p.ribPairs = 10;
   p.age = 5;
   p.funnelCenterX = 8;
-  CMeshO a, b;
+  pectus::OwnedMesh a, b;
   RibCageStats sa;
   generateRibCage(p, a, &sa);
   generateRibCage(p, b);
@@ -189,7 +189,7 @@ TEST(RibCage, ExplicitDimensionsFinerMesh) {
   p.hallerIndex = 3.6;
   p.ribPairs = 11;
   p.edgeLength = 2.5;
-  CMeshO m;
+  pectus::OwnedMesh m;
   RibCageStats st;
   generateRibCage(p, m, &st);
   const auto h = measureHaller(m);
@@ -206,7 +206,7 @@ TEST(RibCage, ExplicitDimensionsFinerMesh) {
 
 TEST(RibCage, BadInputNamesParameterAndRange) {
   auto expectError = [](RibCageParams p, const std::string& name) {
-    CMeshO m;
+    pectus::OwnedMesh m;
     try {
       generateRibCage(p, m);
       ADD_FAILURE() << "no error for " << name;
@@ -250,7 +250,7 @@ TEST(RibCage, SweepAtCoarseEdgesHasNoSelfIntersection) {
     p.edgeLength = c.edge;
     p.age = c.age;
     p.hallerIndex = c.haller;
-    CMeshO m;
+    pectus::OwnedMesh m;
     RibCageStats st;
     generateRibCage(p, m, &st);
     const Topo t = topology(m);

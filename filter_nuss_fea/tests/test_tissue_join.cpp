@@ -42,12 +42,12 @@ TEST(TissueJoin, TissueFromLayerName) {
 }
 
 TEST(TissueJoin, OverlappingBoxesGiveTheUnionVolumeSplitInTheMiddleOfTheOverlap) {
-  CMeshO rib, cart;
+  pectus::OwnedMesh rib, cart;
   box(rib, 0, 0, 0, 20, 10, 10);   // 2000 mm^3
   box(cart, 15, 2, 2, 35, 8, 8);   // 720 mm^3, 5 x 6 x 6 = 180 mm^3 inside the rib
   const double unionVolume = 2000 + 720 - 180;
   const std::vector<Landmark> lms{{cvjLandmark(1, 5), Eigen::Vector3d(0, 5, 5)}};
-  CMeshO joined;
+  pectus::OwnedMesh joined;
   nuss::JoinStats st;
   const auto cage = nuss::joinTissueLayers({{"rib 5", &rib}, {"costal cartilage", &cart}}, lms, joined, &st);
   EXPECT_EQ(st.layers, 2);
@@ -98,24 +98,24 @@ TEST(TissueJoin, OverlappingBoxesGiveTheUnionVolumeSplitInTheMiddleOfTheOverlap)
 }
 
 TEST(TissueJoin, BadLayersAreNamed) {
-  CMeshO rib, cart, open, twice, sternum;
+  pectus::OwnedMesh rib, cart, open, twice, sternum;
   box(rib, 0, 0, 0, 20, 10, 10);
   box(cart, 15, 2, 2, 35, 8, 8);
   box(open, 15, 2, 2, 35, 8, 8);
   vcg::tri::Allocator<CMeshO>::DeleteFace(open, open.face[0]);
   box(twice, 15, 2, 2, 35, 8, 8);
-  CMeshO other;
+  pectus::OwnedMesh other;
   box(other, 20, 4, 4, 40, 6, 12);
   vcg::tri::Append<CMeshO, CMeshO>::Mesh(twice, other);  // two boxes crossing in one layer
   const std::vector<Landmark> lms;
-  CMeshO j;
+  pectus::OwnedMesh j;
   auto err = [&](const std::vector<nuss::TissueLayer>& l) { return errorOf([&] { nuss::joinTissueLayers(l, lms, j); }); };
   EXPECT_NE(err({{"rib", &rib}, {"Segment_2", &cart}}).find("Cannot tell the tissue of layer 'Segment_2'"), std::string::npos);
   EXPECT_NE(err({{"rib", &rib}, {"cartilage", &open}}).find("Layer 'cartilage' is open"), std::string::npos);
   EXPECT_NE(err({{"rib", &rib}, {"cartilage", &twice}}).find("Layer 'cartilage' intersects itself"), std::string::npos);
   EXPECT_NE(err({{"rib", &rib}, {"sternum", &cart}}).find("no cartilage layer"), std::string::npos);
   EXPECT_NE(err({{"cartilage", &cart}}).find("no bone (rib) layer"), std::string::npos);
-  CMeshO empty;
+  pectus::OwnedMesh empty;
   EXPECT_NE(err({{"rib", &rib}, {"cartilage", &empty}}).find("Layer 'cartilage' has no faces"), std::string::npos);
 }
 
@@ -143,15 +143,15 @@ TEST(TissueJoin, GeneratedLayersMatchTheOneSurfaceCageWithoutFillets) {
     return v;
   };
 
-  CMeshO one;
+  pectus::OwnedMesh one;
   const auto lms = ribcage::generateRibCage(p, one);
   const nuss::Analysis a1 = nuss::analyze(nuss::cageFromMesh(one), lms, o);
 
-  std::array<CMeshO, 3> tissues;
+  std::array<pectus::OwnedMesh, 3> tissues;
   const auto lmsLayers = ribcage::generateTissueLayers(p, tissues);
   std::vector<nuss::TissueLayer> layers;
   for (std::size_t k = 0; k < 3; ++k) layers.push_back({ribcage::kTissueLayerNames[k], &tissues[k]});
-  CMeshO joined;
+  pectus::OwnedMesh joined;
   const nuss::Analysis a2 = nuss::analyze(nuss::joinTissueLayers(layers, lmsLayers, joined), lmsLayers, o);
 
   const double v1 = tetVolume(a1), v2 = tetVolume(a2);

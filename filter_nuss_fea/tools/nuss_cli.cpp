@@ -53,9 +53,9 @@ int main(int argc, char** argv) {
     else { std::fprintf(stderr, "usage: see the header of tools/nuss_cli.cpp (unknown argument %s)\n", argv[i]); return 2; }
   }
   try {
-    CMeshO cage;
+    pectus::OwnedMesh cage;
     const auto t0 = std::chrono::steady_clock::now();
-    std::array<CMeshO, 3> tissues;
+    std::array<pectus::OwnedMesh, 3> tissues;
     const auto lms = layers ? ribcage::generateTissueLayers(rp, tissues) : ribcage::generateRibCage(rp, cage);
     nuss::CageSurface surf;
     if (layers) {

@@ -35,7 +35,7 @@ int main(int argc, char** argv) {
       default: break;
     }
   }
-  CMeshO m;
+  pectus::OwnedMesh m;
   RibCageStats st;
   const auto t0 = std::chrono::steady_clock::now();
   const auto lms = generateRibCage(p, m, &st);
