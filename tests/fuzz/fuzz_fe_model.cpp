@@ -31,6 +31,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   const double tetFraction = r.real(0.004, 0.2);  // max tet volume / the surface's bounding box volume
   to.order = r.range(1, 2);
   to.preserveSurface = r.flag();
+  to.timeLimitSeconds = 5;  // a TetGen run that refines without end is an InputError after 5 s
   try {
     const auto cage = nuss::cageFromMesh(m);
     Eigen::AlignedBox3d box;

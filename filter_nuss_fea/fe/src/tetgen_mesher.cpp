@@ -1,6 +1,7 @@
 #include "pectus/fe/tetgen_mesher.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <limits>
 #include <map>
@@ -12,6 +13,8 @@
 #include <cstdint>
 #include <cstring>
 
+#include <poll.h>
+#include <sys/prctl.h>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -127,9 +130,20 @@ bool writeAll(int fd, const void* data, std::size_t n) {
   }
   return true;
 }
-bool readAll(int fd, void* data, std::size_t n) {
+// reads n bytes; false at end of file, on an error, or once `deadline` (if set) has passed
+using Deadline = std::chrono::steady_clock::time_point;
+bool readAll(int fd, void* data, std::size_t n, const Deadline* deadline, bool& timedOut) {
   char* p = static_cast<char*>(data);
   while (n > 0) {
+    if (deadline) {
+      const auto left = std::chrono::duration_cast<std::chrono::milliseconds>(*deadline - std::chrono::steady_clock::now());
+      if (left.count() <= 0) return !(timedOut = true);
+      pollfd pf{fd, POLLIN, 0};
+      const int ready = ::poll(&pf, 1, static_cast<int>(std::min<long long>(left.count(), 1 << 30)));
+      if (ready < 0 && errno == EINTR) continue;
+      if (ready < 0) return false;
+      if (ready == 0) return !(timedOut = true);
+    }
     const ssize_t r = ::read(fd, p, n);
     if (r < 0 && errno == EINTR) continue;
     if (r <= 0) return false;
@@ -142,8 +156,9 @@ bool readAll(int fd, void* data, std::size_t n) {
 // its Delaunay refinement stops on one (insertpoint: assert(0), found by fuzz_fe_model) or crashes: in this
 // process that would abort MeshLab with the user's unsaved work. The child (fork: a copy-on-write image of
 // this one, only the calling thread) runs TetGen and sends the points and tets back through a pipe; a
-// child that dies becomes an InputError. Without fork (no memory for the page tables) TetGen runs here.
-TetgenOutput runTetgen(const std::string& switches, tetgenio& in) {
+// child that dies becomes an InputError, and so does one still running after `timeLimit` seconds (> 0),
+// which is killed. Without fork (no memory for the page tables) TetGen runs here, without a time limit.
+TetgenOutput runTetgen(const std::string& switches, tetgenio& in, double timeLimit) {
   int fd[2];
   if (::pipe(fd) != 0) return tetgenHere(switches, in);
   const pid_t pid = ::fork();
@@ -155,6 +170,7 @@ TetgenOutput runTetgen(const std::string& switches, tetgenio& in) {
     ::close(fd[0]);
     // the host's crash handlers (MeshLab's, a fuzzer's, a sanitizer's) are not the child's: it just dies
     for (int sig : {SIGABRT, SIGSEGV, SIGBUS, SIGFPE, SIGILL}) std::signal(sig, SIG_DFL);
+    ::prctl(PR_SET_PDEATHSIG, SIGKILL);  // and it does not outlive its parent
     int status = 0;
     std::string msg;
     TetgenOutput r;
@@ -170,24 +186,36 @@ TetgenOutput runTetgen(const std::string& switches, tetgenio& in) {
     ::_exit(ok ? 0 : 3);
   }
   ::close(fd[1]);
+  const auto start = std::chrono::steady_clock::now();
+  const Deadline deadline = start + std::chrono::milliseconds(static_cast<long long>(std::min(timeLimit, 1e9) * 1000));
+  const Deadline* dl = timeLimit > 0 ? &deadline : nullptr;
+  bool timedOut = false;
+  auto get = [&](void* data, std::size_t n) { return readAll(fd[0], data, n, dl, timedOut); };
   int status = -1;
   std::uint64_t len = 0, np = 0, nt = 0;
   std::string msg;
   TetgenOutput r;
-  bool ok = readAll(fd[0], &status, sizeof status) && readAll(fd[0], &len, sizeof len) && len < (1u << 20);
+  bool ok = get(&status, sizeof status) && get(&len, sizeof len) && len < (1u << 20);
   if (ok) {
     msg.resize(len);
-    ok = readAll(fd[0], msg.data(), len) && readAll(fd[0], &np, sizeof np) && readAll(fd[0], &nt, sizeof nt) &&
-         np % 3 == 0 && nt % 4 == 0;
+    ok = get(msg.data(), len) && get(&np, sizeof np) && get(&nt, sizeof nt) && np % 3 == 0 && nt % 4 == 0;
   }
   if (ok && status == 0) {
     r.points.resize(np);
     r.tets.resize(nt);
-    ok = readAll(fd[0], r.points.data(), np * sizeof(double)) && readAll(fd[0], r.tets.data(), nt * sizeof(int));
+    ok = get(r.points.data(), np * sizeof(double)) && get(r.tets.data(), nt * sizeof(int));
   }
   ::close(fd[0]);
+  if (timedOut) ::kill(pid, SIGKILL);
   int ws = 0;
   while (::waitpid(pid, &ws, 0) < 0 && errno == EINTR) {
+  }
+  if (timedOut) {
+    std::ostringstream m;
+    m << "TetGen did not finish within " << timeLimit << " s and was stopped: its quality refinement can go on "
+      << "without end where the surface has tiny features, near-duplicate vertices or very sharp angles. "
+      << "Merge close vertices, remove tiny faces, or mesh without quality refinement (tetQuality 0).";
+    throw InputError(m.str());
   }
   if (WIFSIGNALED(ws)) {
     const int sig = WTERMSIG(ws);
@@ -339,7 +367,7 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vect
   if (opt.preserveSurface) sw << "Y";
   if (opt.radiusEdgeRatio > 0) sw << "q" << opt.radiusEdgeRatio;
   if (opt.maxVolume > 0) sw << "a" << opt.maxVolume;
-  const TetgenOutput out = runTetgen(sw.str(), in);
+  const TetgenOutput out = runTetgen(sw.str(), in, opt.timeLimitSeconds);
   if (out.numTets() <= 0) throw InputError("TetGen produced no tetrahedra (is the surface closed?).");
   for (int v : out.tets)
     if (v < 0 || v >= out.numPoints()) throw InputError("TetGen returned a tetrahedron with a node out of range.");

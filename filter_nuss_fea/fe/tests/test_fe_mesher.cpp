@@ -1,6 +1,7 @@
 // TetGen tetrahedralisation, tissue labelling, surface checks (closedness, self-intersection).
 #include <gtest/gtest.h>
 
+#include <chrono>
 #include <map>
 
 #include "pectus/errors.h"
@@ -235,4 +236,40 @@ TEST(FeMesher, TetgenAssertionIsAnErrorNotAnAbort) {
   }
   // the process goes on, and meshes a valid surface afterwards
   EXPECT_GT(tetrahedralize(boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 5)).numTets(), 0);
+}
+
+// TetGen's quality refinement can go on without end: on this 14-vertex sphere (fuzz_fe_model's second
+// finding, corpus/fe_model/timeout-tetgen-refinement) it ran for more than 9 minutes. The child is killed
+// at the time limit and the call is an InputError.
+TEST(FeMesher, TetgenThatDoesNotFinishIsStoppedAtTheTimeLimit) {
+  SurfaceMesh s;
+  s.vertices = {
+      {0, 0, -1.340268611907959}, {0.76586496829986572, 0.2011294811964035, -0.8185495138168335},
+      {-0.2011294811964035, 0.76586496829986572, -0.8185495138168335}, {-0.76586496829986572,
+      -0.2011294811964035, -0.8185495138168335}, {-0.23156355321407318, -0.50754857063293457,
+      -1.1123201847076416}, {0.88902926445007324, -0.40560999512672424, -0.28465315699577332},
+      {0.40795162320137024, 0.89416170120239258, -0.24731607735157013}, {-0.88902926445007324,
+      0.40560999512672424, -0.28465315699577332}, {-0.4080791175365448, -0.89444118738174438,
+      -0.24511326849460602}, {0.76526921987533569, -0.34914582967758179, 0.72481173276901245},
+      {-1.5539733055902616e-07, 5.917250973652699e-07, 1.0601795565889915e-06}, {-0.59070521593093872,
+      -0.15512949228286743, 1.0612711906433105}, {1.5512948468576033e-25, -5.9070520880531568e-25,
+      1.0612711418728368e-24}, {0, 0, 1.340268611907959},};
+  s.faces = {
+      {0, 2, 1}, {0, 3, 2}, {0, 4, 3}, {0, 1, 4}, {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 4, 8}, {3,
+      8, 7}, {4, 1, 5}, {4, 5, 8}, {5, 6, 10}, {5, 10, 9}, {6, 7, 11}, {6, 11, 10}, {7, 8, 12}, {7, 12, 11},
+      {8, 5, 9}, {8, 9, 12}, {13, 9, 10}, {13, 10, 11}, {13, 11, 12}, {13, 12, 9},};
+  s.faceTissue.assign(s.faces.size(), 1);
+  TetgenOptions o;
+  o.radiusEdgeRatio = 1.2;
+  o.maxVolume = 0.034099013459653119;
+  o.timeLimitSeconds = 1;
+  const auto t0 = std::chrono::steady_clock::now();
+  try {
+    tetrahedralize(s, o);
+    FAIL() << "TetGen finished (this TetGen may not loop on it any more: the test then proves nothing)";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("TetGen did not finish within 1 s"), std::string::npos) << e.what();
+  }
+  const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  EXPECT_LT(seconds, 30.0);  // stopped at the limit, not at TetGen's end
 }

@@ -20,6 +20,9 @@ struct TetgenOptions {
   double maxVolume = 0;          ///< TetGen -a: max tet volume in mm^3; <= 0: no limit
   int order = 1;                 ///< 1: TET4, 2: TET10 (straight mid-edge nodes added by toQuadratic)
   bool preserveSurface = false;  ///< TetGen -Y: no Steiner points on the surface
+  /// TetGen runs in a child process; one still running after this many seconds is stopped (its quality
+  /// refinement can go on without end on tiny features) and the call throws InputError; <= 0: no limit
+  double timeLimitSeconds = 900;
 };
 
 /// The first pair of faces (a < b) of the surface that intersect each other (touching through a shared
