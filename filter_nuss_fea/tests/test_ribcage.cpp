@@ -10,6 +10,7 @@
 #include "marching_tets.h"
 #include "pectus/errors.h"
 #include "pectus/labels.h"
+#include "pectus/mesh_checks.h"
 #include "ribcage.h"
 #include "self_intersections.h"
 
@@ -27,8 +28,12 @@ Topo topology(CMeshO& m) {
   for (auto& f : m.face)
     for (int k = 0; k < 3; ++k)
       if (vcg::face::IsBorder(f, k)) ++t.boundary;
-  t.nonManifoldEdges = vcg::tri::Clean<CMeshO>::CountNonManifoldEdgeFF(m);
-  t.nonManifoldVerts = vcg::tri::Clean<CMeshO>::CountNonManifoldVertexFF(m, false);
+  // the project's own counts: vcglib 2020.09's CountNonManifoldEdgeFF takes three face bit flags and never
+  // gives them back, so after a few calls in one process the flags overflow (UBSan: left shift of a
+  // negative value in NewBitFlag) and it counts with bit 0
+  const MeshReport rep = inspectMesh(m);
+  t.nonManifoldEdges = int(rep.nonManifoldEdges);
+  t.nonManifoldVerts = int(rep.nonManifoldVertices);
   t.components = vcg::tri::Clean<CMeshO>::CountConnectedComponents(m);
   t.selfIntersections = int(selfIntersectingFaces(m).size());  // CGAL: faces sharing a vertex are tested too
   for (const auto& f : m.face) {

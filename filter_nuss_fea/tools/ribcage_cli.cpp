@@ -13,6 +13,7 @@
 #include <wrap/io_trimesh/export_ply.h>
 
 #include "haller.h"
+#include "pectus/mesh_checks.h"
 #include "ribcage.h"
 #include "self_intersections.h"
 
@@ -55,8 +56,8 @@ int main(int argc, char** argv) {
     for (int f : selfIntersectingFaces(m)) si.push_back(&m.face[std::size_t(f)]);
     std::vector<std::pair<int, CFaceO*>> cc;
     const int ncc = vcg::tri::Clean<CMeshO>::ConnectedComponents(m, cc);
-    std::printf("self-intersecting faces %zu, non-manifold edges %d, components %d\n", si.size(),
-                vcg::tri::Clean<CMeshO>::CountNonManifoldEdgeFF(m), ncc);
+    std::printf("self-intersecting faces %zu, non-manifold edges %zu, components %d\n", si.size(),
+                pectus::inspectMesh(m).nonManifoldEdges, ncc);  // (vcglib's CountNonManifoldEdgeFF leaks bit flags)
     for (auto* f : si) {
       const int q = int(f->Q() + 0.5f);
       std::printf("  si face part %d at %.1f %.1f %.1f\n", q, f->P(0)[0], f->P(0)[1], f->P(0)[2]);
