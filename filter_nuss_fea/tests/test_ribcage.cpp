@@ -76,15 +76,15 @@ TEST(MarchingTets, SphereIsClosedOrientedAndAccurate) {
 class RibCageCoarse : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    mesh = new CMeshO;
+    mesh = new OwnedMesh;
     lms = new std::vector<Landmark>(generateRibCage(coarse(), *mesh, &stats));
   }
   static void TearDownTestSuite() { delete mesh; delete lms; }
-  static CMeshO* mesh;
+  static OwnedMesh* mesh;
   static std::vector<Landmark>* lms;
   static RibCageStats stats;
 };
-CMeshO* RibCageCoarse::mesh = nullptr;
+OwnedMesh* RibCageCoarse::mesh = nullptr;
 std::vector<Landmark>* RibCageCoarse::lms = nullptr;
 RibCageStats RibCageCoarse::stats;
 
