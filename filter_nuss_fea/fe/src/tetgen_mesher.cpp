@@ -388,6 +388,13 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vect
     }
     m.tets[t] = e;
     if (m.tetVolume(t) < 0) std::swap(m.tets[t][1], m.tets[t][2]);
+    if (!(m.tetVolume(t) > 0)) {  // flat in double precision (TetGen's exact predicates saw a volume): no stiffness
+      std::ostringstream msg;
+      msg << "TetGen made a tetrahedron without volume (tet " << t << ", near " << m.centroid(t).transpose()
+          << " mm): the surface has features far smaller than its tets (near-duplicate vertices, tiny faces). Merge "
+             "close vertices, remove tiny faces, or change the maximum tet volume or the tet quality.";
+      throw InputError(msg.str());
+    }
     centroids[t] = m.centroid(t);
   }
   for (size_t i = 0; i < inTet.size(); ++i)
