@@ -203,6 +203,14 @@ TEST(FeMesher, TetgenBoxLabelsVolumeAndSeriesBar) {
   EXPECT_NEAR(uz / exact, 1.0, 0.03);  // the tissue interface inside is jagged (nearest-face labels)
 }
 
+// the faces of fuzz_mesh.h's smallest closed UV sphere (14 vertices: two poles, three rings of four), on
+// which the decoder's near-duplicate-vertex edit made the TetGen findings below
+const std::vector<std::array<int, 3>> kUvSphere14Faces = {
+    {0, 2, 1}, {0, 3, 2}, {0, 4, 3}, {0, 1, 4}, {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6},
+    {3, 4, 8}, {3, 8, 7}, {4, 1, 5}, {4, 5, 8}, {5, 6, 10}, {5, 10, 9}, {6, 7, 11}, {6, 11, 10},
+    {7, 8, 12}, {7, 12, 11}, {8, 5, 9}, {8, 9, 12}, {13, 9, 10}, {13, 10, 11}, {13, 11, 12}, {13, 12, 9},
+};
+
 // Debian's TetGen keeps its assertions: on this closed, self-intersection-free sphere (fuzz_fe_model's
 // first finding, corpus/fe_model/crash-tetgen-insertpoint-assert: two vertices 1e-6 apart at its centre,
 // where the surface pinches) its quality refinement stops on assert(0) in insertpoint. TetGen runs in a
@@ -220,10 +228,7 @@ TEST(FeMesher, TetgenAssertionIsAnErrorNotAnAbort) {
       {-1.5512948436935403e-07, 5.9070521274406929e-07, 1.0612711776047945e-06}, {-0.59070521593093872,
       -0.15512949228286743, 1.0612711906433105}, {1.5512948468576033e-25, -5.9070520880531568e-25,
       1.0612711418728368e-24}, {0, 0, 1.340268611907959},};
-  s.faces = {
-      {0, 2, 1}, {0, 3, 2}, {0, 4, 3}, {0, 1, 4}, {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 4, 8}, {3,
-      8, 7}, {4, 1, 5}, {4, 5, 8}, {5, 6, 10}, {5, 10, 9}, {6, 7, 11}, {6, 11, 10}, {7, 8, 12}, {7, 12, 11},
-      {8, 5, 9}, {8, 9, 12}, {13, 9, 10}, {13, 10, 11}, {13, 11, 12}, {13, 12, 9},};
+  s.faces = kUvSphere14Faces;
   s.faceTissue.assign(s.faces.size(), 1);
   TetgenOptions o;
   o.radiusEdgeRatio = 1.2;
@@ -254,10 +259,7 @@ TEST(FeMesher, TetgenThatDoesNotFinishIsStoppedAtTheTimeLimit) {
       {-1.5539733055902616e-07, 5.917250973652699e-07, 1.0601795565889915e-06}, {-0.59070521593093872,
       -0.15512949228286743, 1.0612711906433105}, {1.5512948468576033e-25, -5.9070520880531568e-25,
       1.0612711418728368e-24}, {0, 0, 1.340268611907959},};
-  s.faces = {
-      {0, 2, 1}, {0, 3, 2}, {0, 4, 3}, {0, 1, 4}, {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6}, {3, 4, 8}, {3,
-      8, 7}, {4, 1, 5}, {4, 5, 8}, {5, 6, 10}, {5, 10, 9}, {6, 7, 11}, {6, 11, 10}, {7, 8, 12}, {7, 12, 11},
-      {8, 5, 9}, {8, 9, 12}, {13, 9, 10}, {13, 10, 11}, {13, 11, 12}, {13, 12, 9},};
+  s.faces = kUvSphere14Faces;
   s.faceTissue.assign(s.faces.size(), 1);
   TetgenOptions o;
   o.radiusEdgeRatio = 1.2;
