@@ -476,12 +476,10 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
   // compact numbers of the nodes with free dofs (their free dofs are consecutive: node-major numbering)
   std::vector<int> compact(n, -1);
   for (int i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d)
+    for (int d = 0; d < 3 && compact[i] < 0; ++d)
       if (I.freeIndex[3 * i + d] >= 0) {
-        if (compact[i] < 0) {
-          compact[i] = static_cast<int>(I.nodeFirstDof.size());
-          I.nodeFirstDof.push_back(I.freeIndex[3 * i + d]);
-        }
+        compact[i] = static_cast<int>(I.nodeFirstDof.size());
+        I.nodeFirstDof.push_back(I.freeIndex[3 * i + d]);
       }
   I.nodeFirstDof.push_back(I.nFree);
   I.nodeOuter.assign(1, 0);
