@@ -3,8 +3,10 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <cstdint>
 #include <cstdio>
 #include <cstdlib>
+#include <limits>
 #include <sstream>
 
 #include <dlfcn.h>
@@ -23,6 +25,7 @@ using Eigen::Vector3d;
 
 namespace {
 int gMinParallelTets = 2048;  // smaller loops over tets run in one thread (setMinParallelTets, assembleT)
+constexpr int kChunkTets = 256;  // the assembly's unit of work: consecutive tets of the dof order (colorChunks)
 }  // namespace
 
 void setMinParallelTets(int tets) { gMinParallelTets = std::max(1, tets); }
@@ -122,42 +125,61 @@ class Cholmod : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, 
  public:
   double rcond() { return m_cholmodFactor ? cholmod_rcond(m_cholmodFactor, &cholmod()) : 0.0; }
 
-  // Symbolic analysis of K (lower triangle) with a fill-reducing ordering that METIS finds on the graph of
-  // the nodes instead of the dofs: `nodeOuter`/`nodeInner` is the lower-triangular pattern of the nodes
-  // that have free dofs, the free dofs of node k are firstDof[k] .. firstDof[k + 1] - 1. The graph is 3x
-  // smaller (9x fewer edges) than K's, so it is ordered faster, and no separator cuts through a node.
-  // CHOLMOD then postorders the given ordering and finds the supernodes as usual. False if METIS failed
-  // (the caller falls back to CHOLMOD's own choice).
-  bool analyzeByNodes(const Eigen::SparseMatrix<double>& K, std::vector<int>& nodeOuter, std::vector<int>& nodeInner,
-                      const std::vector<int>& firstDof) {
+  // Fill-reducing ordering of the graph of the nodes (lower-triangular pattern `outer`/`inner`, compact
+  // node numbers) instead of the dofs: the graph is 3x smaller (9x fewer edges), and no separator cuts
+  // through a node. CHOLMOD's own default strategy picks the method: AMD, then METIS where AMD's fill is
+  // large, keeping the one with fewer flops (the rib cage's thin bones: AMD, 30 % fewer flops than METIS
+  // and found in 0.02 s instead of 0.95 s; a solid block: METIS). `method` forces one (CHOLMOD_AMD ...).
+  // The order comes back postordered (children before parents). Empty if CHOLMOD failed.
+  std::vector<int> orderNodes(std::vector<int>& outer, std::vector<int>& inner, int method = -1) {
     cholmod_common& c = cholmod();
-    const int nn = static_cast<int>(nodeOuter.size()) - 1;
+    const int nn = static_cast<int>(outer.size()) - 1;
     cholmod_sparse G{};
     G.nrow = G.ncol = static_cast<size_t>(nn);
-    G.nzmax = nodeInner.size();
-    G.p = nodeOuter.data();
-    G.i = nodeInner.data();
+    G.nzmax = inner.size();
+    G.p = outer.data();
+    G.i = inner.data();
     G.stype = -1;  // lower triangle
     G.itype = CHOLMOD_INT;
     G.xtype = CHOLMOD_PATTERN;
     G.dtype = CHOLMOD_DOUBLE;
     G.sorted = 1;
     G.packed = 1;
-    std::vector<int> nodePerm(static_cast<size_t>(nn));
-    if (nn == 0 || !cholmod_metis(&G, nullptr, 0, 1, nodePerm.data(), &c)) return false;
-    std::vector<int> perm;
-    perm.reserve(static_cast<size_t>(K.rows()));
-    for (int k : nodePerm)
-      for (int d = firstDof[std::size_t(k)]; d < firstDof[std::size_t(k) + 1]; ++d) perm.push_back(d);
-    if (static_cast<Eigen::Index>(perm.size()) != K.rows()) return false;
-    if (m_cholmodFactor) cholmod_free_factor(&m_cholmodFactor, &c);
-    const int nmethods = c.nmethods, ordering = c.method[0].ordering;
-    c.nmethods = 1;
-    c.method[0].ordering = CHOLMOD_GIVEN;
-    cholmod_sparse A = Eigen::viewAsCholmod(K.selfadjointView<Eigen::Lower>());
-    m_cholmodFactor = cholmod_analyze_p(&A, perm.data(), nullptr, 0, &c);
+    const int nmethods = c.nmethods, ordering = c.method[0].ordering, supernodal = c.supernodal;
+    c.nmethods = method < 0 ? 0 : 1;
+    if (method >= 0) c.method[0].ordering = method;
+    c.supernodal = CHOLMOD_SIMPLICIAL;  // the ordering (and its postorder) is all that is kept
+    cholmod_factor* L = nn > 0 ? cholmod_analyze(&G, &c) : nullptr;
     c.nmethods = nmethods;
     c.method[0].ordering = ordering;
+    c.supernodal = supernodal;
+    std::vector<int> order;
+    if (L) {
+      const int* perm = static_cast<const int*>(L->Perm);
+      order.assign(perm, perm + nn);
+      nodeOrdering = L->ordering;
+      cholmod_free_factor(&L, &c);
+    }
+    return order;
+  }
+  int nodeOrdering = -1;  // the method orderNodes used (CHOLMOD_AMD, CHOLMOD_METIS, ...)
+
+  // Symbolic analysis of K (lower triangle) whose dofs are already numbered in the fill-reducing order,
+  // postordered (orderNodes): CHOLMOD's natural ordering without its postorder, so that it factorises K
+  // as it is stored. With an ordering of its own, CHOLMOD makes two scattered transposes of K per
+  // factorisation (and more in the analysis): 0.5 s of the rib cage's 4 s analysis. False if CHOLMOD failed.
+  bool analyzeInOrder(const Eigen::SparseMatrix<double>& K) {
+    cholmod_common& c = cholmod();
+    if (m_cholmodFactor) cholmod_free_factor(&m_cholmodFactor, &c);
+    const int nmethods = c.nmethods, ordering = c.method[0].ordering, postorder = c.postorder;
+    c.nmethods = 1;
+    c.method[0].ordering = CHOLMOD_NATURAL;
+    c.postorder = 0;
+    cholmod_sparse A = Eigen::viewAsCholmod(K.selfadjointView<Eigen::Lower>());
+    m_cholmodFactor = cholmod_analyze(&A, &c);
+    c.nmethods = nmethods;
+    c.method[0].ordering = ordering;
+    c.postorder = postorder;
     if (!m_cholmodFactor) return false;
     m_isInitialized = true;
     m_info = Eigen::Success;
@@ -175,7 +197,7 @@ struct Solver::Impl {
   int nen = 4;
   std::vector<int> freeIndex;                 // per dof: free index or -1
   std::vector<const Material*> mat;           // per tet
-  std::vector<Eigen::Matrix<double, 6, 6>> D; // per tet (pointer-free copy by tissue would be smaller)
+  std::vector<const Eigen::Matrix<double, 6, 6>*> D;  // per tet, into Dby (a copy per tet was 288 bytes)
   std::map<int, Eigen::Matrix<double, 6, 6>> Dby;
   Eigen::VectorXd fext;                        // full, 3n
   Eigen::VectorXd prescribed;                  // full, 3n (0 for free dofs)
@@ -183,13 +205,24 @@ struct Solver::Impl {
   Eigen::SparseMatrix<double> K;               // free x free, lower triangle
   Cholmod chol;
   bool analysed = false;
-  std::vector<std::vector<int>> colors;        // tets by colour (colorTets), for the assembly
-  // graph of the nodes with free dofs (lower triangle, compact node numbers) and their first free dof:
-  // the input of the ordering (Cholmod::analyzeByNodes), dropped after the analysis
-  std::vector<int> nodeOuter, nodeInner, nodeFirstDof;
+  std::vector<std::vector<int>> colors;        // chunks of tetOrder by colour (colorChunks), for the assembly
+  std::vector<int> tetOrder;                   // the tets by their first node in the dof order
   bool orderByNodes = true;                    // PECTUS_FE_ORDERING=amd|metis|nesdis: CHOLMOD orders the dofs
+  double orderSeconds = 0;                     // the node ordering's time (verbose line)
 
   int nFree = 0;
+  std::vector<Gauss> quad;                           // the element's quadrature rule
+  std::vector<Eigen::Matrix<double, 10, 3>> quadDN;  // reference shape derivatives at its points
+  Eigen::Matrix<double, 10, 3> centroidDN;           // and at the centroid (stresses)
+
+  void setOrder(int order) {
+    quad = rule(order);
+    quadDN.resize(quad.size());
+    for (std::size_t q = 0; q < quad.size(); ++q) shapeDerivs(order, quad[q].L, quadDN[q]);
+    const double c[4] = {0.25, 0.25, 0.25, 0.25};
+    shapeDerivs(order, c, centroidDN);
+  }
+
   Impl() {
     chol.cholmod().print = 0;  // errors are reported by exceptions, not on stderr
     if (const char* o = std::getenv("PECTUS_FE_ORDERING")) {  // experiments: amd | metis | nesdis
@@ -208,16 +241,16 @@ struct Solver::Impl {
     return static_cast<int>(it - K.innerIndexPtr());
   }
 
-  // element gradients dN/dX at quadrature point, returns det(J)*w
-  double gradients(int t, const Gauss& g, Eigen::Matrix<double, 10, 3>& G) const {
-    Eigen::Matrix<double, 10, 3> dN;
-    shapeDerivs(m->order, g.L, dN);
+  // element gradients dN/dX at a point with reference derivatives dN (shapeDerivs), returns det(J) * w.
+  // Fixed sizes throughout: a dynamic topRows(nen) product went through Eigen's blocked GEMM kernel.
+  template <int NEN>
+  double gradientsT(int t, const Eigen::Matrix<double, 10, 3>& dN10, double w, Eigen::Matrix<double, NEN, 3>& G) const {
+    const Eigen::Matrix<double, NEN, 3> dN = dN10.template topRows<NEN>();
     Matrix3d J = Matrix3d::Zero();
-    for (int a = 0; a < nen; ++a) J += m->nodes[m->tets[t][a]] * dN.row(a);
+    for (int a = 0; a < NEN; ++a) J.noalias() += m->nodes[m->tets[t][a]] * dN.row(a);
     const double det = J.determinant();
-    const Matrix3d Jinv = J.inverse();
-    G.topRows(nen) = dN.topRows(nen) * Jinv;
-    return det * g.w;
+    G.noalias() = dN.lazyProduct(J.inverse());
+    return det * w;
   }
 
   // assemble tangent (free-free lower) and internal forces (all dofs) at displacement u
@@ -235,28 +268,32 @@ struct Solver::Impl {
     fint.setZero(u.size());
     double* val = K.valuePtr();
     double* fi = fint.data();
-    if (colors.empty()) colors = colorTets(*m);
-    // Tets of one colour share no node: within a colour every entry of K and fint gets at most one
-    // contribution, so the sums are formed in colour order whatever the number of threads (byte-identical
-    // results with 1 or N threads; atomic adds would sum in thread-timing order).
+    if (colors.empty()) colors = colorChunks(*m, tetOrder);
+    // The tets are assembled in chunks of kChunkTets consecutive tets of tetOrder (a compact region of
+    // the mesh, so a chunk touches nearby columns of K), one thread per chunk. Chunks of one colour share
+    // no node: within a colour every entry of K and fint gets contributions from one chunk only, in that
+    // chunk's order, so the sums are formed in the same order whatever the number of threads
+    // (byte-identical results with 1 or N threads; atomic adds would sum in thread-timing order).
     // A colour of a few hundred tets is assembled in one thread: a parallel region per colour costs a
     // barrier, and on a machine whose cores are busy with other jobs a barrier waits for a descheduled
     // thread (measured, 480-tet cantilever, 40 Newton iterations, load ~7: 0.07 s on one thread, 6.7-14 s
-    // with two threads and a region per colour).
+    // with two threads and a region per colour). Colouring single tets instead of chunks made every
+    // colour a sweep over all of K: the rib cage's 360k-tet assembly took 0.5-0.8 s instead of 0.15 s.
+    const int nt = m->numTets();
     for (const std::vector<int>& group : colors) {
       const int ng = static_cast<int>(group.size());
-  #pragma omp parallel for schedule(dynamic, 64) if (ng >= gMinParallelTets)
+  #pragma omp parallel for schedule(dynamic, 1) if (ng > 1 && ng * kChunkTets >= gMinParallelTets)
       for (int gi = 0; gi < ng; ++gi) {
-        const int t = group[gi];
+       const int end = std::min(nt, (group[gi] + 1) * kChunkTets);
+       for (int oi = group[gi] * kChunkTets; oi < end; ++oi) {
+        const int t = tetOrder[std::size_t(oi)];
         Eigen::Matrix<double, ND, ND> Ke = Eigen::Matrix<double, ND, ND>::Zero();
         Eigen::Matrix<double, ND, 1> fe = Eigen::Matrix<double, ND, 1>::Zero();
-        Eigen::Matrix<double, 10, 3> G10;
-        Eigen::Matrix<double, NEN, 3> ue;
+        Eigen::Matrix<double, NEN, 3> G, ue;
         for (int a = 0; a < NEN; ++a) ue.row(a) = u.template segment<3>(3 * m->tets[t][a]).transpose();
-        const auto& Dm = D[t];
-        for (const Gauss& g : rule(m->order)) {
-          const double w = gradients(t, g, G10);
-          const Eigen::Matrix<double, NEN, 3> G = G10.template topRows<NEN>();
+        const auto& Dm = *D[t];
+        for (std::size_t q = 0; q < quad.size(); ++q) {
+          const double w = gradientsT<NEN>(t, quadDN[q], quad[q].w, G);
           const Matrix3d H = ue.transpose() * G;  // du_i/dX_j
           Matrix3d F = Matrix3d::Identity();
           Matrix3d E;
@@ -284,7 +321,7 @@ struct Solver::Impl {
             }
           }
           const Eigen::Matrix<double, 6, ND> DB = (w * Dm) * B;
-          Ke.noalias() += B.transpose() * DB;
+          Ke.noalias() += B.transpose().lazyProduct(DB);
           if (nonlinear) {
             const Eigen::Matrix<double, NEN, NEN> GSG = w * G * S * G.transpose();
             for (int a = 0; a < NEN; ++a)
@@ -296,41 +333,67 @@ struct Solver::Impl {
         for (int a = 0; a < NEN; ++a)
           for (int i = 0; i < 3; ++i) dofs[3 * a + i] = 3 * m->tets[t][a] + i, fdof[3 * a + i] = freeIndex[3 * m->tets[t][a] + i];
         for (int r = 0; r < ND; ++r) fi[dofs[r]] += fe(r);
-        for (int c = 0; c < ND; ++c) {
-          const int fc = fdof[c];
-          if (fc < 0) continue;
-          const int* b = K.innerIndexPtr() + K.outerIndexPtr()[fc];
-          const int* e = K.innerIndexPtr() + K.outerIndexPtr()[fc + 1];
-          for (int r = 0; r < ND; ++r) {
-            const int fr = fdof[r];
-            if (fr < fc) continue;  // lower triangle only (and skips constrained: -1)
-            const int k = static_cast<int>(std::lower_bound(b, e, fr) - K.innerIndexPtr());
+        // the element's dofs by free index (constrained ones, -1, first): a column's rows are then the dofs
+        // after it, ascending, found by one forward walk along the column (a binary search per entry
+        // mispredicted most of its branches)
+        int byIndex[ND];
+        for (int r = 0; r < ND; ++r) byIndex[r] = r;
+        for (int r = 1; r < ND; ++r)
+          for (int q = r; q > 0 && fdof[byIndex[q - 1]] > fdof[byIndex[q]]; --q) std::swap(byIndex[q - 1], byIndex[q]);
+        const int* rows = K.innerIndexPtr();
+        for (int ci = 0; ci < ND; ++ci) {
+          const int c = byIndex[ci];
+          if (fdof[c] < 0) continue;
+          int k = K.outerIndexPtr()[fdof[c]];
+          for (int ri = ci; ri < ND; ++ri) {
+            const int r = byIndex[ri];
+            while (rows[k] < fdof[r]) ++k;
             val[k] += Ke(r, c);
           }
         }
+       }
       }
     }
   }
 
-  // greedy colouring of the tets (in tet order, deterministic): no two tets of a colour share a node.
-  // Corners suffice: tets sharing a TET10 mid-edge node share that edge's corners.
-  static std::vector<std::vector<int>> colorTets(const TetMesh& mesh) {
+  // greedy colouring of the chunks of kChunkTets consecutive tets of `order` (deterministic): each chunk
+  // takes the lowest colour that no chunk at its nodes has yet, so no two chunks of a colour share a
+  // node. Corners suffice: tets sharing a TET10 mid-edge node share that edge's corners. The colours at
+  // a node are bits of a 64-bit mask for the first 64 colours (the rib cage needs about 10), then a list.
+  static std::vector<std::vector<int>> colorChunks(const TetMesh& mesh, const std::vector<int>& order) {
     std::vector<std::vector<int>> out;
-    std::vector<std::vector<char>> used;  // used[c][node]: colour c has a tet at the node
-    const int nen = 4;
-    for (int t = 0; t < mesh.numTets(); ++t) {
+    std::vector<std::uint64_t> mask(mesh.nodes.size(), 0);
+    std::vector<std::vector<int>> more;  // colours >= 64 at a node (rare)
+    const int nt = static_cast<int>(order.size()), chunks = (nt + kChunkTets - 1) / kChunkTets;
+    std::vector<int> nodes;
+    for (int k = 0; k < chunks; ++k) {
+      nodes.clear();
+      for (int oi = k * kChunkTets; oi < std::min(nt, (k + 1) * kChunkTets); ++oi)
+        for (int a = 0; a < 4; ++a) nodes.push_back(mesh.tets[std::size_t(order[std::size_t(oi)])][a]);
+      std::sort(nodes.begin(), nodes.end());
+      nodes.erase(std::unique(nodes.begin(), nodes.end()), nodes.end());
+      std::uint64_t taken = 0;
+      for (int v : nodes) taken |= mask[std::size_t(v)];
       std::size_t c = 0;
-      for (; c < out.size(); ++c) {
-        bool free = true;
-        for (int a = 0; a < nen && free; ++a) free = !used[c][std::size_t(mesh.tets[t][a])];
-        if (free) break;
+      if (~taken) {
+        while (taken >> c & 1u) ++c;
+      } else {
+        if (more.empty()) more.resize(mesh.nodes.size());
+        for (c = 64;; ++c) {
+          bool free = true;
+          for (std::size_t i = 0; i < nodes.size() && free; ++i) {
+            const auto& l = more[std::size_t(nodes[i])];
+            free = std::find(l.begin(), l.end(), static_cast<int>(c)) == l.end();
+          }
+          if (free) break;
+        }
       }
-      if (c == out.size()) {
-        out.emplace_back();
-        used.emplace_back(mesh.nodes.size(), 0);
+      if (c >= out.size()) out.resize(c + 1);
+      out[c].push_back(k);
+      for (int v : nodes) {
+        if (c < 64) mask[std::size_t(v)] |= std::uint64_t(1) << c;
+        else more[std::size_t(v)].push_back(static_cast<int>(c));
       }
-      out[c].push_back(t);
-      for (int a = 0; a < nen; ++a) used[c][std::size_t(mesh.tets[t][a])] = 1;
     }
     return out;
   }
@@ -346,10 +409,7 @@ struct Solver::Impl {
     auto t0 = std::chrono::steady_clock::now();
     double analyseSeconds = 0;
     if (!analysed) {
-      if (!orderByNodes || !chol.analyzeByNodes(K, nodeOuter, nodeInner, nodeFirstDof)) chol.analyzePattern(K);
-      std::vector<int>().swap(nodeOuter);
-      std::vector<int>().swap(nodeInner);
-      std::vector<int>().swap(nodeFirstDof);
+      if (!orderByNodes || !chol.analyzeInOrder(K)) chol.analyzePattern(K);
       analysed = true;
       analyseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
@@ -357,10 +417,12 @@ struct Solver::Impl {
     chol.factorize(K);
     seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     if (std::getenv("PECTUS_FE_VERBOSE"))
-      std::fprintf(stderr, "[pectus_fe] n=%d nnz(A)=%ld nnz(L)=%.0f flops=%.3g ordering=%d analyse %.3f s factor %.3f s\n",
+      std::fprintf(stderr, "[pectus_fe] n=%d nnz(A)=%ld nnz(L)=%.0f flops=%.3g ordering=%d%s (%.3f s) analyse %.3f s factor %.3f s\n",
                    nFree, static_cast<long>(K.nonZeros()), chol.cholmod().lnz, chol.cholmod().fl,
-                   chol.cholmod().selected >= 0 ? chol.cholmod().method[chol.cholmod().selected].ordering : -1,
-                   analyseSeconds, seconds);
+                   orderByNodes                      ? chol.nodeOrdering
+                   : chol.cholmod().selected >= 0 ? chol.cholmod().method[chol.cholmod().selected].ordering
+                                                  : -1,
+                   orderByNodes ? " on the nodes" : "", orderSeconds, analyseSeconds, seconds);
     if (chol.info() != Eigen::Success)
       throw InputError(
           "The stiffness matrix is singular or not positive definite: the model is not held enough (fix more "
@@ -383,18 +445,26 @@ struct Solver::Impl {
   }
 
   void stresses(const Eigen::VectorXd& u, bool nonlinear, Result& res) const {
+    if (nen == 10)
+      stressesT<10>(u, nonlinear, res);
+    else
+      stressesT<4>(u, nonlinear, res);
+  }
+
+  // stress and strain at the tet centroid
+  template <int NEN>
+  void stressesT(const Eigen::VectorXd& u, bool nonlinear, Result& res) const {
     const int nt = m->numTets();
     res.vonMises.assign(nt, 0.0);
     res.eqStrain.assign(nt, 0.0);
-    const Gauss c{{0.25, 0.25, 0.25, 0.25}, 1.0};
 #pragma omp parallel for schedule(static) if (nt >= gMinParallelTets)
     for (int t = 0; t < nt; ++t) {
-      Eigen::Matrix<double, 10, 3> G, ue;
-      for (int a = 0; a < nen; ++a) ue.row(a) = u.segment<3>(3 * m->tets[t][a]).transpose();
-      gradients(t, c, G);
-      const Matrix3d H = ue.topRows(nen).transpose() * G.topRows(nen);
+      Eigen::Matrix<double, NEN, 3> G, ue;
+      for (int a = 0; a < NEN; ++a) ue.row(a) = u.segment<3>(3 * m->tets[t][a]).transpose();
+      gradientsT<NEN>(t, centroidDN, 1.0, G);
+      const Matrix3d H = ue.transpose().lazyProduct(G);
       Matrix3d E = nonlinear ? Matrix3d(0.5 * (H + H.transpose() + H.transpose() * H)) : Matrix3d(0.5 * (H + H.transpose()));
-      const Eigen::Matrix<double, 6, 1> Sv = D[t] * voigt(E, true);
+      const Eigen::Matrix<double, 6, 1> Sv = *D[t] * voigt(E, true);
       Matrix3d S;
       S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
       if (nonlinear) {
@@ -414,6 +484,7 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
   const TetMesh& m = *prob.mesh;
   I.m = &m;
   I.nen = m.nodesPerTet();
+  I.setOrder(m.order);
   if (m.tets.empty()) throw InputError("The FE mesh has no tetrahedra.");
   if (m.tissue.size() != m.tets.size()) throw InputError("The FE mesh needs one tissue label per tetrahedron.");
   const int n = m.numNodes();
@@ -435,7 +506,7 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
     if (it == prob.materials.end())
       throw InputError("No material for tissue label " + std::to_string(m.tissue[t]) + " (tetrahedron " + std::to_string(t) + ").");
     I.mat[t] = &it->second;
-    I.D[t] = I.Dby[m.tissue[t]];
+    I.D[t] = &I.Dby[m.tissue[t]];
   }
   // rebind material pointers to our copy
   for (int t = 0; t < m.numTets(); ++t) I.mat[t] = &I.p.materials.at(m.tissue[t]);
@@ -455,62 +526,102 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
     if (static_cast<int>(prob.force.size()) != n) throw InputError("Force vector size differs from the node count.");
     for (int i = 0; i < n; ++i) I.fext.segment<3>(3 * i) = prob.force[i];
   }
-  // nodes used by tets; unused nodes get no dofs
-  std::vector<char> used(n, 0);
-  for (const auto& e : m.tets)
-    for (int a = 0; a < I.nen; ++a) used[e[a]] = 1;
-  I.freeIndex.assign(3 * n, -1);
-  for (int i = 0; i < n; ++i)
-    for (int d = 0; d < 3; ++d)
-      if (used[i] && !I.isConstrained[3 * i + d]) I.freeIndex[3 * i + d] = I.nFree++;
-  if (I.nFree == 0) throw InputError("Every degree of freedom is fixed: nothing to solve.");
-
-  // node adjacency -> lower-triangular pattern of the free dofs
-  std::vector<std::vector<int>> adj(n);
-  for (const auto& e : m.tets)
-    for (int a = 0; a < I.nen; ++a)
-      for (int b = 0; b < I.nen; ++b) adj[e[a]].push_back(e[b]);
-  std::vector<int> outer(I.nFree + 1, 0);
-  std::vector<int> inner;
-  inner.reserve(static_cast<size_t>(I.nFree) * 40);
-  // compact numbers of the nodes with free dofs (their free dofs are consecutive: node-major numbering)
-  std::vector<int> compact(n, -1);
-  for (int i = 0; i < n; ++i)
-    for (int d = 0; d < 3 && compact[i] < 0; ++d)
-      if (I.freeIndex[3 * i + d] >= 0) {
-        compact[i] = static_cast<int>(I.nodeFirstDof.size());
-        I.nodeFirstDof.push_back(I.freeIndex[3 * i + d]);
-      }
-  I.nodeFirstDof.push_back(I.nFree);
-  I.nodeOuter.assign(1, 0);
-  int col = 0;
+  // node adjacency (compressed rows, sorted, with the node itself); nodes without tets have no row entries
+  std::vector<int> adjOuter(std::size_t(n) + 1, 0), adj;
+  {
+    for (const auto& e : m.tets)
+      for (int a = 0; a < I.nen; ++a) adjOuter[std::size_t(e[a]) + 1] += I.nen;
+    for (int i = 0; i < n; ++i) adjOuter[std::size_t(i) + 1] += adjOuter[std::size_t(i)];
+    adj.resize(std::size_t(adjOuter[std::size_t(n)]));
+    std::vector<int> fill(adjOuter.begin(), adjOuter.end() - 1);
+    for (const auto& e : m.tets)
+      for (int a = 0; a < I.nen; ++a)
+        for (int b = 0; b < I.nen; ++b) adj[std::size_t(fill[std::size_t(e[a])]++)] = e[b];
+    int k = 0;  // sort and deduplicate each row in place
+    for (int i = 0; i < n; ++i) {
+      const auto first = adj.begin() + adjOuter[std::size_t(i)], last = adj.begin() + adjOuter[std::size_t(i) + 1];
+      std::sort(first, last);
+      const int start = k;
+      for (auto it = first; it != last; ++it)
+        if (it == first || *it != *(it - 1)) adj[std::size_t(k++)] = *it;
+      adjOuter[std::size_t(i)] = start;
+    }
+    adjOuter[std::size_t(n)] = k;
+    adj.resize(std::size_t(k));
+  }
+  // the nodes with a free dof, compactly numbered (the ordering's graph)
+  std::vector<int> compact(std::size_t(n), -1), nodeOf;
   for (int i = 0; i < n; ++i) {
-    auto& a = adj[i];
-    std::sort(a.begin(), a.end());
-    a.erase(std::unique(a.begin(), a.end()), a.end());
-    if (compact[i] >= 0) {
-      for (int j : a)
-        if (j >= i && compact[j] >= 0) I.nodeInner.push_back(compact[j]);
-      I.nodeOuter.push_back(static_cast<int>(I.nodeInner.size()));
+    if (adjOuter[std::size_t(i)] == adjOuter[std::size_t(i) + 1]) continue;  // used by no tet: no dofs
+    for (int d = 0; d < 3 && compact[std::size_t(i)] < 0; ++d)
+      if (!I.isConstrained[3 * std::size_t(i) + std::size_t(d)]) {
+        compact[std::size_t(i)] = static_cast<int>(nodeOf.size());
+        nodeOf.push_back(i);
+      }
+  }
+  if (nodeOf.empty()) throw InputError("Every degree of freedom is fixed: nothing to solve.");
+  // fill-reducing order of those nodes (see Cholmod::orderNodes); their free dofs are numbered in it,
+  // node by node, so CHOLMOD factorises K as it is (PECTUS_FE_ORDERING: node order, CHOLMOD orders the dofs)
+  std::vector<int> order;
+  if (I.orderByNodes) {
+    std::vector<int> gOuter(1, 0), gInner;
+    gInner.reserve(adj.size() / 2 + nodeOf.size());
+    for (int i : nodeOf) {
+      for (int k = adjOuter[std::size_t(i)]; k < adjOuter[std::size_t(i) + 1]; ++k) {
+        const int j = compact[std::size_t(adj[std::size_t(k)])];
+        if (j >= compact[std::size_t(i)]) gInner.push_back(j);
+      }
+      std::sort(gInner.begin() + gOuter.back(), gInner.end());
+      gOuter.push_back(static_cast<int>(gInner.size()));
     }
+    const auto t0 = std::chrono::steady_clock::now();
+    order = I.chol.orderNodes(gOuter, gInner);
+    I.orderSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (order.empty()) I.orderByNodes = false;  // CHOLMOD failed: it orders the dofs itself
+  }
+  if (order.empty())
+    for (std::size_t k = 0; k < nodeOf.size(); ++k) order.push_back(static_cast<int>(k));
+  std::vector<int> rank(std::size_t(n), std::numeric_limits<int>::max());  // position of a node in the order
+  I.freeIndex.assign(3 * std::size_t(n), -1);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    const int i = nodeOf[std::size_t(order[k])];
+    rank[std::size_t(i)] = static_cast<int>(k);
+    for (int d = 0; d < 3; ++d)
+      if (!I.isConstrained[3 * std::size_t(i) + std::size_t(d)]) I.freeIndex[3 * std::size_t(i) + std::size_t(d)] = I.nFree++;
+  }
+  // lower-triangular pattern of K: the column of a free dof holds the free dofs at or after it of the node's
+  // neighbours; with the neighbours sorted by rank the rows come out sorted
+  std::vector<int> outer(std::size_t(I.nFree) + 1, 0), inner, nbrs;
+  inner.reserve(static_cast<size_t>(I.nFree) * 20);
+  int col = 0;
+  for (int i : order) {
+    const int node = nodeOf[std::size_t(i)];
+    nbrs.assign(adj.begin() + adjOuter[std::size_t(node)], adj.begin() + adjOuter[std::size_t(node) + 1]);
+    std::sort(nbrs.begin(), nbrs.end(), [&](int x, int y) { return rank[std::size_t(x)] < rank[std::size_t(y)]; });
     for (int d = 0; d < 3; ++d) {
-      const int fc = I.freeIndex[3 * i + d];
+      const int fc = I.freeIndex[3 * std::size_t(node) + std::size_t(d)];
       if (fc < 0) continue;
-      std::vector<int> rows;
-      for (int j : a)
+      for (int j : nbrs)
         for (int e = 0; e < 3; ++e) {
-          const int fr = I.freeIndex[3 * j + e];
-          if (fr >= fc) rows.push_back(fr);
+          const int fr = I.freeIndex[3 * std::size_t(j) + std::size_t(e)];
+          if (fr >= fc) inner.push_back(fr);
         }
-      std::sort(rows.begin(), rows.end());
-      inner.insert(inner.end(), rows.begin(), rows.end());
-      outer[++col] = static_cast<int>(inner.size());
+      outer[std::size_t(++col)] = static_cast<int>(inner.size());
     }
-    std::vector<int>().swap(a);
   }
   std::vector<double> zeros(inner.size(), 0.0);
   I.K = Eigen::Map<Eigen::SparseMatrix<double>>(I.nFree, I.nFree, static_cast<Eigen::Index>(inner.size()),
                                                  outer.data(), inner.data(), zeros.data());
+  // the assembly visits the tets by their first node in that order (colorChunks)
+  std::vector<int> first(std::size_t(m.numTets()));
+  for (int t = 0; t < m.numTets(); ++t) {
+    int r = std::numeric_limits<int>::max();
+    for (int a = 0; a < 4; ++a) r = std::min(r, rank[std::size_t(m.tets[std::size_t(t)][a])]);
+    first[std::size_t(t)] = r;
+  }
+  I.tetOrder.resize(first.size());
+  for (std::size_t t = 0; t < first.size(); ++t) I.tetOrder[t] = static_cast<int>(t);
+  std::stable_sort(I.tetOrder.begin(), I.tetOrder.end(), [&](int x, int y) { return first[std::size_t(x)] < first[std::size_t(y)]; });
 }
 
 Solver::~Solver() = default;
@@ -519,15 +630,22 @@ int Solver::numFreeDofs() const { return impl_->nFree; }
 
 Result Solver::solveLinear(double scale) {
   Impl& I = *impl_;
+  using Clock = std::chrono::steady_clock;
+  const auto since = [](Clock::time_point a) { return std::chrono::duration<double>(Clock::now() - a).count(); };
+  auto t = Clock::now();
   Result res;
   res.u = scale * I.prescribed;
   Eigen::VectorXd fint;
   I.assemble(res.u, false, fint);
   Eigen::VectorXd r = I.freePart(scale * I.fext - fint);
+  const double tAssemble = since(t);
   I.factorize(lastFactorSeconds_);
+  t = Clock::now();
   const Eigen::VectorXd du = I.solveFree(r);
   for (size_t d = 0; d < I.freeIndex.size(); ++d)
     if (I.freeIndex[d] >= 0) res.u(d) += du(I.freeIndex[d]);
+  const double tSolve = since(t);
+  t = Clock::now();
   // residual check: catches near-singular systems the factorisation let through. The stiffness is linear,
   // so the free part of the internal force at u is the one at the prescribed displacements plus K du.
   const Eigen::VectorXd Kdu = I.K.selfadjointView<Eigen::Lower>() * du;
@@ -536,9 +654,14 @@ Result Solver::solveLinear(double scale) {
   if (!(rn <= 1e-6 * ref))
     throw InputError("The linear system could not be solved accurately (relative residual " + std::to_string(rn / ref) +
                      "): the model is nearly singular; fix more nodes.");
+  const double tResidual = since(t);
+  t = Clock::now();
   res.increments = 1;
   res.newtonIterations = 1;
   I.stresses(res.u, false, res);
+  if (std::getenv("PECTUS_FE_VERBOSE"))
+    std::fprintf(stderr, "[pectus_fe] linear: assemble %.3f s, solve %.3f s, residual check %.3f s, stresses %.3f s\n",
+                 tAssemble, tSolve, tResidual, since(t));
   return res;
 }
 
