@@ -107,6 +107,78 @@ TEST(FeIo, CalculixDeck) {
   EXPECT_EQ(slurp(path).find("NLGEOM"), std::string::npos);
 }
 
+// a deck written by writeCalculixInp reads back as the same model: nodes, tets and their tissues,
+// materials, fixed dofs, forces, print nodes, NLGEOM increments; written again it is the same text,
+// and both models solve to the same displacements
+TEST(FeIo, CalculixDeckReadsBackAsTheSameModel) {
+  for (int order : {1, 2}) {
+    Bar b(order, 3.0);
+    b.p.fixed.push_back({b.tip, 0, 0.25});  // a prescribed non-zero displacement too
+    InpOptions o;
+    o.nlgeom = order == 2;
+    o.increments = 8;
+    o.printNodes = {b.tip, 0};
+    const std::string path = tmp("fe_roundtrip.inp"), again = tmp("fe_roundtrip2.inp");
+    writeCalculixInp(path, b.p, o);
+    const auto r = readCalculixInp(path);
+    ASSERT_EQ(r->problem.mesh, &r->mesh);
+    EXPECT_EQ(r->mesh.order, b.m.order);
+    ASSERT_EQ(r->mesh.numNodes(), b.m.numNodes());
+    ASSERT_EQ(r->mesh.numTets(), b.m.numTets());
+    double dx = 0;
+    for (int i = 0; i < b.m.numNodes(); ++i) dx = std::max(dx, (r->mesh.nodes[i] - b.m.nodes[i]).norm());
+    EXPECT_LT(dx, 1e-9);
+    EXPECT_EQ(r->mesh.tets, b.m.tets);
+    EXPECT_EQ(r->mesh.tissue, b.m.tissue);
+    ASSERT_EQ(r->problem.materials.size(), 2u);
+    EXPECT_EQ(r->problem.materials.at(2).E, 100.0);
+    EXPECT_EQ(r->problem.materials.at(2).nu, 0.4);
+    ASSERT_EQ(r->problem.fixed.size(), b.p.fixed.size());
+    EXPECT_EQ(r->problem.fixed.back().node, b.tip);
+    EXPECT_EQ(r->problem.fixed.back().value, 0.25);
+    EXPECT_EQ(r->problem.force[std::size_t(b.tip)], Vector3d(0, 3, 0));
+    EXPECT_EQ(r->options.printNodes, o.printNodes);
+    EXPECT_EQ(r->options.nlgeom, o.nlgeom);
+    if (o.nlgeom) EXPECT_EQ(r->options.increments, 8);
+    writeCalculixInp(again, r->problem, r->options);
+    EXPECT_EQ(slurp(again), slurp(path));
+    const Eigen::VectorXd u0 = solveLinear(b.p).u, u1 = solveLinear(r->problem).u;
+    EXPECT_LT((u0 - u1).norm(), 1e-9 * u0.norm());
+  }
+}
+
+TEST(FeIo, CalculixDeckErrorsNameTheLine) {
+  Bar b(1, 1.0);
+  const std::string path = tmp("fe_bad.inp");
+  writeCalculixInp(path, b.p);
+  const std::string good = slurp(path);
+  auto expectError = [&](const std::string& deck, const std::string& what) {
+    std::ofstream(path) << deck;
+    try {
+      readCalculixInp(path);
+      ADD_FAILURE() << "no error for " << what;
+    } catch (const pectus::InputError& e) {
+      EXPECT_NE(std::string(e.what()).find(what), std::string::npos) << e.what();
+    }
+  };
+  std::string s = good;
+  s.replace(s.find("C3D4"), 4, "C3D8");
+  expectError(s, "only *ELEMENT, TYPE=C3D4 or C3D10");
+  s = good;
+  s.insert(s.find("*BOUNDARY"), "*AMPLITUDE, NAME=A\n");
+  expectError(s, "keyword *AMPLITUDE is not read");
+  s = good;
+  s.replace(s.find("\n1, ") + 1, 3, "1, x");  // node 1's x coordinate
+  expectError(s, "line 5: 'x");
+  s = good;
+  const size_t e = s.find('\n', s.find("*ELEMENT")) + 1;
+  const size_t n0 = s.find(',', e) + 2;  // the first element's first node becomes one that is not defined
+  s.replace(n0, s.find(',', n0) - n0, "888888");
+  expectError(s, "node 888888 is used but not defined");
+  expectError("*NODE\n1, 0, 0, 0\n", "no *ELEMENT");
+  EXPECT_THROW(readCalculixInp("/nonexistent-dir/x.inp"), pectus::InputError);
+}
+
 TEST(FeCalibrate, AnalyticSofteningCurve) {
   auto d = [](double F) { return 60.0 * (1.0 - std::exp(-F / 90.0)); };
   CalibrationOptions o;

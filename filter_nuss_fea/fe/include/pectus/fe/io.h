@@ -1,5 +1,6 @@
 // Writers of the FE model and results: VTK XML unstructured grid (.vtu, ascii) and CalculiX input deck (.inp).
 #pragma once
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -23,5 +24,23 @@ struct InpOptions {
 /// *MATERIAL/*ELASTIC/*SOLID SECTION per tissue, *BOUNDARY (prescribed dofs), *STEP [NLGEOM], *STATIC,
 /// *CLOAD (nodal forces), *NODE PRINT / *NODE FILE U, *EL FILE S, E. Node and element ids are 1-based.
 void writeCalculixInp(const std::string& path, const Problem& p, const InpOptions& opt = {});
+
+/// A CalculiX deck read back: the mesh, the problem (its `mesh` points at `mesh`, hence held by pointer)
+/// and the output options (printNodes 0-based; increments of an NLGEOM step).
+struct InpModel {
+  TetMesh mesh;
+  Problem problem;
+  InpOptions options;
+};
+
+/// Reads the subset of the CalculiX/Abaqus input language that writeCalculixInp writes (so a deck written
+/// by the filter, BASE.inp, can be solved again, and the same deck timed against ccx): *NODE, *ELEMENT
+/// TYPE=C3D4|C3D10 with ELSET, *MATERIAL + *ELASTIC (isotropic), *SOLID SECTION, *NSET, *BOUNDARY
+/// (node, first dof, last dof[, value]), *STEP[, NLGEOM, INC], *STATIC[, DIRECT], *CLOAD, *NODE PRINT,
+/// *NODE FILE, *EL FILE, *END STEP; comment lines (**) and *HEADING text are skipped. Each ELSET becomes
+/// a tissue label (BONE 1, CARTILAGE 2, STERNUM 3 as written, others 4, 5, ... in order of appearance).
+/// Anything else (another keyword, element type, a bad number or node id) throws pectus::InputError
+/// naming the line.
+std::unique_ptr<InpModel> readCalculixInp(const std::string& path);
 
 }  // namespace pectus::fe
