@@ -233,14 +233,6 @@ struct Solver::Impl {
     }
   }
 
-  // position of K(row, col) (row >= col) in K.valuePtr()
-  int pos(int row, int col) const {
-    const int* b = K.innerIndexPtr() + K.outerIndexPtr()[col];
-    const int* e = K.innerIndexPtr() + K.outerIndexPtr()[col + 1];
-    const int* it = std::lower_bound(b, e, row);
-    return static_cast<int>(it - K.innerIndexPtr());
-  }
-
   // element gradients dN/dX at a point with reference derivatives dN (shapeDerivs), returns det(J) * w.
   // Fixed sizes throughout: a dynamic topRows(nen) product went through Eigen's blocked GEMM kernel.
   template <int NEN>
@@ -263,7 +255,6 @@ struct Solver::Impl {
 
   template <int NEN>
   void assembleT(const Eigen::VectorXd& u, bool nonlinear, Eigen::VectorXd& fint) {
-    constexpr int ND = 3 * NEN;
     std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
     fint.setZero(u.size());
     double* val = K.valuePtr();
@@ -278,80 +269,83 @@ struct Solver::Impl {
     // barrier, and on a machine whose cores are busy with other jobs a barrier waits for a descheduled
     // thread (measured, 480-tet cantilever, 40 Newton iterations, load ~7: 0.07 s on one thread, 6.7-14 s
     // with two threads and a region per colour). Colouring single tets instead of chunks made every
-    // colour a sweep over all of K: the rib cage's 360k-tet assembly took 0.5-0.8 s instead of 0.15 s.
+    // colour a sweep over all of K: the rib cage's 360k-tet assembly took 0.5-0.8 s instead of 0.35 s.
     const int nt = m->numTets();
     for (const std::vector<int>& group : colors) {
       const int ng = static_cast<int>(group.size());
   #pragma omp parallel for schedule(dynamic, 1) if (ng > 1 && ng * kChunkTets >= gMinParallelTets)
-      for (int gi = 0; gi < ng; ++gi) {
-       const int end = std::min(nt, (group[gi] + 1) * kChunkTets);
-       for (int oi = group[gi] * kChunkTets; oi < end; ++oi) {
-        const int t = tetOrder[std::size_t(oi)];
-        Eigen::Matrix<double, ND, ND> Ke = Eigen::Matrix<double, ND, ND>::Zero();
-        Eigen::Matrix<double, ND, 1> fe = Eigen::Matrix<double, ND, 1>::Zero();
-        Eigen::Matrix<double, NEN, 3> G, ue;
-        for (int a = 0; a < NEN; ++a) ue.row(a) = u.template segment<3>(3 * m->tets[t][a]).transpose();
-        const auto& Dm = *D[t];
-        for (std::size_t q = 0; q < quad.size(); ++q) {
-          const double w = gradientsT<NEN>(t, quadDN[q], quad[q].w, G);
-          const Matrix3d H = ue.transpose() * G;  // du_i/dX_j
-          Matrix3d F = Matrix3d::Identity();
-          Matrix3d E;
-          if (nonlinear) {
-            F += H;
-            E = 0.5 * (H + H.transpose() + H.transpose() * H);
-          } else {
-            E = 0.5 * (H + H.transpose());
-          }
-          const Eigen::Matrix<double, 6, 1> Sv = Dm * voigt(E, true);
-          Matrix3d S;
-          S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
-          const Matrix3d P = F * S;  // first Piola (linear: sigma)
-          Eigen::Matrix<double, 6, ND> B;
-          for (int a = 0; a < NEN; ++a) {
-            const Vector3d Ga = G.row(a).transpose();
-            fe.template segment<3>(3 * a) += w * P * Ga;
-            for (int i = 0; i < 3; ++i) {
-              B(0, 3 * a + i) = F(i, 0) * Ga(0);
-              B(1, 3 * a + i) = F(i, 1) * Ga(1);
-              B(2, 3 * a + i) = F(i, 2) * Ga(2);
-              B(3, 3 * a + i) = F(i, 0) * Ga(1) + F(i, 1) * Ga(0);
-              B(4, 3 * a + i) = F(i, 1) * Ga(2) + F(i, 2) * Ga(1);
-              B(5, 3 * a + i) = F(i, 0) * Ga(2) + F(i, 2) * Ga(0);
-            }
-          }
-          const Eigen::Matrix<double, 6, ND> DB = (w * Dm) * B;
-          Ke.noalias() += B.transpose().lazyProduct(DB);
-          if (nonlinear) {
-            const Eigen::Matrix<double, NEN, NEN> GSG = w * G * S * G.transpose();
-            for (int a = 0; a < NEN; ++a)
-              for (int b = 0; b < NEN; ++b)
-                for (int i = 0; i < 3; ++i) Ke(3 * a + i, 3 * b + i) += GSG(a, b);
-          }
+      for (int gi = 0; gi < ng; ++gi)
+        for (int oi = group[gi] * kChunkTets; oi < std::min(nt, (group[gi] + 1) * kChunkTets); ++oi)
+          assembleTet<NEN>(tetOrder[std::size_t(oi)], u, nonlinear, val, fi);
+    }
+  }
+
+  // one tet's tangent and internal forces, added into K's values and fint
+  template <int NEN>
+  void assembleTet(int t, const Eigen::VectorXd& u, bool nonlinear, double* val, double* fi) const {
+    constexpr int ND = 3 * NEN;
+    Eigen::Matrix<double, ND, ND> Ke = Eigen::Matrix<double, ND, ND>::Zero();
+    Eigen::Matrix<double, ND, 1> fe = Eigen::Matrix<double, ND, 1>::Zero();
+    Eigen::Matrix<double, NEN, 3> G, ue;
+    for (int a = 0; a < NEN; ++a) ue.row(a) = u.template segment<3>(3 * m->tets[t][a]).transpose();
+    const auto& Dm = *D[t];
+    for (std::size_t q = 0; q < quad.size(); ++q) {
+      const double w = gradientsT<NEN>(t, quadDN[q], quad[q].w, G);
+      const Matrix3d H = ue.transpose() * G;  // du_i/dX_j
+      Matrix3d F = Matrix3d::Identity();
+      Matrix3d E;
+      if (nonlinear) {
+        F += H;
+        E = 0.5 * (H + H.transpose() + H.transpose() * H);
+      } else {
+        E = 0.5 * (H + H.transpose());
+      }
+      const Eigen::Matrix<double, 6, 1> Sv = Dm * voigt(E, true);
+      Matrix3d S;
+      S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
+      const Matrix3d P = F * S;  // first Piola (linear: sigma)
+      Eigen::Matrix<double, 6, ND> B;
+      for (int a = 0; a < NEN; ++a) {
+        const Vector3d Ga = G.row(a).transpose();
+        fe.template segment<3>(3 * a) += w * P * Ga;
+        for (int i = 0; i < 3; ++i) {
+          B(0, 3 * a + i) = F(i, 0) * Ga(0);
+          B(1, 3 * a + i) = F(i, 1) * Ga(1);
+          B(2, 3 * a + i) = F(i, 2) * Ga(2);
+          B(3, 3 * a + i) = F(i, 0) * Ga(1) + F(i, 1) * Ga(0);
+          B(4, 3 * a + i) = F(i, 1) * Ga(2) + F(i, 2) * Ga(1);
+          B(5, 3 * a + i) = F(i, 0) * Ga(2) + F(i, 2) * Ga(0);
         }
-        int dofs[ND], fdof[ND];
+      }
+      const Eigen::Matrix<double, 6, ND> DB = (w * Dm) * B;
+      Ke.noalias() += B.transpose().lazyProduct(DB);
+      if (nonlinear) {
+        const Eigen::Matrix<double, NEN, NEN> GSG = w * G * S * G.transpose();
         for (int a = 0; a < NEN; ++a)
-          for (int i = 0; i < 3; ++i) dofs[3 * a + i] = 3 * m->tets[t][a] + i, fdof[3 * a + i] = freeIndex[3 * m->tets[t][a] + i];
-        for (int r = 0; r < ND; ++r) fi[dofs[r]] += fe(r);
-        // the element's dofs by free index (constrained ones, -1, first): a column's rows are then the dofs
-        // after it, ascending, found by one forward walk along the column (a binary search per entry
-        // mispredicted most of its branches)
-        int byIndex[ND];
-        for (int r = 0; r < ND; ++r) byIndex[r] = r;
-        for (int r = 1; r < ND; ++r)
-          for (int q = r; q > 0 && fdof[byIndex[q - 1]] > fdof[byIndex[q]]; --q) std::swap(byIndex[q - 1], byIndex[q]);
-        const int* rows = K.innerIndexPtr();
-        for (int ci = 0; ci < ND; ++ci) {
-          const int c = byIndex[ci];
-          if (fdof[c] < 0) continue;
-          int k = K.outerIndexPtr()[fdof[c]];
-          for (int ri = ci; ri < ND; ++ri) {
-            const int r = byIndex[ri];
-            while (rows[k] < fdof[r]) ++k;
-            val[k] += Ke(r, c);
-          }
-        }
-       }
+          for (int b = 0; b < NEN; ++b)
+            for (int i = 0; i < 3; ++i) Ke(3 * a + i, 3 * b + i) += GSG(a, b);
+      }
+    }
+    int dofs[ND], fdof[ND];
+    for (int a = 0; a < NEN; ++a)
+      for (int i = 0; i < 3; ++i) dofs[3 * a + i] = 3 * m->tets[t][a] + i, fdof[3 * a + i] = freeIndex[3 * m->tets[t][a] + i];
+    for (int r = 0; r < ND; ++r) fi[dofs[r]] += fe(r);
+    // the element's dofs by free index (constrained ones, -1, first): a column's rows are then the dofs
+    // after it, ascending, found by one forward walk along the column (a binary search per entry
+    // mispredicted most of its branches)
+    int byIndex[ND];
+    for (int r = 0; r < ND; ++r) byIndex[r] = r;
+    for (int r = 1; r < ND; ++r)
+      for (int q = r; q > 0 && fdof[byIndex[q - 1]] > fdof[byIndex[q]]; --q) std::swap(byIndex[q - 1], byIndex[q]);
+    const int* rows = K.innerIndexPtr();
+    for (int ci = 0; ci < ND; ++ci) {
+      const int c = byIndex[ci];
+      if (fdof[c] < 0) continue;
+      int k = K.outerIndexPtr()[fdof[c]];
+      for (int ri = ci; ri < ND; ++ri) {
+        const int r = byIndex[ri];
+        while (rows[k] < fdof[r]) ++k;
+        val[k] += Ke(r, c);
       }
     }
   }
@@ -359,7 +353,7 @@ struct Solver::Impl {
   // greedy colouring of the chunks of kChunkTets consecutive tets of `order` (deterministic): each chunk
   // takes the lowest colour that no chunk at its nodes has yet, so no two chunks of a colour share a
   // node. Corners suffice: tets sharing a TET10 mid-edge node share that edge's corners. The colours at
-  // a node are bits of a 64-bit mask for the first 64 colours (the rib cage needs about 10), then a list.
+  // a node are bits of a 64-bit mask for the first 64 colours (PECTUS_FE_VERBOSE prints how many), then a list.
   static std::vector<std::vector<int>> colorChunks(const TetMesh& mesh, const std::vector<int>& order) {
     std::vector<std::vector<int>> out;
     std::vector<std::uint64_t> mask(mesh.nodes.size(), 0);
@@ -660,8 +654,8 @@ Result Solver::solveLinear(double scale) {
   res.newtonIterations = 1;
   I.stresses(res.u, false, res);
   if (std::getenv("PECTUS_FE_VERBOSE"))
-    std::fprintf(stderr, "[pectus_fe] linear: assemble %.3f s, solve %.3f s, residual check %.3f s, stresses %.3f s\n",
-                 tAssemble, tSolve, tResidual, since(t));
+    std::fprintf(stderr, "[pectus_fe] linear: assemble %.3f s (%zu colours of %d-tet chunks), solve %.3f s, residual check %.3f s, stresses %.3f s\n",
+                 tAssemble, I.colors.size(), kChunkTets, tSolve, tResidual, since(t));
   return res;
 }
 
