@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "pectus/errors.h"
+#include "pectus/fe/solver.h"
 
 namespace pectus::fe {
 
@@ -92,7 +93,26 @@ CalibrationResult calibrateForce(const std::function<double(double, const Observ
         << r.force << " N -> " << r.displacement << " mm).";
       throw InputError(s.str());
     }
-    const double d = displacement(f, observe);
+    double d = 0;
+    try {
+      d = displacement(f, observe);
+    } catch (const NewtonDidNotConverge& e) {
+      // the states passed before the failure are on the curve: if one is beyond the target, the target
+      // lies between them and the next force comes from them (below the failing force); otherwise no
+      // converged state reaches it
+      ++r.evaluations;
+      r.history.emplace_back(f, std::nan(""));
+      const auto best = std::max_element(seen.begin(), seen.end(), [](const auto& a, const auto& b) { return a.second < b.second; });
+      if (best->second < target) {
+        std::ostringstream s;
+        s << "No converged state reaches the target displacement " << target << " mm: the nonlinear solve stops converging at "
+          << e.loadFactor * f << " N (" << e.what() << ") and the largest displacement reached is " << best->second << " mm at "
+          << best->first << " N. Lower the target, or check the model where it deforms most (an element inverting at the load).";
+        throw InputError(s.str());
+      }
+      f = nextForce(seen, target, opt.maxForce, true);
+      continue;
+    }
     if (!std::isfinite(d)) throw InputError("Calibration: the displacement is not finite at force " + std::to_string(f) + " N.");
     r.history.emplace_back(f, d);
     ++r.evaluations;

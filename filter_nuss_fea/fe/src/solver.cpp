@@ -718,7 +718,7 @@ Result Solver::solveNonlinear(const NewtonOptions& opt, double scale) {
         s << "The nonlinear (Newton) solve did not converge at load factor " << target << " after " << opt.maxCutbacks
           << " step cut-backs: the load is too large for the model (instability or inverted elements); "
              "reduce the force, use more load steps or check the boundary conditions.";
-        throw InputError(s.str());
+        throw NewtonDidNotConverge(s.str(), target);
       }
       dlam *= 0.5;
     }

@@ -272,3 +272,42 @@ TEST(Calibration, CageShapedCurvesInFourSolves) {
       EXPECT_LE(r.evaluations, target < 44 ? 3 : 4) << name << " " << target;
     }
 }
+
+// A solve whose Newton stops converging above 50 N (after reporting its increments up to there), on the
+// curve 60 (1 - exp(-F/90)): a target passed before the failure (25.4 mm at 50 N) is still calibrated
+// from the states seen below it; one beyond (34 mm needs 75 N) is refused with a message that names the
+// failing force and the largest displacement reached, not the solver's bare Newton message.
+TEST(Calibration, NewtonFailureAboveTheTargetIsBracketedBelowIt) {
+  auto curve = [](double F) { return 60.0 * (1.0 - std::exp(-F / 90.0)); };
+  int failures = 0;
+  auto solve = [&](double F, const Observer& obs) {
+    const int n = std::max(5, int(std::ceil(F / 10.0)));
+    for (int k = 1; k <= n; ++k) {
+      const double f = F * k / n;
+      if (f > 50.0) {
+        ++failures;
+        throw NewtonDidNotConverge("Newton did not converge (test)", double(k) / n);
+      }
+      obs(f, curve(f));
+    }
+    return curve(F);
+  };
+  CalibrationOptions o;
+  o.initialForce = 80.0;  // beyond the failure
+  o.tolerance = 0.1;
+  const auto r = calibrateForce(solve, 20.0, o);
+  EXPECT_NEAR(curve(r.force), 20.0, 0.1);
+  EXPECT_LT(r.force, 50.0);
+  EXPECT_EQ(failures, 1);
+  EXPECT_TRUE(std::isnan(r.history.front().second));  // the failed solve is in the history
+  try {
+    calibrateForce(solve, 34.0, o);
+    ADD_FAILURE() << "a target beyond the last converged state must be refused";
+  } catch (const NewtonDidNotConverge&) {
+    ADD_FAILURE() << "the solver's own message, not the calibration's";
+  } catch (const pectus::InputError& e) {
+    const std::string m = e.what();
+    EXPECT_NE(m.find("No converged state reaches the target displacement 34 mm"), std::string::npos) << m;
+    EXPECT_NE(m.find("stops converging at"), std::string::npos) << m;
+  }
+}

@@ -18,14 +18,16 @@ struct CalibrationResult {
   double force = 0;
   double displacement = 0;
   int evaluations = 0;
-  std::vector<std::pair<double, double>> history;  ///< (force, displacement) of every evaluation
+  std::vector<std::pair<double, double>> history;  ///< (force, displacement) of every evaluation (NaN: did not converge)
 };
 
 /// displacement(F) must be increasing in F with displacement(0) = 0 (it is not evaluated at 0).
 /// Secant steps through the origin and the last points, kept inside the bracket once the target is
 /// bracketed (Illinois-style fallback to bisection). Throws pectus::InputError when the target is not
-/// reached up to maxForce, the displacement has the wrong sign, or maxEvaluations is exceeded;
-/// exceptions of displacement() (e.g. non-converged Newton) propagate.
+/// reached up to maxForce, the displacement has the wrong sign, or maxEvaluations is exceeded.
+/// A NewtonDidNotConverge from displacement() (solver.h) is a failed evaluation: when a state observed
+/// before it (Observer below) lies beyond the target, the search goes on below the failing force;
+/// otherwise an InputError says that no converged state reaches the target. Other exceptions propagate.
 CalibrationResult calibrateForce(const std::function<double(double)>& displacement, double target,
                                  const CalibrationOptions& opt = {});
 

@@ -12,6 +12,7 @@
 
 #include <Eigen/Core>
 
+#include "pectus/errors.h"
 #include "pectus/fe/tet_mesh.h"
 
 namespace pectus::fe {
@@ -51,6 +52,13 @@ struct NewtonOptions {
   std::vector<double> stops;
   /// called after every converged increment with (load factor, displacements)
   std::function<void(double, const Eigen::VectorXd&)> onIncrement;
+};
+
+/// Thrown by Solver::solveNonlinear when Newton does not converge after the step cut-backs (an
+/// InputError: the message says what to do); `loadFactor` is the load factor it could not reach.
+struct NewtonDidNotConverge : InputError {
+  NewtonDidNotConverge(const std::string& what, double factor) : InputError(what), loadFactor(factor) {}
+  double loadFactor;
 };
 
 struct Result {
