@@ -207,14 +207,14 @@ std::map<std::string, std::string> keywordLine(std::string_view line) {
 }  // namespace
 
 std::unique_ptr<InpModel> readCalculixInp(const std::string& path) {
-  std::string text;
-  {
-    std::ifstream f(path, std::ios::binary);
-    if (!f) throw InputError("Cannot read " + path + ".");
-    std::ostringstream all;
-    all << f.rdbuf();
-    text = all.str();
-  }
+  std::ifstream f(path, std::ios::binary);
+  if (!f) throw InputError("Cannot read " + path + ".");
+  std::ostringstream all;
+  all << f.rdbuf();
+  return parseCalculixInp(all.str(), path);
+}
+
+std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::string& path) {
   auto owned = std::make_unique<InpModel>();
   InpModel& model = *owned;
   TetMesh& m = model.mesh;

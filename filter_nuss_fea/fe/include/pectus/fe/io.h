@@ -42,5 +42,7 @@ struct InpModel {
 /// Anything else (another keyword, element type, a bad number or node id) throws pectus::InputError
 /// naming the line.
 std::unique_ptr<InpModel> readCalculixInp(const std::string& path);
+/// The same on the deck's text; `name` stands for the file in the messages.
+std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::string& name);
 
 }  // namespace pectus::fe
