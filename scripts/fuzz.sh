@@ -13,7 +13,7 @@ RUNS="${1:-1000000}"
 MAXT="${2:-3600}"
 shift $(( $# > 2 ? 2 : $# ))
 TARGETS=("$@")
-[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(c1 mga quad volume fe_model)
+[ ${#TARGETS[@]} -gt 0 ] || TARGETS=(c1 mga quad volume fe_model inp)
 PRESET="${PRESET:-fuzz}"
 BUILD="build-$PRESET"
 cd "$ROOT"

@@ -245,7 +245,8 @@ std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::s
     const auto r = std::from_chars(t.data(), t.data() + t.size(), i);
     if (!t.empty() && r.ec == std::errc() && r.ptr == t.data() + t.size()) return i;
     const double v = number(t);  // 1.0, 1e3, +1, or an error
-    if (v != static_cast<double>(static_cast<long>(v)) || std::abs(v) > 2e9) fail("'" + std::string(t) + "' is not an integer");
+    // the range first: casting a double outside long's range is undefined (fuzz_inp, UBSan: 1e300)
+    if (!(std::abs(v) <= 2e9) || v != std::floor(v)) fail("'" + std::string(t) + "' is not an integer");
     return static_cast<int>(v);
   };
   std::vector<std::string_view> t;  // a data line's fields

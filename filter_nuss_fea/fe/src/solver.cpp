@@ -487,6 +487,18 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
       if (m.tets[t][a] < 0 || m.tets[t][a] >= n) throw InputError("Tetrahedron " + std::to_string(t) + " has an invalid node index.");
     if (!(m.tetVolume(t) > 0))
       throw InputError("Tetrahedron " + std::to_string(t) + " is inverted or flat (volume <= 0).");
+    // a TET10 whose mid-edge nodes lie far from its edges' midpoints can fold inside although its corners
+    // do not: its Jacobian must be positive at every quadrature point and at the centroid (where the
+    // stresses are taken), else its stiffness and stresses are meaningless (fuzz_inp: NaN stresses)
+    if (I.nen == 10) {
+      Eigen::Matrix<double, 10, 3> G;
+      bool ok = I.gradientsT<10>(t, I.centroidDN, 1.0, G) > 0;
+      for (std::size_t q = 0; q < I.quad.size() && ok; ++q) ok = I.gradientsT<10>(t, I.quadDN[q], 1.0, G) > 0;
+      if (!ok)
+        throw InputError("Tetrahedron " + std::to_string(t) +
+                         " (quadratic) folds inside: its mid-edge nodes are too far from its edges' midpoints (the "
+                         "Jacobian is not positive everywhere in it). Use straight-sided quadratic tets or refine there.");
+    }
   }
   for (const auto& kv : prob.materials) {
     if (!(kv.second.E > 0) || !(kv.second.nu > -1 && kv.second.nu < 0.5))

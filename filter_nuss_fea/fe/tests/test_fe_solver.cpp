@@ -254,6 +254,23 @@ TEST(FeSolver, MissingMaterialIsAnError) {
   EXPECT_THROW({ Solver s(p); }, pectus::InputError);
 }
 
+// a TET10 whose corners are fine but whose mid-edge node is moved far off its edge folds inside: refused
+// before any solve, naming the tet (fuzz_inp found NaN stresses from such a deck); the straight-sided
+// mesh solves
+TEST(FeSolver, FoldedQuadraticTetIsRefused) {
+  TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 1, 1, 2, 1));
+  Problem p = cantilever(q, 5.0);
+  EXPECT_NO_THROW({ Solver s(p); s.solveLinear(); });
+  const int mid = q.tets[0][4];  // the mid-edge node of tet 0's edge (0, 1)
+  q.nodes[std::size_t(mid)] += Vector3d(0, 8 * kL, 0);
+  try {
+    Solver s(p);
+    ADD_FAILURE() << "a folded TET10 was accepted";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("folds inside"), std::string::npos) << e.what();
+  }
+}
+
 TEST(FeSolver, NonConvergingNewtonIsAnError) {
   const TetMesh m = structuredBox(kB, kB, kL, 1, 1, 10, 1);
   Problem p = cantilever(m, 50 * kL / timoshenko(1.0));  // absurd load: deflection 50 x length
