@@ -226,7 +226,8 @@ std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::s
   std::map<std::string, Material> materials;
   std::map<std::string, std::vector<int>> nsets;
   std::vector<std::pair<int, std::array<double, 3>>> loads;  // (deck node id, force)
-  std::vector<std::array<double, 4>> boundary;               // deck node id, first dof, last dof, value
+  struct BoundaryLine { int node, first, last; double value; };  // deck node id, dofs first..last (1-based)
+  std::vector<BoundaryLine> boundary;
   std::string block, currentSet, currentMaterial;
   int nen = 0, lineNo = 0, currentTissue = 0;
   auto fail = [&](const std::string& why) {
@@ -333,7 +334,7 @@ std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::s
     } else if (block == "*BOUNDARY") {
       if (t.size() < 2) fail("a *BOUNDARY line needs a node and a dof");
       const int first = integer(t[1]), last = t.size() > 2 && !t[2].empty() ? integer(t[2]) : first;
-      boundary.push_back({static_cast<double>(integer(t[0])), double(first), double(last), t.size() > 3 ? number(t[3]) : 0.0});
+      boundary.push_back({integer(t[0]), first, last, t.size() > 3 ? number(t[3]) : 0.0});
     } else if (block == "*CLOAD") {
       if (t.size() < 3) fail("a *CLOAD line needs a node, a dof and a value");
       const int dof = integer(t[1]);
@@ -372,9 +373,8 @@ std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::s
     m.tissue.push_back(elemTissue[k]);
   }
   for (const auto& b : boundary) {
-    if (b[1] < 1 || b[2] > 3 || b[1] > b[2]) throw InputError(path + ": *BOUNDARY dofs must be within 1..3.");
-    for (int d = static_cast<int>(b[1]); d <= static_cast<int>(b[2]); ++d)
-      p.fixed.push_back({node(static_cast<int>(b[0])), d - 1, b[3]});
+    if (b.first < 1 || b.last > 3 || b.first > b.last) throw InputError(path + ": *BOUNDARY dofs must be within 1..3.");
+    for (int d = b.first; d <= b.last; ++d) p.fixed.push_back({node(b.node), d - 1, b.value});
   }
   p.force.assign(m.nodes.size(), Eigen::Vector3d::Zero());
   for (const auto& l : loads) p.force[std::size_t(node(l.first))] += Eigen::Vector3d(l.second[0], l.second[1], l.second[2]);
