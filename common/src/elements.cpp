@@ -57,7 +57,7 @@ ElementMesh buildElements(const CMeshO& m, ElementKind kind) {
         throw InputError("face " + std::to_string(fi) + " has " + std::to_string(nfaux) +
                          " faux edges: the layer holds polygons with more than four sides, not quads");
       const int a = vi(f, faux), b = vi(f, (faux + 1) % 3), c = vi(f, (faux + 2) % 3);
-      const auto& nb = edges.faces(a, b);
+      const EdgeMap::Faces nb = edges.faces(a, b);
       if (nb.size() != 2)
         throw InputError("face " + std::to_string(fi) + " has a faux edge " +
                          (nb.size() < 2 ? std::string("on the boundary") : std::string("shared by more than two faces")) +

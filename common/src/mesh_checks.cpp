@@ -60,7 +60,7 @@ MeshReport inspectMesh(const CMeshO& m) {
   // per vertex: count of incident boundary edges and of faces, to detect non-manifold vertices
   // (a manifold vertex's fan is one cycle: #edges-in-fan == #faces, or a chain with 2 boundary edges)
   std::vector<int> vBoundary(m.vert.size(), 0), vEdges(m.vert.size(), 0);
-  edges.forEach([&](int a, int b, const std::vector<int>& fs) {
+  edges.forEach([&](int a, int b, const EdgeMap::Faces& fs) {
     if (fs.size() == 1) { ++r.boundaryEdges; ++vBoundary[a]; ++vBoundary[b]; }
     if (fs.size() > 2) ++r.nonManifoldEdges;
     ++vEdges[a];
