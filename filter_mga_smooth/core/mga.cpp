@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 
 namespace pectus::mga {
@@ -61,7 +62,10 @@ struct Codec {
     int pos = 0;
     for (std::size_t i = 0; i < ranges.size(); ++i) {
       std::uint64_t v = 0;
-      for (int k = 0; k < len[i]; ++k) v = (v << 1) | std::uint64_t(bit(b, pos + k));
+      if ((pos >> 6) == ((pos + len[i] - 1) >> 6))  // within one word: one shift
+        v = (b[pos >> 6] << (pos & 63)) >> (64 - len[i]);
+      else
+        for (int k = 0; k < len[i]; ++k) v = (v << 1) | std::uint64_t(bit(b, pos + k));
       pos += len[i];
       x[i] = ranges[i].lo + (ranges[i].hi - ranges[i].lo) * (double(v) / maxv[i]);
     }
@@ -88,13 +92,21 @@ struct Codec {
 };
 
 /// fitness of the strings met so far in one run (single-word strings, the word is the key): open
-/// addressing, grows at half load
+/// addressing, grows at half load. The table is reused from run to run (see Workspace): a slot belongs to the
+/// current run when its stamp is the run's, so starting a run clears nothing and allocates nothing.
 class Memo {
  public:
+  void reset() {
+    count_ = 0;
+    if (++stamp_ == 0) {  // the stamp wrapped: clear once
+      std::fill(stamps_.begin(), stamps_.end(), 0u);
+      stamp_ = 1;
+    }
+  }
   bool find(std::uint64_t key, double& f) const {
     if (keys_.empty()) return false;
     for (std::size_t i = slot(key);; i = (i + 1) & (keys_.size() - 1)) {
-      if (!used_[i]) return false;
+      if (stamps_[i] != stamp_) return false;
       if (keys_[i] == key) {
         f = vals_[i];
         return true;
@@ -104,8 +116,8 @@ class Memo {
   void insert(std::uint64_t key, double f) {
     if (2 * (count_ + 1) > keys_.size()) grow();
     std::size_t i = slot(key);
-    while (used_[i]) i = (i + 1) & (keys_.size() - 1);
-    used_[i] = 1;
+    while (stamps_[i] == stamp_) i = (i + 1) & (keys_.size() - 1);
+    stamps_[i] = stamp_;
     keys_[i] = key;
     vals_[i] = f;
     ++count_;
@@ -117,24 +129,42 @@ class Memo {
   void grow() {
     std::vector<std::uint64_t> k;
     std::vector<double> v;
-    std::vector<char> u;
+    std::vector<std::uint32_t> u;
     k.swap(keys_);
     v.swap(vals_);
-    u.swap(used_);
+    u.swap(stamps_);
     const std::size_t n = k.empty() ? 128 : 2 * k.size();
     shift_ = 64 - __builtin_ctzll(n);
     keys_.assign(n, 0);
     vals_.assign(n, 0);
-    used_.assign(n, 0);
+    stamps_.assign(n, 0u);
     count_ = 0;
     for (std::size_t i = 0; i < k.size(); ++i)
-      if (u[i]) insert(k[i], v[i]);
+      if (u[i] == stamp_) insert(k[i], v[i]);
   }
   std::vector<std::uint64_t> keys_;
   std::vector<double> vals_;
-  std::vector<char> used_;
+  std::vector<std::uint32_t> stamps_;
   std::size_t count_ = 0;
+  std::uint32_t stamp_ = 1;
   int shift_ = 57;
+};
+
+/// the buffers of one run, reused from run to run on a thread: a run allocates nothing but its Result
+/// (a fitness function that itself runs optimize() gets a workspace of its own)
+struct Workspace {
+  Codec codec;
+  std::vector<std::uint64_t> pop, next, best;
+  std::vector<double> fit, wheel, x;
+  Memo memo;
+};
+thread_local Workspace tlWorkspace;
+thread_local int tlDepth = 0;
+struct DepthGuard {
+  DepthGuard() { ++tlDepth; }
+  ~DepthGuard() { --tlDepth; }
+  DepthGuard(const DepthGuard&) = delete;
+  DepthGuard& operator=(const DepthGuard&) = delete;
 };
 
 }  // namespace
@@ -143,8 +173,14 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
                 const Options& opt, const std::vector<double>* seedPoint) {
   if (opt.population < 3) throw std::invalid_argument("MGA: population must be at least 3");
   if (ranges.empty()) throw std::invalid_argument("MGA: no design parameter");
-  Codec codec;
-  codec.ranges = ranges;
+  std::unique_ptr<Workspace> own;
+  Workspace& ws = tlDepth == 0 ? tlWorkspace : *(own = std::make_unique<Workspace>());
+  const DepthGuard depth;
+  Codec& codec = ws.codec;
+  codec.ranges.assign(ranges.begin(), ranges.end());
+  codec.len.clear();
+  codec.maxv.clear();
+  codec.total = 0;
   for (const auto& r : ranges) {
     if (!(r.hi > r.lo)) throw std::invalid_argument("MGA: empty parameter range");
     codec.len.push_back(substringLength(r.hi - r.lo, opt.accuracy));
@@ -160,17 +196,26 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
 
   // strings live in flat buffers (individual i at i * W): no allocation per generation
   const std::size_t P = std::size_t(opt.population);
-  std::vector<std::uint64_t> pop(P * W), next(P * W), best(W);
+  auto& pop = ws.pop;
+  auto& next = ws.next;
+  auto& best = ws.best;
+  pop.assign(P * W, 0);
+  next.assign(P * W, 0);
+  best.assign(W, 0);
   auto ind = [&](std::vector<std::uint64_t>& buf, std::size_t i) { return buf.data() + i * W; };
-  std::vector<double> fit(P);
+  auto& fit = ws.fit;
+  fit.assign(P, 0.0);
   Result res;
+  res.bestHistory.reserve(std::size_t(std::max(opt.maxGenerations, 0)));
   // The fitness is a function of the string alone, and a micro-GA breeds many copies of the same
   // string (crossover of near-identical parents, the converged population): each distinct string is
   // evaluated once per run and looked up afterwards (strings of up to 64 bits; longer ones are not
   // cached). The search itself - selection, crossover, restarts - is unchanged.
-  Memo memo;
+  Memo& memo = ws.memo;
+  memo.reset();
   const bool useMemo = W == 1;
-  std::vector<double> x(ranges.size());
+  auto& x = ws.x;
+  x.assign(ranges.size(), 0.0);
   auto eval = [&](const std::uint64_t* b) {
     double f = 0;
     if (useMemo && memo.find(b[0], f)) {
@@ -192,6 +237,17 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
   std::copy_n(ind(pop, bestIdx), W, best.begin());
   double bestFit = fit[bestIdx];
 
+  // roulette wheel (eq. 1-2) on fitness shifted to be positive: the cumulative sums, once per generation
+  auto& wheel = ws.wheel;
+  wheel.assign(P, 0.0);
+  auto buildWheel = [&] {
+    const double fmin = *std::min_element(fit.begin(), fit.end());
+    const double fmax = *std::max_element(fit.begin(), fit.end());
+    const double shift = fmin < 0 ? -fmin : 0.0;
+    const double eps = 1e-12 * (1.0 + std::abs(fmax));
+    double acc = 0;
+    for (std::size_t i = 0; i < P; ++i) wheel[i] = acc += fit[i] + shift + eps;
+  };
   auto select = [&](void) -> std::size_t {
     if (opt.selection == Selection::Tournament) {
       std::uniform_int_distribution<std::size_t> pick(0, P - 1);
@@ -202,19 +258,10 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
       }
       return w;
     }
-    // roulette wheel (eq. 1-2) on fitness shifted to be positive
-    const double fmin = *std::min_element(fit.begin(), fit.end());
-    const double fmax = *std::max_element(fit.begin(), fit.end());
-    const double shift = fmin < 0 ? -fmin : 0.0;
-    const double eps = 1e-12 * (1.0 + std::abs(fmax));
-    double total = 0;
-    for (double f : fit) total += f + shift + eps;
-    std::uniform_real_distribution<double> u(0.0, total);
-    double r = u(rng), acc = 0;
-    for (std::size_t i = 0; i < P; ++i) {
-      acc += fit[i] + shift + eps;
-      if (r <= acc) return i;
-    }
+    std::uniform_real_distribution<double> u(0.0, wheel[P - 1]);
+    const double r = u(rng);
+    for (std::size_t i = 0; i < P; ++i)
+      if (r <= wheel[i]) return i;
     return P - 1;
   };
 
@@ -222,6 +269,7 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
   for (int gen = 0; gen < opt.maxGenerations; ++gen) {
     // Step 6: select parents (the elite is in the pool), one-point crossover with probability one
     std::copy(best.begin(), best.end(), ind(next, 0));
+    if (opt.selection == Selection::Roulette) buildWheel();
     for (std::size_t n = 1; n < P;) {
       const std::uint64_t* a = ind(pop, select());
       const std::uint64_t* b = ind(pop, select());
