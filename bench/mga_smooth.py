@@ -129,16 +129,23 @@ def taubin():
 ENUM3 = ["Auto", "Triangles (alpha)", "Quads (beta)"]
 
 
-def ours(mga, sweeps, guard=0.35, min_pass=0.0, feature=60.0, singular=90.0, guided=False):
+SEARCH = ["Every adjacent element (thesis)", "Guided (faster)", "Guided, local (fastest)"]
+
+
+def ours(mga, sweeps, guard=0.35, min_pass=0.0, feature=60.0, singular=90.0, guided=False, search=None, generations=20):
+    """search: 0 every element, 1 guided, 2 guided local (default: guided -> 1, else 0)"""
     common = dict(elementType=mlx.Enum(0, ENUM3), maxSweeps=mlx.Int(sweeps), tolerance=mlx.Float(1e-4))
     tail = dict(worstGuard=mlx.Float(guard), minPassBelow=mlx.Float(min_pass), featureAngle=mlx.Float(feature),
                 singularAngle=mlx.Float(singular),
                 selectionMode=mlx.Enum(0, ["None", "Smooth only selected vertices", "Keep selected vertices fixed"]))
     if mga:
-        return [mlx.Filter("MGA Surface Mesh Smoothing", **common, accuracy=mlx.Float(1e-3), generations=mlx.Int(20),
+        if search is None:
+            search = int(guided)
+        return [mlx.Filter("MGA Surface Mesh Smoothing", **common, accuracy=mlx.Float(1e-3),
+                           generations=mlx.Int(generations),
                            restarts=mlx.Int(4), population=mlx.Int(5),
                            selection=mlx.Enum(0, ["Roulette wheel", "Tournament"]),
-                           elementSearch=mlx.Enum(int(guided), ["Every adjacent element (thesis)", "Guided (faster)"]),
+                           elementSearch=mlx.Enum(search, SEARCH),
                            **tail, seed=mlx.Int(1))]
     return [mlx.Filter("Gradient Surface Mesh Smoothing (Baseline)", **common, cgIterations=mlx.Int(10), **tail)]
 
@@ -201,7 +208,8 @@ def main():
                  (f"ours: Gradient baseline, defaults{' (3 sweeps)' if large else ''}", ("ml", elems, ours(False, sweeps_cg))),
                  (f"ours: MGA, defaults{' (3 sweeps)' if large else ''}", ("ml", elems, ours(True, sweeps_mga))),
                  (f"ours: MGA, guided search{' (3 sweeps)' if large else ''}",
-                  ("ml", elems, ours(True, sweeps_mga, guided=True)))]
+                  ("ml", elems, ours(True, sweeps_mga, guided=True))),
+                 ("ours: MGA, guided local, 6 sw x 8 gens", ("ml", elems, ours(True, 6, search=2, generations=8)))]
         # settings beyond the defaults, the same for both methods where both are run (named in the row)
         if label == "saddle, triangles":
             runs += [("ours: Gradient, 30 sw, guard .3, pass .32", ("ml", elems, ours(False, 30, 0.3, 0.32))),

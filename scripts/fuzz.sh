@@ -2,6 +2,7 @@
 # Builds the libFuzzer targets and runs each one.
 #   scripts/fuzz.sh [RUNS] [MAX_SECONDS] [TARGET...]   defaults: 1000000 runs, 3600 s cap, all targets
 #   MAX_LEN=512 (default)                              largest input, bytes (a 7 x 7 jittered grid reads ~300)
+#   TIMEOUT=30 (default)                               seconds one input may take (raise it to pause a run with SIGSTOP)
 # Build: preset `fuzz` (clang + ASan + UBSan), or PRESET=<another preset with PECTUS_BUILD_FUZZERS>.
 # Each target starts from its regression corpus tests/fuzz/corpus/<target>/ (read only) and writes the new
 # inputs it finds to <build>/corpus/<target>/; crashes go to <build>/artifacts/<target>/, the log to <build>/fuzz_<target>.log. Minimise a crash
@@ -26,7 +27,7 @@ for t in "${TARGETS[@]}"; do
   mkdir -p "$BUILD/corpus/$t" "$BUILD/artifacts/$t"
   echo "[fuzz] $t ($PRESET): $RUNS runs, at most $MAXT s"
   start=$(date +%s)
-  nice -n 10 "$BUILD/tests/fuzz/fuzz_$t" -runs="$RUNS" -max_total_time="$MAXT" -timeout=30 -rss_limit_mb=4096 \
+  nice -n 10 "$BUILD/tests/fuzz/fuzz_$t" -runs="$RUNS" -max_total_time="$MAXT" -timeout="${TIMEOUT:-30}" -rss_limit_mb=4096 \
     -max_len="${MAX_LEN:-512}" -print_final_stats=1 -artifact_prefix="$BUILD/artifacts/$t/" \
     "$BUILD/corpus/$t" "tests/fuzz/corpus/$t" 2>&1 | tee "$BUILD/fuzz_$t.log" |
     grep -E "^#[0-9]+ +(DONE|pulse)|stat::|==[0-9]+==ERROR|fuzz check failed|SUMMARY" || true

@@ -536,6 +536,23 @@ void C1Surface::evalImpl(int face, const TT& s, const TT& t, Vec3& P, Vec3& Ps, 
   Pt = Vec3(pt[0], pt[1], pt[2]);
 }
 
+std::vector<C1Surface::EdgeFaces> C1Surface::edges() const {
+  std::vector<EdgeFaces> out;
+  out.reserve(topo_->edges.size());
+  for (const auto& e : topo_->edges) out.push_back({e.a, e.b, e.f0 / 3, e.f1 < 0 ? -1 : e.f1 / 3});
+  return out;
+}
+
+std::vector<std::array<int, 3>> C1Surface::faceNeighbours() const {
+  std::vector<std::array<int, 3>> nb(mesh_.F.size(), {-1, -1, -1});
+  for (const auto& e : topo_->edges)
+    if (e.f1 >= 0) {
+      nb[std::size_t(e.f0 / 3)][std::size_t(e.f0 % 3)] = e.f1 / 3;
+      nb[std::size_t(e.f1 / 3)][std::size_t(e.f1 % 3)] = e.f0 / 3;
+    }
+  return nb;
+}
+
 PatchJet C1Surface::jet(int face, const Vec3& bary) const {
   const double sum = bary.sum();
   const Vec3 b = std::abs(sum) > 0 ? Vec3(bary / sum) : Vec3(1.0 / 3, 1.0 / 3, 1.0 / 3);

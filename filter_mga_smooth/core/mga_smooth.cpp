@@ -1,9 +1,10 @@
 #include "mga_smooth.h"
 
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
-#include <map>
+#include <cstdint>
 #include <numeric>
 
 #include "pectus/c1_cmesh.h"
@@ -40,25 +41,16 @@ Vec3 normalAt(const C1Surface& S, const Loc& l) {
 /// Gauss-Newton stops when the step in (s, t) is below this (a 1e-8 fraction of the patch: far below the
 /// micro-GA accuracy)
 constexpr double kProjTol = 1e-8;
+/// In the micro-GA's search, the last Gauss-Newton step is taken to first order once it is below this
+/// (see Projector::project): a candidate is then off the patch by O(step^2), ~1e-6 of the patch size,
+/// far below the search's resolution (accuracy 1e-3 of an edge), and most candidates cost one patch
+/// evaluation instead of two or three. The move itself is the exact surface point at the best location.
+constexpr double kSearchLinTol = 1e-3;
 class Projector {
  public:
-  Projector(const C1Surface& S) : S_(S) {
+  Projector(const C1Surface& S) : S_(S), adj_(S.faceNeighbours()) {
     const auto& F = S.mesh().F;
     const auto& V = S.mesh().V;
-    adj_.assign(F.size(), {-1, -1, -1});
-    std::map<std::pair<int, int>, std::pair<int, int>> edges;  // (a<b) -> (face, local edge)
-    for (int f = 0; f < int(F.size()); ++f)
-      for (int l = 0; l < 3; ++l) {
-        int a = F[f][(l + 1) % 3], b = F[f][(l + 2) % 3];
-        if (a > b) std::swap(a, b);
-        auto it = edges.find({a, b});
-        if (it == edges.end()) {
-          edges[{a, b}] = {f, l};
-        } else {
-          adj_[f][l] = it->second.first;
-          adj_[it->second.first][it->second.second] = f;
-        }
-      }
     flat_.resize(F.size());
     for (std::size_t f = 0; f < F.size(); ++f) {
       Flat& fl = flat_[f];
@@ -77,7 +69,7 @@ class Projector {
   }
 
   /// Projects q starting at `start`; returns the location, point and unit normal.
-  Loc project(const Vec3& q, Loc start, Vec3& P, Vec3& N) const {
+  Loc project(const Vec3& q, Loc start, Vec3& P, Vec3& N, double linTol = kProjTol) const {
     const auto& F = S_.mesh().F;
     int f = start.face, prev = -1;
     double s = start.s, t = start.t;
@@ -92,17 +84,22 @@ class Projector {
         const double gs = j.Ps.dot(r), gt = j.Pt.dot(r);
         const double ds = -(h22 * gs - h12 * gt) / det, dt = -(h11 * gt - h12 * gs) / det;
         if (!std::isfinite(ds) || !std::isfinite(dt)) break;
-        if (std::abs(ds) + std::abs(dt) < kProjTol) {
-          // converged at (s, t): j is the point there; inside the patch it is the answer
-          if (s >= 0 && t >= 0 && s + t <= 1) {
+        const double step = std::abs(ds) + std::abs(dt);
+        if (step < linTol) {
+          // converged: below kProjTol, j is the point at (s, t); below linTol, the last Gauss-Newton
+          // step is taken to first order (P + Ps ds + Pt dt, off the patch by O(step^2)) instead of
+          // evaluating the patch again. Inside the patch it is the answer.
+          const bool lin = step >= kProjTol;
+          const double s1 = lin ? s + ds : s, t1 = lin ? t + dt : t;
+          if (s1 >= 0 && t1 >= 0 && s1 + t1 <= 1) {
             const Vec3 nrm = j.normal();
             if (nrm.squaredNorm() > 0) {
-              P = j.P;
+              P = lin ? Vec3(j.P + ds * j.Ps + dt * j.Pt) : j.P;
               N = nrm;
-              return Loc{f, s, t};
+              return Loc{f, s1, t1};
             }
           }
-          break;
+          if (!lin) break;
         }
         s += ds;
         t += dt;
@@ -208,8 +205,10 @@ inline double elementQuality(const Mesh& M, const Element& e, const Vec3* p, int
     const TriangleShape t(p[0], p[1], p[2]);
     const double q = t.alpha();
     if (!(q > 1e-12)) return q;
+    // alphaSigned(normal) > 1e-12, without its division (edgeSum > 0 since q > 0)
+    const double lim = 1e-12 / (2.0 * std::sqrt(3.0)) * t.edgeSum;
     for (int k = 0; k < 3; ++k)
-      if (!(t.alphaSigned(nodeNormal(M, e, k, n, nrm)) > 1e-12)) return q;
+      if (!(t.cross.dot(nodeNormal(M, e, k, n, nrm)) > lim)) return q;
     ok = true;
     return q;
   }
@@ -234,6 +233,13 @@ inline double elementQuality(const Mesh& M, const Element& e, const Vec3* p, int
 /// node's normal (a nearly flat corner on a curved surface) can never trade it for an element invalid in
 /// itself.
 constexpr double kCapSumWeight = 0.01;
+/// the fitness of a star from its elements' sum and worst quality and the counts of broken (quality not
+/// positive) and invalid (folded) elements, as described above
+inline double rankStar(double sum, double lo, int broken, int invalid, double guard, double cap) {
+  if (lo < guard) return -1e9 + 0.01 * sum;
+  if (broken || invalid) return -1e4 * broken - 100.0 * invalid + 0.01 * sum;
+  return cap > 0 ? std::min(lo, cap) + kCapSumWeight * sum : sum;
+}
 double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double guard, double cap = 0,
                  double* minQ = nullptr) {
   double sum = 0, lo = 1e300;
@@ -250,9 +256,7 @@ double fitnessAt(const Mesh& M, int n, const Vec3& x, const Vec3& nrm, double gu
     lo = std::min(lo, q);
   }
   if (minQ) *minQ = lo;
-  if (lo < guard) return -1e9 + 0.01 * sum;
-  if (broken || invalid) return -1e4 * broken - 100.0 * invalid + 0.01 * sum;
-  return cap > 0 ? std::min(lo, cap) + kCapSumWeight * sum : sum;
+  return rankStar(sum, lo, broken, invalid, guard, cap);
 }
 
 QualityStats stats(const Mesh& M) { return summarizeQuality(elementQualities(M.E, M.X), 10); }
@@ -270,6 +274,65 @@ std::size_t foldedElements(const Mesh& M) {
   return folded;
 }
 
+/// A node's star of triangles gathered once per search (positions and normals of the other two nodes of
+/// each triangle, in the triangle's orientation), so that a candidate's fitness reads no mesh arrays:
+/// the same value as fitnessAt() (up to rounding: each triangle is taken from the node's corner).
+class TriStar {
+ public:
+  /// false if the node has an element that is not a triangle, or more than kMax
+  bool gather(const Mesh& M, int n) {
+    nt_ = 0;
+    const auto& vE = M.vE[std::size_t(n)];
+    if (vE.size() > kMax) return false;
+    for (int ei : vE) {
+      const Element& e = M.E[std::size_t(ei)];
+      if (e.nv != 3) return false;
+      int k = 0;
+      while (e.v[k] != n) ++k;
+      Tri& t = t_[nt_++];
+      const int b = e.v[(k + 1) % 3], c = e.v[(k + 2) % 3];
+      t.b = M.X[std::size_t(b)];
+      t.c = M.X[std::size_t(c)];
+      t.nb = M.N[std::size_t(b)];
+      t.nc = M.N[std::size_t(c)];
+      t.bc2 = (t.c - t.b).squaredNorm();
+    }
+    return true;
+  }
+  /// fitnessAt() for this star
+  double fitness(const Vec3& x, const Vec3& nrm, double guard, double cap) const {
+    constexpr double kAlpha = 2.0 * 1.7320508075688772;  // 2 sqrt(3): alpha = kAlpha |cross| / edge sum
+    double sum = 0, lo = 1e300;
+    int invalid = 0, broken = 0;
+    for (int i = 0; i < nt_; ++i) {
+      const Tri& t = t_[i];
+      const Vec3 db = t.b - x, dc = t.c - x;
+      const Vec3 cr = db.cross(dc);
+      const double es = db.squaredNorm() + dc.squaredNorm() + t.bc2;
+      const double q = es > 0.0 ? kAlpha * cr.norm() / es : 0.0;
+      if (!(q > 1e-12)) {
+        ++broken;
+      } else {
+        // alphaSigned(normal) > 1e-12 at each of the three nodes
+        const double lim = 1e-12 / kAlpha * es;
+        if (!(cr.dot(nrm) > lim) || !(cr.dot(t.nb) > lim) || !(cr.dot(t.nc) > lim)) ++invalid;
+      }
+      sum += q;
+      lo = std::min(lo, q);
+    }
+    return rankStar(sum, lo, broken, invalid, guard, cap);
+  }
+
+ private:
+  static constexpr std::size_t kMax = 32;
+  struct Tri {
+    Vec3 b, c, nb, nc;
+    double bc2;
+  };
+  std::array<Tri, kMax> t_;
+  int nt_ = 0;
+};
+
 /// One node's search: where it starts, the guard, and the best candidate found so far.
 struct NodeSearch {
   const Mesh& M;
@@ -279,19 +342,25 @@ struct NodeSearch {
   Loc l0;
   double guard;      ///< the node's worst element may not drop below this
   double cap;        ///< > 0: final pass fitness (the worst element up to cap, then the sum)
-  double startFit;   ///< fitness at x0
+  double startFit;   ///< fitness at x0 (< 0: the star is folded or invalid, or below the guard)
   double bestFit;
   Vec3 bestX;
   Loc bestLoc;
   double bestDist = 0;  ///< candidate-to-surface distance of the best
   std::size_t evaluations = 0;
+  const TriStar* star = nullptr;  ///< the node's triangles, if gathered (else the mesh arrays are read)
+  double linTol = kProjTol;       ///< Projector::project's first-order tolerance for the candidates
 
+  /// fitness at surface point P with unit normal N
+  double fitness(const Vec3& P, const Vec3& N) const {
+    return star ? star->fitness(P, N, guard, cap) : fitnessAt(M, n, P, N, guard, cap);
+  }
   /// fitness of the surface point nearest to q (projected from the node's location); P, L: that point
   double eval(const Vec3& q, Vec3& P, Loc& L) {
     Vec3 N;
-    L = proj.project(q, l0, P, N);
+    L = proj.project(q, l0, P, N, linTol);
     ++evaluations;
-    return fitnessAt(M, n, P, N, guard, cap);
+    return fitness(P, N);
   }
   void offer(double fit, const Vec3& P, const Loc& L, const Vec3& q) {
     if (fit > bestFit) {
@@ -303,9 +372,9 @@ struct NodeSearch {
   }
 };
 
-/// thesis steps 3-7: the micro-GA inside each triangle around the node (a quad gives two). allElements:
-/// every triangle, as the thesis; else the guided order of Options::searchAllElements.
-void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, bool allElements) {
+/// thesis steps 3-7: the micro-GA inside each triangle around the node (a quad gives two), in the order
+/// of Options::elementSearch.
+void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, ElementSearch mode) {
   static const std::vector<mga::Range> ranges{{0.0, 1.0}, {0.0, 0.5}};
   static const std::vector<double> seedPoint{0.0, 0.0};
   const Mesh& M = ns.M;
@@ -349,7 +418,7 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, b
     }
     return std::array<double, 2>{r.x[0], r.x[1]};
   };
-  if (allElements || nf < 2) {
+  if (mode == ElementSearch::Every || nf < 2) {
     for (int i = 0; i < nf; ++i) search(i);
     return;
   }
@@ -357,7 +426,8 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, b
   // the centroid of the node's neighbours; while the best point of a triangle lies on one of its two
   // edges through the node (r1 within kEdgeR1 of 0 or 1), go on into the triangle across that edge; stop
   // at an optimum inside a triangle. A triangle where no move gains (r2 ~ 0) sends the search to every
-  // triangle, as the thesis does.
+  // triangle, as the thesis does (GuidedLocal: only if the star starts folded or invalid; else the
+  // search ends there).
   constexpr double kEdgeR1 = 0.05;
   Vec3 c(0, 0, 0);
   for (const auto& f : fan) c += M.X[std::size_t(f.first)] + M.X[std::size_t(f.second)];
@@ -380,9 +450,10 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, b
   while (cur >= 0 && !done[std::size_t(cur)]) {
     done[std::size_t(cur)] = 1;
     const auto x = search(cur);
-    if (x[1] < 2 * mo.accuracy) {  // no gain in this triangle: all the others
-      for (int i = 0; i < nf; ++i)
-        if (!done[std::size_t(i)]) search(i);
+    if (x[1] < 2 * mo.accuracy) {  // no gain in this triangle
+      if (mode == ElementSearch::Guided || ns.startFit < 0)
+        for (int i = 0; i < nf; ++i)
+          if (!done[std::size_t(i)]) search(i);
       return;
     }
     cur = x[0] < kEdgeR1 ? across(cur, fan[std::size_t(cur)].first)
@@ -534,55 +605,63 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   res.elements = M.E.size();
   res.quads = em.quads();
 
+  // the C1 surface of the original mesh, built once (its topology also gives the edges below)
+  C1Surface S(tm);
+
   // fixed nodes: boundary, feature, unreferenced, user
   std::vector<char> fixed(nv, 0), boundary(nv, 0), feature(nv, 0), singular(nv, 0);
   {
-    std::map<std::pair<int, int>, std::vector<int>> edgeFaces;
-    for (int f = 0; f < int(tm.F.size()); ++f)
-      for (int l = 0; l < 3; ++l) {
-        int a = tm.F[std::size_t(f)][std::size_t(l)], b = tm.F[std::size_t(f)][std::size_t((l + 1) % 3)];
-        edgeFaces[{std::min(a, b), std::max(a, b)}].push_back(f);
-      }
-    // faux edges inside quads are not feature edges
-    std::map<std::pair<int, int>, char> fauxInside;
-    for (const auto& e : M.E)
-      if (e.nv == 4) {
-        fauxInside[{std::min(e.v[0], e.v[2]), std::max(e.v[0], e.v[2])}] = 1;
-        fauxInside[{std::min(e.v[1], e.v[3]), std::max(e.v[1], e.v[3])}] = 1;
-      }
     auto normal = [&](int f) {
       const auto& F = tm.F[std::size_t(f)];
       const Vec3 n = (tm.V[std::size_t(F[1])] - tm.V[std::size_t(F[0])]).cross(tm.V[std::size_t(F[2])] - tm.V[std::size_t(F[0])]);
       return n.norm() > 0 ? Vec3(n.normalized()) : Vec3(0, 0, 0);
     };
+    std::vector<Vec3> fn(tm.F.size());
+    for (std::size_t f = 0; f < tm.F.size(); ++f) fn[f] = normal(int(f));
+    // faux edges inside quads are not feature edges
+    auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
+    std::vector<std::uint64_t> fauxInside;
+    for (const auto& e : M.E)
+      if (e.nv == 4) {
+        fauxInside.push_back(key(e.v[0], e.v[2]));
+        fauxInside.push_back(key(e.v[1], e.v[3]));
+      }
+    std::sort(fauxInside.begin(), fauxInside.end());
     const double cosLim = std::cos(opt.featureAngleDeg * M_PI / 180.0);
-    for (const auto& [edge, fs] : edgeFaces) {
-      if (fs.size() == 1) {
-        boundary[std::size_t(edge.first)] = boundary[std::size_t(edge.second)] = 1;
-      } else if (fs.size() == 2 && opt.featureAngleDeg < 180 && !fauxInside.count(edge)) {
-        const Vec3 a = normal(fs[0]), b = normal(fs[1]);
+    for (const auto& e : S.edges()) {
+      if (e.f1 < 0) {
+        boundary[std::size_t(e.a)] = boundary[std::size_t(e.b)] = 1;
+      } else if (opt.featureAngleDeg < 180 && !std::binary_search(fauxInside.begin(), fauxInside.end(), key(e.a, e.b))) {
+        const Vec3& a = fn[std::size_t(e.f0)];
+        const Vec3& b = fn[std::size_t(e.f1)];
         if (a.squaredNorm() > 0 && b.squaredNorm() > 0 && a.dot(b) < cosLim)
-          feature[std::size_t(edge.first)] = feature[std::size_t(edge.second)] = 1;
+          feature[std::size_t(e.a)] = feature[std::size_t(e.b)] = 1;
       }
     }
     // singular nodes: the normal cone of the node's faces is wider than the singular angle
     if (opt.singularAngleDeg < 180) {
-      std::vector<std::vector<int>> vF(nv);
-      for (int f = 0; f < int(tm.F.size()); ++f)
-        for (int k = 0; k < 3; ++k) vF[std::size_t(tm.F[std::size_t(f)][std::size_t(k)])].push_back(f);
+      std::vector<int> start(nv + 1, 0), vf(3 * tm.F.size());
+      for (const auto& F : tm.F)
+        for (int k = 0; k < 3; ++k) ++start[std::size_t(F[std::size_t(k)]) + 1];
+      for (std::size_t i = 0; i < nv; ++i) start[i + 1] += start[i];
+      {
+        std::vector<int> fill(start.begin(), start.end() - 1);
+        for (int f = 0; f < int(tm.F.size()); ++f)
+          for (int k = 0; k < 3; ++k) vf[std::size_t(fill[std::size_t(tm.F[std::size_t(f)][std::size_t(k)])]++)] = f;
+      }
       const double cosSing = std::cos(opt.singularAngleDeg * M_PI / 180.0);
       for (std::size_t i = 0; i < nv; ++i) {
-        std::vector<Vec3> ns;
-        for (int f : vF[i]) {
-          const Vec3 nf = normal(f);
-          if (nf.squaredNorm() > 0) ns.push_back(nf);
-        }
-        for (std::size_t a = 0; a < ns.size() && !singular[i]; ++a)
-          for (std::size_t b = a + 1; b < ns.size(); ++b)
-            if (ns[a].dot(ns[b]) < cosSing) {
+        for (int a = start[i]; a < start[i + 1] && !singular[i]; ++a) {
+          const Vec3& na = fn[std::size_t(vf[std::size_t(a)])];
+          if (!(na.squaredNorm() > 0)) continue;
+          for (int b = a + 1; b < start[i + 1]; ++b) {
+            const Vec3& nb = fn[std::size_t(vf[std::size_t(b)])];
+            if (nb.squaredNorm() > 0 && na.dot(nb) < cosSing) {
               singular[i] = 1;
               break;
             }
+          }
+        }
       }
     }
   }
@@ -607,8 +686,6 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
 
   res.before = stats(M);
 
-  // the C1 surface of the original mesh, built once
-  C1Surface S(tm);
   S.buildIndex();
   Projector proj(S);
   std::vector<Loc> loc(nv);
@@ -677,17 +754,40 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         if (maxMin && !(curMin < opt.minPassBelow)) continue;
         // the node's worst element may not drop below min(its current value, the guard level)
         const double guard = std::min(curMin, guardLevel);
-        if (fit0 >= 0) fit0 = fitnessAt(M, n, x0, n0, guard, cap);
+        thread_local TriStar star;
+        const bool haveStar = star.gather(M, n);
+        if (fit0 >= 0) fit0 = haveStar ? star.fitness(x0, n0, guard, cap) : fitnessAt(M, n, x0, n0, guard, cap);
         NodeSearch ns{M, proj, n, x0, n0, l0, guard, cap, fit0, fit0, x0, l0};
-        if (opt.method == Method::MicroGA)
-          searchMga(ns, mo, mga::itemSeed(sweepSeed, std::uint64_t(toM[std::size_t(n)])), opt.searchAllElements);
-        else
-          searchGradient(ns, opt.cgIterations);
+        ns.star = haveStar ? &star : nullptr;
+        if (opt.method == Method::MicroGA) {
+          ns.linTol = kSearchLinTol;
+          searchMga(ns, mo, mga::itemSeed(sweepSeed, std::uint64_t(toM[std::size_t(n)])), opt.elementSearch);
+        } else {
+          searchGradient(ns, opt.cgIterations);  // exact projections: its finite differences need them
+        }
         evaluations[std::size_t(n)] += ns.evaluations;
+        // the move: the surface point exactly at the best location (the search's candidates may be off
+        // the patch to first order, see kSearchLinTol), taken only if its fitness there still gains
+        Vec3 nrm = n0;
+        if (ns.bestFit > fit0) {
+          const Loc& b = ns.bestLoc;
+          const c1::SurfacePoint sp = S.at(b.face, Vec3(1 - b.s - b.t, b.s, b.t));
+          const double f = ns.fitness(sp.point, sp.normal);
+          if (f > fit0) {
+            ns.bestX = sp.point;
+            ns.bestFit = f;
+            nrm = sp.normal;
+          } else {
+            ns.bestX = x0;
+            ns.bestLoc = l0;
+            ns.bestFit = fit0;
+            ns.bestDist = 0;
+          }
+        }
         // the node moves after its own search: neighbours of the same colour do not see it, and
         // no node of this colour reads it (they share no element)
         M.X[std::size_t(n)] = ns.bestX;
-        M.N[std::size_t(n)] = normalAt(S, ns.bestLoc);
+        M.N[std::size_t(n)] = nrm;
         loc[std::size_t(n)] = ns.bestLoc;
         projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], ns.bestDist);
         if (!maxMin) gained[std::size_t(n)] = ns.bestFit - fit0 > activeTol * double(M.vE[std::size_t(n)].size());
@@ -695,6 +795,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
     }
   };
   res.foldedBefore = foldedElements(M);
+  res.setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   bool stopped = false;
   for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
     sweepOnce(sweep, false);

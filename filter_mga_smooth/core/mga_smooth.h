@@ -6,8 +6,10 @@
 //   V = (1 - r2) V1 + r2 (1 - r1) V2 + r1 r2 V3,   r1 in [0,1], r2 in [0,0.5]      (eqs. 3-18/3-19)
 // with V1 the node; it is mapped onto the C1 surface (c1_surface.h) of the ORIGINAL mesh (built once) by a
 // local projection (Gauss-Newton on the patch the node currently lies on, walking to neighbour patches,
-// falling back to the global closestPoint). Fitness = sum of alpha (eq. 3-21) or beta (eq. 3-24) over the
-// node's elements. An element that is inverted or folded with respect to the surface normal at the
+// falling back to the global closestPoint; in the micro-GA's search the last Gauss-Newton step is taken
+// to first order, ~1e-6 of a patch off it, and the node moves to the exact surface point at the best
+// location found, if its fitness there still gains). Fitness = sum of alpha (eq. 3-21) or beta (eq. 3-24)
+// over the node's elements. An element that is inverted or folded with respect to the surface normal at the
 // candidate or at any other of its nodes (signed area / Knupp corner areas not positive; the other nodes'
 // normals are kept per node) makes the candidate worse than any valid one, so no move folds a neighbour's element,
 // and r2 = 0 (the node's current position, exactly) is the seed of every search, so a node never gets
@@ -57,6 +59,19 @@ namespace pectus::smooth {
 
 constexpr double kMinQualityGuard = 0.35;  ///< default guard (bench/mga_smooth.py: 0.5 costs mean, 0.3 min)
 
+/// MicroGA: which elements around a node the micro-GA searches
+enum class ElementSearch {
+  Every,   ///< every adjacent element, the best kept (thesis step 3)
+  /// start in the element towards the centroid of the node's neighbours, go on across an edge while the
+  /// best point lies on it, stop at an optimum inside an element; an element where no move gains sends
+  /// the search to every element (searchMga in mga_smooth.cpp)
+  Guided,
+  /// Guided, but an element where no move gains ends the node's search (the node stays where it is):
+  /// every element only for a star that starts folded or invalid. The fastest; on smooth scans (the
+  /// bunny) the same mean as Guided, on rough ones (the femur) lower
+  GuidedLocal,
+};
+
 enum class Method {
   MicroGA,            ///< thesis ch. 4.2: micro-GA inside every adjacent element
   ConjugateGradient,  ///< baseline of thesis Table 4-1: Polak-Ribiere CG in the node's tangent plane
@@ -78,10 +93,7 @@ struct Options {
   int minPassSweeps = 3;        ///< at most this many final max-min sweeps (stops when the minimum stalls)
   double singularAngleDeg = 90; ///< normal-cone angle of a node's faces above which it is singular (180: none)
   bool activeSet = true;         ///< after the first sweep, search only nodes whose star still gains (see above)
-  /// MicroGA: true = search every adjacent element (thesis step 3); false = guided (searchMga in
-  /// mga_smooth.cpp): start in the element towards the centroid of the node's neighbours, go on across an
-  /// edge while the best point lies on it, stop at an optimum inside an element
-  bool searchAllElements = true;
+  ElementSearch elementSearch = ElementSearch::Every;  ///< MicroGA only
   int cgIterations = 10;        ///< ConjugateGradient: CG iterations per node and sweep
   std::uint64_t seed = 1;
   /// called after every sweep with (sweep, mean quality); return false to stop
@@ -104,6 +116,7 @@ struct Result {
   int colours = 0;
   double maxProjectionDistance = 0;  ///< largest candidate-to-surface distance of an accepted move
   double seconds = 0;
+  double setupSeconds = 0;           ///< of which before the first sweep: checks, fixed nodes, C1 surface, colouring
 };
 
 /// Smooths with opt.method. Nodes are the live vertices of `m`. `userFixed` (per m.vert index, empty = none): 1 = keep fixed.

@@ -216,8 +216,8 @@ TEST(MgaSmooth, SameResultForOneAndTwoThreads) {
   EXPECT_GT(differ3, 0u);
 }
 
-// the guided element search (Options::searchAllElements = false) does a fraction of the thesis' work
-// for nearly its quality, on triangles and on quads, and keeps the no-fold rule
+// the guided element searches (Options::elementSearch) do a fraction of the thesis' work for nearly its
+// quality, on triangles and on quads, and keep the no-fold rule; the local one does less than the guided
 TEST(MgaSmooth, GuidedElementSearch) {
   std::vector<std::array<int, 4>> quads;
   const TriMesh q = grid(10, 0.3, 5, &quads);
@@ -226,16 +226,25 @@ TEST(MgaSmooth, GuidedElementSearch) {
     sm::Options o = fastOptions();
     o.kind = isQuads ? pectus::ElementKind::Quads : pectus::ElementKind::Triangles;
     const auto all = sm::smoothMesh(*mp, o);
-    o.searchAllElements = false;
+    o.elementSearch = sm::ElementSearch::Guided;
     const auto guided = sm::smoothMesh(*mp, o);
-    std::printf("%s: every element mean %.4f min %.4f, %zu evaluations; guided mean %.4f min %.4f, %zu evaluations\n",
+    o.elementSearch = sm::ElementSearch::GuidedLocal;
+    const auto local = sm::smoothMesh(*mp, o);
+    std::printf("%s: every element mean %.4f min %.4f, %zu evaluations; guided mean %.4f min %.4f, %zu evaluations; "
+                "local mean %.4f min %.4f, %zu evaluations\n",
                 isQuads ? "quad grid" : "saddle", all.after.mean, all.after.min, all.evaluations, guided.after.mean,
-                guided.after.min, guided.evaluations);
+                guided.after.min, guided.evaluations, local.after.mean, local.after.min, local.evaluations);
     EXPECT_LT(double(guided.evaluations), 0.6 * double(all.evaluations));
+    EXPECT_LT(local.evaluations, guided.evaluations);
+    // the local search gives up nodes whose first element does not gain: on this jittered saddle it ends
+    // 0.014 below (measured 0.8498 against 0.8638)
     EXPECT_GT(guided.after.mean, all.after.mean - 0.003);
-    EXPECT_GT(guided.after.mean, guided.before.mean + 0.05);
-    EXPECT_GE(guided.after.min, guided.before.min);
-    EXPECT_EQ(guided.foldedAfter, 0u);
+    EXPECT_GT(local.after.mean, all.after.mean - 0.02);
+    for (const auto* r : {&guided, &local}) {
+      EXPECT_GT(r->after.mean, r->before.mean + 0.05);
+      EXPECT_GE(r->after.min, r->before.min);
+      EXPECT_EQ(r->foldedAfter, 0u);
+    }
   }
 }
 

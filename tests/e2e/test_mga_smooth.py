@@ -100,6 +100,18 @@ if r.rc == 0:
           f"{a1.mean():.4f} / {ag.mean():.4f}, min {ag.min():.4f}")
     ev = [int(re.search(r"(\d+) fitness evaluations", x).group(1)) for x in (logs["MGA"], log)]
     check(ev[1] < 0.7 * ev[0], "guided: fewer fitness evaluations than every element", str(ev))
+    # 1d. the guided local search: logged, improves, fewer evaluations again
+    outl = os.path.join(d, "tri_local.ply")
+    r = run([inp], script("triLocal", "MGA", maxSweeps=6, seed=3, elementSearch=2), [(outl, "vq sa")])
+    logl = "\n".join(r.log)
+    check(r.rc == 0 and "MGA smoothing, guided local element search" in logl, "guided local search runs and is logged", logl)
+    if r.rc == 0:
+        Wl = np.array(read_ply(outl)["V"], float)
+        al = np.array([alpha(*(Wl[i] for i in f)) for f in F])
+        check(al.mean() > before.mean() + 0.02 and al.min() > before.min(), "guided local: mean and min alpha rise",
+              f"{before.mean():.4f} -> {al.mean():.4f}, min {al.min():.4f}")
+        evl = int(re.search(r"(\d+) fitness evaluations", logl).group(1))
+        check(evl < ev[1], "guided local: fewer fitness evaluations than guided", f"{evl} / {ev[1]}")
 
 # 2. the same seed gives the same file; another seed another result
 out2 = os.path.join(d, "tri_s2.ply")

@@ -32,7 +32,9 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::vector<char> fixed;
   if (r.flag())
     for (std::size_t i = 0; i < m.vert.size(); ++i) fixed.push_back(char(r.u8() % 4 == 0));
-  o.searchAllElements = !r.flag();  // the guided element search (read last: older corpus inputs keep their meaning)
+  // the element search (read last: older corpus inputs keep their meaning; an exhausted input reads false)
+  o.elementSearch = r.flag() ? smooth::ElementSearch::Guided : smooth::ElementSearch::Every;
+  if (o.elementSearch == smooth::ElementSearch::Guided && r.flag()) o.elementSearch = smooth::ElementSearch::GuidedLocal;
   try {
     const auto res = smooth::smoothMesh(m, o, fixed);
     PECTUS_FUZZ_CHECK(res.positions.size() == m.vert.size());

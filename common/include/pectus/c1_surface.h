@@ -132,6 +132,15 @@ class C1Surface {
   SurfacePoint closestPoint(const Vec3& p) const;
   void buildIndex() const;
 
+  /// An edge of the mesh: vertices a < b and the faces on either side (f1 = -1 on the boundary)
+  struct EdgeFaces {
+    int a, b, f0, f1;
+  };
+  /// the mesh's edges, from the topology the patches were built on (ascending (a, b))
+  std::vector<EdgeFaces> edges() const;
+  /// per face, the face across local edge l (the edge opposite local vertex l); -1 on the boundary
+  std::vector<std::array<int, 3>> faceNeighbours() const;
+
   /// Each triangle split k x k; new vertices on the patches, edge vertices shared (conforming output).
   /// Vertex order: the input's referenced vertices (in input order), then edge, then interior vertices.
   /// `normals`, if given, receives the patch normal at every output vertex.
