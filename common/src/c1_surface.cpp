@@ -302,22 +302,33 @@ void C1Surface::build(std::vector<Vec3>* given) {
     Vec2 g(0, 0);
     bool ok = false;
     if (opt_.gradient != GradientMethod::InverseArea) {  // QuadraticFit, and MinimumCurvature's start/fallback
-      // 2-ring neighbourhood, grown to the 3-ring where it has fewer than 8 points (corners, boundaries)
+      // 2-ring neighbourhood, grown to the 3-ring where it has fewer than 8 points (corners, boundaries);
+      // each ring's new vertices in ascending order. `seen` marks the vertices taken for v (a stamp per v)
+      thread_local std::vector<unsigned> seen;
+      thread_local unsigned stamp = 0;
+      if (seen.size() < std::size_t(nv)) seen.assign(std::size_t(nv), 0u);
+      if (++stamp == 0) {
+        std::fill(seen.begin(), seen.end(), 0u);
+        stamp = 1;
+      }
       std::vector<int> nb{v};
+      seen[std::size_t(v)] = stamp;
       std::size_t ringStart = 0;
       for (int ring = 0; ring < 3; ++ring) {
         if (ring == 2 && nb.size() >= 9) break;
         const std::size_t ringEnd = nb.size();
-        std::vector<int> add;
         for (std::size_t q0 = ringStart; q0 < ringEnd; ++q0) {
           const int w = nb[q0];
           for (int r = topo.vfStart[w]; r < topo.vfStart[w + 1]; ++r)
-            for (int kk = 0; kk < 3; ++kk) add.push_back(mesh_.F[topo.vf[r]][kk]);
+            for (int kk = 0; kk < 3; ++kk) {
+              const int a = mesh_.F[topo.vf[r]][kk];
+              if (seen[std::size_t(a)] != stamp) {
+                seen[std::size_t(a)] = stamp;
+                nb.push_back(a);
+              }
+            }
         }
-        std::sort(add.begin(), add.end());
-        add.erase(std::unique(add.begin(), add.end()), add.end());
-        for (int a : add)
-          if (std::find(nb.begin(), nb.end(), a) == nb.end()) nb.push_back(a);
+        std::sort(nb.begin() + std::ptrdiff_t(ringEnd), nb.end());
         ringStart = ringEnd;
       }
       nb.erase(nb.begin());
