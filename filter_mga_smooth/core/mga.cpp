@@ -11,7 +11,11 @@ int substringLength(double interval, double accuracy) {
   if (!(accuracy > 0) || !(interval > 0)) throw std::invalid_argument("MGA: accuracy and interval must be positive");
   const double steps = interval / accuracy;
   int nl = 1;
-  while (nl < 52 && std::ldexp(1.0, nl) - 1.0 < steps) ++nl;
+  double p = 2.0;  // 2^nl (doubling is exact)
+  while (nl < 52 && p - 1.0 < steps) {
+    ++nl;
+    p *= 2.0;
+  }
   return nl;
 }
 
@@ -150,6 +154,14 @@ class Memo {
   int shift_ = 57;
 };
 
+/// bits set in x (SWAR: inline on any x86-64, where __builtin_popcountll calls libgcc without -mpopcnt)
+inline std::size_t popcount(std::uint64_t x) {
+  x = x - ((x >> 1) & 0x5555555555555555ull);
+  x = (x & 0x3333333333333333ull) + ((x >> 2) & 0x3333333333333333ull);
+  x = (x + (x >> 4)) & 0x0F0F0F0F0F0F0F0Full;
+  return std::size_t((x * 0x0101010101010101ull) >> 56);
+}
+
 /// the buffers of one run, reused from run to run on a thread: a run allocates nothing but its Result
 /// (a fitness function that itself runs optimize() gets a workspace of its own)
 struct Workspace {
@@ -184,7 +196,7 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
   for (const auto& r : ranges) {
     if (!(r.hi > r.lo)) throw std::invalid_argument("MGA: empty parameter range");
     codec.len.push_back(substringLength(r.hi - r.lo, opt.accuracy));
-    codec.maxv.push_back(std::ldexp(1.0, codec.len.back()) - 1.0);
+    codec.maxv.push_back(double(std::uint64_t(1) << codec.len.back()) - 1.0);
     codec.total += codec.len.back();
   }
   codec.words = (codec.total + 63) / 64;
@@ -206,7 +218,7 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
   auto& fit = ws.fit;
   fit.assign(P, 0.0);
   Result res;
-  res.bestHistory.reserve(std::size_t(std::max(opt.maxGenerations, 0)));
+  if (opt.recordHistory) res.bestHistory.reserve(std::size_t(std::max(opt.maxGenerations, 0)));
   // The fitness is a function of the string alone, and a micro-GA breeds many copies of the same
   // string (crossover of near-identical parents, the converged population): each distinct string is
   // evaluated once per run and looked up afterwards (strings of up to 64 bits; longer ones are not
@@ -291,12 +303,12 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
         std::copy_n(ind(pop, i), W, best.begin());
       }
     res.generations = gen + 1;
-    res.bestHistory.push_back(bestFit);
+    if (opt.recordHistory) res.bestHistory.push_back(bestFit);
 
     // Step 7: nominal convergence -> restart around the kept best
     std::size_t differing = 0;
     for (std::size_t i = 0; i < P; ++i)
-      for (std::size_t w = 0; w < W; ++w) differing += std::size_t(__builtin_popcountll(ind(pop, i)[w] ^ best[w]));
+      for (std::size_t w = 0; w < W; ++w) differing += popcount(ind(pop, i)[w] ^ best[w]);
     if (double(differing) < opt.convergedBitFraction * double(codec.total * int(P))) {
       if (res.restarts >= opt.maxRestarts) break;
       ++res.restarts;

@@ -22,6 +22,7 @@ struct Options {
   Selection selection = Selection::Roulette;
   int tournamentSize = 2;
   std::uint64_t seed = 1;
+  bool recordHistory = true;    ///< fill Result::bestHistory
 };
 
 struct Range { double lo = 0, hi = 1; };
@@ -33,7 +34,7 @@ struct Result {
   int restarts = 0;
   int evaluations = 0;           ///< fitness calls (distinct strings)
   int cacheHits = 0;             ///< strings met again, whose fitness was looked up instead
-  std::vector<double> bestHistory;  ///< best fitness after each generation (never decreases)
+  std::vector<double> bestHistory;  ///< best fitness after each generation (never decreases; Options::recordHistory)
 };
 
 /// Substring length for a parameter interval `a` and accuracy `acc`: the smallest nl with

@@ -299,8 +299,8 @@ class TriStar {
     }
     return true;
   }
-  /// fitnessAt() for this star
-  double fitness(const Vec3& x, const Vec3& nrm, double guard, double cap) const {
+  /// fitnessAt() for this star (minQ: the worst element's quality)
+  double fitness(const Vec3& x, const Vec3& nrm, double guard, double cap, double* minQ = nullptr) const {
     constexpr double kAlpha = 2.0 * 1.7320508075688772;  // 2 sqrt(3): alpha = kAlpha |cross| / edge sum
     double sum = 0, lo = 1e300;
     int invalid = 0, broken = 0;
@@ -320,6 +320,7 @@ class TriStar {
       sum += q;
       lo = std::min(lo, q);
     }
+    if (minQ) *minQ = lo;
     return rankStar(sum, lo, broken, invalid, guard, cap);
   }
 
@@ -379,9 +380,9 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
   static const std::vector<double> seedPoint{0.0, 0.0};
   const Mesh& M = ns.M;
   const int n = ns.n;
-  // the triangles of the node's elements: V1 = node, (V2, V3) in boundary order
-  std::vector<std::pair<int, int>> fan;
-  fan.reserve(12);
+  // the triangles of the node's elements: V1 = node, (V2, V3) in boundary order (buffers reused per thread)
+  thread_local std::vector<std::pair<int, int>> fan;
+  fan.clear();
   for (int ei : M.vE[std::size_t(n)]) {
     const Element& e = M.E[std::size_t(ei)];
     int k = 0;
@@ -409,6 +410,7 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
     };
     mga::Options o = mo;
     o.seed = mga::itemSeed(nodeSeed, std::uint64_t(i));
+    o.recordHistory = false;
     const mga::Result r = mga::optimize(ranges, fitness, o, &seedPoint);
     if (r.fitness > ns.bestFit && r.x[1] > 0) {
       Vec3 P;
@@ -441,7 +443,8 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
       break;
     }
   }
-  std::vector<char> done(std::size_t(nf), 0);
+  thread_local std::vector<char> done;
+  done.assign(std::size_t(nf), 0);
   auto across = [&](int i, int v) {  // the other fan triangle with the edge (node, v)
     for (int j = 0; j < nf; ++j)
       if (j != i && (fan[std::size_t(j)].first == v || fan[std::size_t(j)].second == v)) return j;
@@ -750,12 +753,12 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         const Vec3 n0 = M.N[std::size_t(n)];
         double curMin = 0;
         const double cap = maxMin ? opt.minPassBelow : 0.0;
-        double fit0 = fitnessAt(M, n, x0, n0, -1.0, cap, &curMin);
+        thread_local TriStar star;
+        const bool haveStar = star.gather(M, n);
+        double fit0 = haveStar ? star.fitness(x0, n0, -1.0, cap, &curMin) : fitnessAt(M, n, x0, n0, -1.0, cap, &curMin);
         if (maxMin && !(curMin < opt.minPassBelow)) continue;
         // the node's worst element may not drop below min(its current value, the guard level)
         const double guard = std::min(curMin, guardLevel);
-        thread_local TriStar star;
-        const bool haveStar = star.gather(M, n);
         if (fit0 >= 0) fit0 = haveStar ? star.fitness(x0, n0, guard, cap) : fitnessAt(M, n, x0, n0, guard, cap);
         NodeSearch ns{M, proj, n, x0, n0, l0, guard, cap, fit0, fit0, x0, l0};
         ns.star = haveStar ? &star : nullptr;
