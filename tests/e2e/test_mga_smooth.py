@@ -112,6 +112,17 @@ if r.rc == 0:
               f"{before.mean():.4f} -> {al.mean():.4f}, min {al.min():.4f}")
         evl = int(re.search(r"(\d+) fitness evaluations", logl).group(1))
         check(evl < ev[1], "guided local: fewer fitness evaluations than guided", f"{evl} / {ev[1]}")
+    # 1e. the fast example as shipped (guided local, 6 sweeps x 8 generations)
+    outf = os.path.join(d, "tri_fast.ply")
+    r = run([inp], os.path.join(SOURCE, "filter_mga_smooth", "examples", "mga_smooth_fast.mlx"), [(outf, "vq sa")])
+    logf = "\n".join(r.log)
+    check(r.rc == 0 and "guided local element search" in logf and "sweeps 6" in logf,
+          "mga_smooth_fast.mlx runs: guided local, 6 sweeps", logf[-600:])
+    if r.rc == 0:
+        Wf = np.array(read_ply(outf)["V"], float)
+        af = np.array([alpha(*(Wf[i] for i in f)) for f in F])
+        check(af.mean() > before.mean() + 0.02 and af.min() > before.min(), "fast example: mean and min alpha rise",
+              f"{before.mean():.4f} -> {af.mean():.4f}, min {af.min():.4f}")
 
 # 2. the same seed gives the same file; another seed another result
 out2 = os.path.join(d, "tri_s2.ply")
