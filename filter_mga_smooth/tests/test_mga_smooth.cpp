@@ -208,6 +208,20 @@ TEST(MgaSmooth, SameResultForOneAndTwoThreads) {
   for (std::size_t i = 0; i < r1.positions.size(); ++i) differ += r1.positions[i] != r2.positions[i];
   EXPECT_EQ(differ, 0u);
   EXPECT_GT(r1.nodesMoved, 100u);
+  // the guided searches too (their per-thread buffers: the star, the fan, the micro-GA workspace)
+  for (const auto mode : {sm::ElementSearch::Guided, sm::ElementSearch::GuidedLocal}) {
+    sm::Options g = o;
+    g.elementSearch = mode;
+    omp_set_num_threads(1);
+    const auto g1 = sm::smoothMesh(m, g);
+    omp_set_num_threads(2);
+    const auto g2 = sm::smoothMesh(m, g);
+    std::size_t gd = 0;
+    for (std::size_t i = 0; i < g1.positions.size(); ++i) gd += g1.positions[i] != g2.positions[i];
+    EXPECT_EQ(gd, 0u);
+    EXPECT_EQ(g1.evaluations, g2.evaluations);
+    EXPECT_GT(g1.nodesMoved, 100u);
+  }
   // another seed gives another (also improving) result: the seed is used
   o.seed = 8;
   const auto r3 = sm::smoothMesh(m, o);
