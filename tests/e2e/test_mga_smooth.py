@@ -87,40 +87,42 @@ if r.rc == 0:
     a2 = np.array([alpha(*(results["Gradient"][i] for i in f)) for f in F])
     check(a3.min() >= a2.min() - 1e-6, "final pass: min alpha not below the run without it", f"{a2.min():.4f} -> {a3.min():.4f}")
 
+def run_alpha(name, script_path):
+    """meshlabserver on the dome grid with a script: (exit code, Log text, per-triangle alpha of the result or None)"""
+    out = os.path.join(d, name + ".ply")
+    r = run([inp], script_path, [(out, "vq sa")])
+    log = "\n".join(r.log)
+    if r.rc != 0:
+        return r.rc, log, None
+    W = np.array(read_ply(out)["V"], float)
+    return r.rc, log, np.array([alpha(*(W[i] for i in f)) for f in F])
+
+
+def evaluations(log):
+    return int(re.search(r"(\d+) fitness evaluations", log).group(1))
+
+
 # 1c. the guided element search: named in the Log, fewer fitness evaluations than every element, still improves
-outg = os.path.join(d, "tri_guided.ply")
-r = run([inp], script("triGuided", "MGA", maxSweeps=6, seed=3, elementSearch=1), [(outg, "vq sa")])
-log = "\n".join(r.log)
-check(r.rc == 0 and "MGA smoothing, guided element search" in log, "guided element search runs and is logged", log)
-if r.rc == 0:
-    Wg = np.array(read_ply(outg)["V"], float)
-    ag = np.array([alpha(*(Wg[i] for i in f)) for f in F])
+rc, log, ag = run_alpha("tri_guided", script("triGuided", "MGA", maxSweeps=6, seed=3, elementSearch=1))
+check(rc == 0 and "MGA smoothing, guided element search" in log, "guided element search runs and is logged", log)
+if rc == 0:
     a1 = np.array([alpha(*(results["MGA"][i] for i in f)) for f in F])
     check(ag.mean() > a1.mean() - 0.005 and ag.min() > before.min(), "guided: mean alpha near the full search's, min rises",
           f"{a1.mean():.4f} / {ag.mean():.4f}, min {ag.min():.4f}")
-    ev = [int(re.search(r"(\d+) fitness evaluations", x).group(1)) for x in (logs["MGA"], log)]
+    ev = [evaluations(logs["MGA"]), evaluations(log)]
     check(ev[1] < 0.7 * ev[0], "guided: fewer fitness evaluations than every element", str(ev))
     # 1d. the guided local search: logged, improves, fewer evaluations again
-    outl = os.path.join(d, "tri_local.ply")
-    r = run([inp], script("triLocal", "MGA", maxSweeps=6, seed=3, elementSearch=2), [(outl, "vq sa")])
-    logl = "\n".join(r.log)
-    check(r.rc == 0 and "MGA smoothing, guided local element search" in logl, "guided local search runs and is logged", logl)
-    if r.rc == 0:
-        Wl = np.array(read_ply(outl)["V"], float)
-        al = np.array([alpha(*(Wl[i] for i in f)) for f in F])
+    rc, logl, al = run_alpha("tri_local", script("triLocal", "MGA", maxSweeps=6, seed=3, elementSearch=2))
+    check(rc == 0 and "MGA smoothing, guided local element search" in logl, "guided local search runs and is logged", logl)
+    if rc == 0:
         check(al.mean() > before.mean() + 0.02 and al.min() > before.min(), "guided local: mean and min alpha rise",
               f"{before.mean():.4f} -> {al.mean():.4f}, min {al.min():.4f}")
-        evl = int(re.search(r"(\d+) fitness evaluations", logl).group(1))
-        check(evl < ev[1], "guided local: fewer fitness evaluations than guided", f"{evl} / {ev[1]}")
+        check(evaluations(logl) < ev[1], "guided local: fewer fitness evaluations than guided", f"{evaluations(logl)} / {ev[1]}")
     # 1e. the fast example as shipped (guided local, 6 sweeps x 8 generations)
-    outf = os.path.join(d, "tri_fast.ply")
-    r = run([inp], os.path.join(SOURCE, "filter_mga_smooth", "examples", "mga_smooth_fast.mlx"), [(outf, "vq sa")])
-    logf = "\n".join(r.log)
-    check(r.rc == 0 and "guided local element search" in logf and "sweeps 6" in logf,
+    rc, logf, af = run_alpha("tri_fast", os.path.join(SOURCE, "filter_mga_smooth", "examples", "mga_smooth_fast.mlx"))
+    check(rc == 0 and "guided local element search" in logf and "sweeps 6" in logf,
           "mga_smooth_fast.mlx runs: guided local, 6 sweeps", logf[-600:])
-    if r.rc == 0:
-        Wf = np.array(read_ply(outf)["V"], float)
-        af = np.array([alpha(*(Wf[i] for i in f)) for f in F])
+    if rc == 0:
         check(af.mean() > before.mean() + 0.02 and af.min() > before.min(), "fast example: mean and min alpha rise",
               f"{before.mean():.4f} -> {af.mean():.4f}, min {af.min():.4f}")
 
