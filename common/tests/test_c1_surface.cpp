@@ -5,6 +5,10 @@
 #include <map>
 #include <random>
 
+#ifdef _OPENMP
+#include <omp.h>
+#endif
+
 #include "pectus/c1_shapes.h"
 #include "pectus/c1_surface.h"
 #include "pectus/errors.h"
@@ -370,6 +374,38 @@ TEST(C1Surface, ClosestPointMatchesDenseSampling) {
     const Vec3 x = s.eval(f, Vec3(0.2, 0.5, 0.3));
     EXPECT_LT(s.closestPoint(x).distance, 1e-9);
   }
+}
+
+// after buildIndex() closestPoint may be called from several threads (the C1 projection filter and the MGA
+// fallback do): the same answers as one thread, point for point (and, under TSan, no race)
+TEST(C1Surface, ClosestPointFromTwoThreadsAfterBuildIndex) {
+  const TriMesh m = ellipsoid(2, 1.0, 0.8, 0.6);
+  C1Surface s(m);
+  s.buildIndex();
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> U(-1.3, 1.3);
+  std::vector<Vec3> pts;
+  for (int q = 0; q < 2000; ++q) {
+    const double z = U(rng), y = U(rng), x = U(rng);
+    pts.emplace_back(x, y, z);
+  }
+  std::vector<pectus::c1::SurfacePoint> one(pts.size()), two(pts.size());
+  for (std::size_t i = 0; i < pts.size(); ++i) one[i] = s.closestPoint(pts[i]);
+  int threads = 1;
+#pragma omp parallel for schedule(dynamic, 16) num_threads(2)
+  for (long i = 0; i < long(pts.size()); ++i) {
+#ifdef _OPENMP
+    if (omp_get_thread_num() == 1) threads = 2;
+#endif
+    two[std::size_t(i)] = s.closestPoint(pts[std::size_t(i)]);
+  }
+  std::size_t differ = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    differ += one[i].face != two[i].face || one[i].point != two[i].point || one[i].distance != two[i].distance;
+  EXPECT_EQ(differ, 0u);
+#ifdef _OPENMP
+  EXPECT_EQ(threads, 2);
+#endif
 }
 
 TEST(C1Surface, BadInputIsRefusedWithAMessage) {
