@@ -40,6 +40,16 @@ PectusIndex pectusIndexOnSlice(const SliceRegion& r, const std::optional<double>
     o << "no geometry at the pectus index level z = " << r.z << " mm: the plane does not cut the rib cage";
     throw InputError(o.str());
   }
+  // a section that encloses (next to) no area - a lone sheet, one triangle - has no chest to measure: its
+  // region is a sliver around the seed (area under 1e-3 of the squared extent of the cut; a chest's is ~0.4)
+  {
+    Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
+    for (const auto& sg : r.segments) lo = lo.cwiseMin(sg.a).cwiseMin(sg.b), hi = hi.cwiseMax(sg.a).cwiseMax(sg.b);
+    const double ext = (hi - lo).maxCoeff();
+    if (!(std::abs(r.polygonArea()) > 1e-3 * ext * ext))
+      throw InputError("the pectus index cannot be measured at z = " + std::to_string(r.z) +
+                       " mm: the section encloses no area (a sheet, not a chest)");
+  }
   PectusIndex out;
   out.z = r.z;
   double xlo = 1e300, xhi = -1e300, ymax = -1e300;

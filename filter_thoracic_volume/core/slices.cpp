@@ -207,7 +207,10 @@ SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K, cons
         const double th = (k + j) * dth;
         const Eigen::Vector2d d(std::cos(th), std::sin(th));
         const double den = cross2(d, P1 - P0);
-        const double chord = std::abs(den) > 1e-300 ? cross2(P0, P1 - P0) / den : std::min(r0, r1);
+        // (a gap of half a turn or more: the chord's line can be parallel to the ray or behind it; the
+        // closure is kept between the centre and the farther end point, as a chord of a smaller gap is)
+        const double chord = std::clamp(std::abs(den) > 1e-300 ? cross2(P0, P1 - P0) / den : std::min(r0, r1), 0.0,
+                                        std::max(r0, r1));
         double r = chord;
         if (!large) {
           const double t = double(j) / g, t2 = t * t, t3 = t2 * t;

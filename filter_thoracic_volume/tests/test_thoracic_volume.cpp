@@ -62,6 +62,27 @@ TEST(ThoracicVolumeSlice, GapRuleBeatsChords) {
   EXPECT_LT(rel(R.polygonArea(), exact), rel(C.polygonArea(), exact));
 }
 
+// hits in a narrow arc only (a coarse probe of a deformed cage: 3 of 64 rays hit): the closure of the gap of
+// more than half a turn stays inside the farthest hit; the chord's line, nearly parallel to some of the
+// gap's rays, gave radii of kilometres and a raster box that swallowed every other slice (the main job's
+// envelope probe on the FE result, session 8)
+TEST(ThoracicVolumeSlice, GapOfMoreThanHalfATurnStaysInside) {
+  std::vector<Seg2> arc;
+  const double r = 100;
+  for (double deg : {0.0, 20.0, 40.0, 60.0, 80.0}) {
+    const double a0 = (deg - 3) * kPi / 180, a1 = (deg + 3) * kPi / 180;
+    arc.push_back({Eigen::Vector2d(r * std::cos(a0), r * std::sin(a0)), Eigen::Vector2d(r * std::cos(a1), r * std::sin(a1))});
+  }
+  const auto R = regionFromSegments(0.0, arc, 64, Eigen::Vector2d(0, 0));
+  ASSERT_GE(R.hits, 3);
+  ASSERT_LT(R.coverage(), 0.2);
+  double farthest = 0;
+  for (const auto& q : R.polygon) farthest = std::max(farthest, q.norm());
+  EXPECT_LE(farthest, r * (1 + 1e-9));
+  EXPECT_GT(R.polygonArea(), 0);
+  EXPECT_LE(R.polygonArea(), kPi * r * r);
+}
+
 TEST(ThoracicVolumeEnvelope, ClosedEllipsoidWithin1Percent) {
   const double a = 120, b = 90, c = 150;
   const auto e = closedEllipsoid(a, b, c, 256, 128);
