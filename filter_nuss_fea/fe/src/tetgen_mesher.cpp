@@ -367,6 +367,7 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vect
   if (opt.preserveSurface) sw << "Y";
   if (opt.radiusEdgeRatio > 0) sw << "q" << opt.radiusEdgeRatio;
   if (opt.maxVolume > 0) sw << "a" << opt.maxVolume;
+  if (opt.maxAddedPoints >= 0) sw << "S" << opt.maxAddedPoints;
   const TetgenOutput out = runTetgen(sw.str(), in, opt.timeLimitSeconds);
   if (out.numTets() <= 0) throw InputError("TetGen produced no tetrahedra (is the surface closed?).");
   for (int v : out.tets)

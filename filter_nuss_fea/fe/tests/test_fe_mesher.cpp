@@ -275,3 +275,24 @@ TEST(FeMesher, TetgenThatDoesNotFinishIsStoppedAtTheTimeLimit) {
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_LT(seconds, 30.0);  // stopped at the limit, not at TetGen's end
 }
+
+// maxAddedPoints (TetGen -S) bounds the mesh whatever the bounds ask: the box of TetgenBoxLabelsVolumeAndSeriesBar
+// would take > 1000 tets; with at most 30 added points it keeps its vertices, at most 30 more nodes, its
+// volume, and tets above the volume bound; without the cap the same call adds more than 30 points.
+TEST(FeMesher, MaxAddedPointsBoundsTheMesh) {
+  const SurfaceMesh s = boxSurface({0, 0, 0}, {10, 10, 40}, 2, 2, 8, 20);
+  TetgenOptions o;
+  o.radiusEdgeRatio = 1.5;
+  o.maxVolume = 4.0;
+  o.maxAddedPoints = 30;
+  const TetMesh m = tetrahedralize(s, o);
+  EXPECT_GE(m.numNodes(), int(s.vertices.size()));
+  EXPECT_LE(m.numNodes(), int(s.vertices.size()) + 30);
+  double vol = 0, largest = 0;
+  for (int t = 0; t < m.numTets(); ++t) vol += m.tetVolume(t), largest = std::max(largest, m.tetVolume(t));
+  EXPECT_NEAR(vol, 4000.0, 1e-6);
+  EXPECT_GT(largest, 4.0);  // the bound was not reached: the cap stopped the refinement
+  for (size_t i = 0; i < s.vertices.size(); ++i) EXPECT_EQ((m.nodes[i] - s.vertices[i]).norm(), 0.0);
+  o.maxAddedPoints = -1;
+  EXPECT_GT(tetrahedralize(s, o).numNodes(), int(s.vertices.size()) + 30);
+}

@@ -20,6 +20,10 @@ struct TetgenOptions {
   double maxVolume = 0;          ///< TetGen -a: max tet volume in mm^3; <= 0: no limit
   int order = 1;                 ///< 1: TET4, 2: TET10 (straight mid-edge nodes added by toQuadratic)
   bool preserveSurface = false;  ///< TetGen -Y: no Steiner points on the surface
+  /// TetGen -S: at most this many points added to the input's (quality and volume refinement stop there,
+  /// leaving tets above the bounds; a surface whose recovery needs more is an InputError); < 0: no limit.
+  /// Bounds the mesh's size, and so time and memory, whatever the surface's features.
+  int maxAddedPoints = -1;
   /// TetGen runs in a child process; one still running after this many seconds is stopped (its quality
   /// refinement can go on without end on tiny features) and the call throws InputError; <= 0: no limit
   double timeLimitSeconds = 900;
