@@ -39,7 +39,7 @@ from pectus_meshes import closed_ellipsoid, saddle_mesh, write_ply  # noqa: E402
 PREFIX = os.environ.get("PECTUS_PREFIX", os.path.join(SOURCE, "build", "prefix"))
 TABLE = os.path.join(SOURCE, "docs", "bad_input_matrix.md")
 MASK = "vq vc fq fc sa"
-TIMEOUT = 60.0
+TIMEOUT = 60.0 * float(os.environ.get("PECTUS_TIMEOUT_SCALE", "1"))  # scripts/sanitize.sh e2e: x 5 under ASan
 BUILD = os.environ.get("PECTUS_BUILD", os.path.join(SOURCE, "build"))
 LAYER_CHECK = os.environ.get("PECTUS_LAYER_CHECK", os.path.join(BUILD, "bin", "pectus_layer_check"))
 PLUGINS = os.environ.get("PECTUS_PLUGINS", os.path.join(BUILD, "plugins"))
