@@ -229,10 +229,10 @@ def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tu
     to set on top of the current environment (e.g. OMP_NUM_THREADS).
     Returns the exit code and everything printed (stdout + stderr); subprocess.TimeoutExpired on a timeout."""
     exe = find_meshlabserver(prefix)
-    cmd = ["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", exe]
+    # e.g. libasan.so for plugins built with AddressSanitizer (scripts/sanitize.sh e2e): meshlabserver only
     preload = os.environ.get("PECTUS_MESHLAB_PRELOAD")
-    if preload:  # e.g. libasan.so for plugins built with AddressSanitizer (scripts/sanitize.sh e2e): meshlabserver only
-        cmd[-1:] = ["env", "LD_PRELOAD=" + preload, exe]
+    launcher = ["env", "LD_PRELOAD=" + preload] if preload else []
+    cmd = ["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", *launcher, exe]
     for i in inputs:
         cmd += ["-i", i]
     tmp = None
