@@ -87,6 +87,54 @@ Vector3d closestOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d&
   return a + ab * (vb * den) + ac * (vc * den);
 }
 
+// The face of s nearest to p among those `skip` does not exclude, by rings of grid cells around p's cell,
+// and its squared distance (best2); -1 if there is none closer than `within` (mm; infinity: any face).
+template <class Skip>
+int nearestFace(const SurfaceMesh& s, const Grid& grid, const Vector3d& p, double within, const Skip& skip, double& best2) {
+  int c[3];
+  for (int d = 0; d < 3; ++d) c[d] = grid.clampc(p(d), d);
+  best2 = std::numeric_limits<double>::infinity();
+  int bestF = -1;
+  const int maxR = std::max({grid.n[0], grid.n[1], grid.n[2]});
+  for (int r = 0; r <= maxR; ++r) {
+    for (int k = c[2] - r; k <= c[2] + r; ++k)
+      for (int j = c[1] - r; j <= c[1] + r; ++j)
+        for (int i = c[0] - r; i <= c[0] + r; ++i) {
+          if (std::max({std::abs(i - c[0]), std::abs(j - c[1]), std::abs(k - c[2])}) != r) continue;
+          if (i < 0 || j < 0 || k < 0 || i >= grid.n[0] || j >= grid.n[1] || k >= grid.n[2]) continue;
+          for (int f : grid.cells[grid.idx(i, j, k)]) {
+            if (skip(f)) continue;
+            const auto& F = s.faces[f];
+            const double d = (closestOnTriangle(p, s.vertices[F[0]], s.vertices[F[1]], s.vertices[F[2]]) - p).squaredNorm();
+            if (d < best2) best2 = d, bestF = f;
+          }
+        }
+    // every face not yet seen is at least r*h away from p (p lies inside its cell)
+    if (r * grid.h >= std::min(std::sqrt(best2), within)) break;
+  }
+  return std::sqrt(best2) < within ? bestF : -1;
+}
+
+// A sentence on the surface's smallest feature when it is far below its edges (< 1e-3 of the median edge):
+// what TetGen's failures on a closed, self-intersection-free surface come from (fuzz_fe_model's findings
+// all had one); empty otherwise.
+std::string smallFeatureHint(const SurfaceMesh& s) {
+  const SurfaceFeature f = smallestFeature(s);
+  if (!(f.size < 1e-3 * f.medianEdge) || f.vertex < 0) return {};
+  std::ostringstream m;
+  m.precision(3);
+  m << " The surface's smallest feature, a likely cause: ";
+  if (f.face < 0)
+    m << "the edge between vertices " << f.vertex << " and " << f.other << " (at " << s.vertices[f.vertex].transpose()
+      << " mm) is " << f.size << " mm long";
+  else
+    m << "vertex " << f.vertex << " (at " << s.vertices[f.vertex].transpose() << " mm) is " << f.size << " mm from face "
+      << f.face << ", which it is not a corner of";
+  m << ", against a median edge of " << f.medianEdge
+    << " mm. Merge close vertices (Cleaning and Repairing > Merge Close Vertices) or remove the tiny faces there.";
+  return m.str();
+}
+
 /// New index of each TetGen output point such that surface vertex i is node i (the promise of
 /// tetrahedralize) and the other points follow in TetGen's order. TetGen drops input points it does not
 /// mesh (a point in no face outside the volume, a duplicate) and numbers the rest consecutively (found by
@@ -313,35 +361,47 @@ std::vector<int> nearestFaces(const SurfaceMesh& s, const std::vector<Vector3d>&
   std::vector<int> out(pts.size(), -1);
 #pragma omp parallel for schedule(dynamic, 64)
   for (long q = 0; q < static_cast<long>(pts.size()); ++q) {
-    const Vector3d& p = pts[q];
-    int c[3];
-    for (int d = 0; d < 3; ++d) c[d] = grid.clampc(p(d), d);
-    double best = std::numeric_limits<double>::infinity();
-    int bestF = -1;
-    const int maxR = std::max({grid.n[0], grid.n[1], grid.n[2]});
-    for (int r = 0; r <= maxR; ++r) {
-      for (int k = c[2] - r; k <= c[2] + r; ++k)
-        for (int j = c[1] - r; j <= c[1] + r; ++j)
-          for (int i = c[0] - r; i <= c[0] + r; ++i) {
-            if (std::max({std::abs(i - c[0]), std::abs(j - c[1]), std::abs(k - c[2])}) != r) continue;
-            if (i < 0 || j < 0 || k < 0 || i >= grid.n[0] || j >= grid.n[1] || k >= grid.n[2]) continue;
-            for (int f : grid.cells[grid.idx(i, j, k)]) {
-              const auto& F = s.faces[f];
-              const double d = (closestOnTriangle(p, s.vertices[F[0]], s.vertices[F[1]], s.vertices[F[2]]) - p).squaredNorm();
-              if (d < best) best = d, bestF = f;
-            }
-          }
-      // every face not yet seen is at least r*h away from p (p lies inside its cell)
-      if (bestF >= 0 && std::sqrt(best) <= r * grid.h) break;
-    }
-    out[q] = bestF;
+    double best2 = 0;
+    out[q] = nearestFace(s, grid, pts[q], std::numeric_limits<double>::infinity(), [](int) { return false; }, best2);
   }
   return out;
 }
 
-TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<int>* tetFace) {
-  checkSurfaceForTetgen(s);
-  if (opt.order != 1 && opt.order != 2) throw InputError("Element order must be 1 (TET4) or 2 (TET10).");
+SurfaceFeature smallestFeature(const SurfaceMesh& s) {
+  SurfaceFeature r;
+  const int nv = static_cast<int>(s.vertices.size());
+  std::vector<double> lengths;
+  lengths.reserve(3 * s.faces.size());
+  for (const auto& F : s.faces)
+    for (int i = 0; i < 3; ++i) {
+      const int a = F[i], b = F[(i + 1) % 3];
+      if (a < 0 || b < 0 || a >= nv || b >= nv) continue;
+      const double l = (s.vertices[a] - s.vertices[b]).norm();
+      lengths.push_back(l);
+      if (l < r.size) r.size = l, r.vertex = std::min(a, b), r.other = std::max(a, b), r.face = -1;
+    }
+  if (lengths.empty()) return r;
+  std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
+  r.medianEdge = lengths[lengths.size() / 2];
+  std::vector<std::vector<int>> facesOf(static_cast<size_t>(nv));
+  for (int f = 0; f < static_cast<int>(s.faces.size()); ++f)
+    for (int v : s.faces[f])
+      if (v >= 0 && v < nv) facesOf[v].push_back(f);
+  Grid grid;
+  grid.build(s);
+  for (int v = 0; v < nv; ++v) {
+    if (facesOf[v].empty()) continue;
+    const auto& own = facesOf[v];
+    double best2 = 0;
+    const int f = nearestFace(s, grid, s.vertices[v], r.size, [&](int g) { return std::find(own.begin(), own.end(), g) != own.end(); }, best2);
+    if (f >= 0 && std::sqrt(best2) < r.size) r.size = std::sqrt(best2), r.vertex = v, r.other = -1, r.face = f;
+  }
+  return r;
+}
+
+namespace {
+// tetrahedralize after its checks
+TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<int>* tetFace) {
   tetgenio in;
   in.firstnumber = 0;
   in.numberofpoints = static_cast<int>(s.vertices.size());
@@ -410,6 +470,17 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vect
   for (size_t t = 0; t < m.tets.size(); ++t) m.tissue[t] = s.faceTissue[nf[t]];
   if (tetFace) *tetFace = nf;
   return opt.order == 2 ? toQuadratic(m) : m;
+}
+}  // namespace
+
+TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<int>* tetFace) {
+  checkSurfaceForTetgen(s);
+  if (opt.order != 1 && opt.order != 2) throw InputError("Element order must be 1 (TET4) or 2 (TET10).");
+  try {
+    return tetgenMesh(s, opt, tetFace);
+  } catch (const InputError& e) {  // TetGen failed: say where the surface's features are tiny, if they are
+    throw InputError(e.what() + smallFeatureHint(s));
+  }
 }
 
 }  // namespace pectus::fe

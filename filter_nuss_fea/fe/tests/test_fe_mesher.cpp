@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <chrono>
+#include <cstdio>
 #include <map>
 
 #include "pectus/errors.h"
@@ -215,7 +216,7 @@ const std::vector<std::array<int, 3>> kUvSphere14Faces = {
 // first finding, corpus/fe_model/crash-tetgen-insertpoint-assert: two vertices 1e-6 apart at its centre,
 // where the surface pinches) its quality refinement stops on assert(0) in insertpoint. TetGen runs in a
 // child process, so that is an InputError here and not the end of the program (and of MeshLab).
-TEST(FeMesher, TetgenAssertionIsAnErrorNotAnAbort) {
+static SurfaceMesh pinchedSphere() {
   SurfaceMesh s;
   s.vertices = {
       {0, 0, -1.340268611907959}, {0.76586496829986572, 0.2011294811964035, -0.8185495138168335},
@@ -230,6 +231,11 @@ TEST(FeMesher, TetgenAssertionIsAnErrorNotAnAbort) {
       1.0612711418728368e-24}, {0, 0, 1.340268611907959},};
   s.faces = kUvSphere14Faces;
   s.faceTissue.assign(s.faces.size(), 1);
+  return s;
+}
+
+TEST(FeMesher, TetgenAssertionIsAnErrorNotAnAbort) {
+  const SurfaceMesh s = pinchedSphere();
   TetgenOptions o;
   o.radiusEdgeRatio = 1.2;
   o.maxVolume = 0.041604772732396877;
@@ -238,6 +244,9 @@ TEST(FeMesher, TetgenAssertionIsAnErrorNotAnAbort) {
     FAIL() << "TetGen meshed it (this TetGen may not assert on it any more: the test then proves nothing)";
   } catch (const pectus::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("TetGen stopped on one of its internal assertions"), std::string::npos) << e.what();
+    std::printf("[message] %s\n", e.what());
+    // and it says where: the pinch (vertex 12 is ~1e-6 mm from the faces around vertex 10)
+    EXPECT_NE(std::string(e.what()).find("smallest feature, a likely cause: vertex 1"), std::string::npos) << e.what();
   }
   // the process goes on, and meshes a valid surface afterwards
   EXPECT_GT(tetrahedralize(boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 5)).numTets(), 0);
@@ -271,6 +280,7 @@ TEST(FeMesher, TetgenThatDoesNotFinishIsStoppedAtTheTimeLimit) {
     FAIL() << "TetGen finished (this TetGen may not loop on it any more: the test then proves nothing)";
   } catch (const pectus::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("TetGen did not finish within 1 s"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("smallest feature, a likely cause"), std::string::npos) << e.what();
   }
   const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   EXPECT_LT(seconds, 30.0);  // stopped at the limit, not at TetGen's end
@@ -295,4 +305,29 @@ TEST(FeMesher, MaxAddedPointsBoundsTheMesh) {
   for (size_t i = 0; i < s.vertices.size(); ++i) EXPECT_EQ((m.nodes[i] - s.vertices[i]).norm(), 0.0);
   o.maxAddedPoints = -1;
   EXPECT_GT(tetrahedralize(s, o).numNodes(), int(s.vertices.size()) + 30);
+}
+
+// smallestFeature: a box's is one of its edges; two boxes 1e-5 mm apart nearly touch (a vertex of one is
+// 1e-5 mm from a face of the other, far below the 5 mm edges); the pinched sphere's is its pinch, where
+// vertices 10 and 12 are ~1e-6 mm apart without sharing a face.
+TEST(FeMesher, SmallestFeatureFindsNearTouchingSheetsAndPinches) {
+  const SurfaceMesh a = boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 5);
+  const SurfaceFeature fa = smallestFeature(a);
+  EXPECT_NEAR(fa.medianEdge, 5.0, 1e-12);
+  EXPECT_GT(fa.size, 0.5 * fa.medianEdge);
+
+  const SurfaceMesh ab = merge(a, boxSurface({10 + 1e-5, 0, 0}, {10, 10, 10}, 2, 2, 2, 5));
+  const SurfaceFeature f = smallestFeature(ab);
+  EXPECT_NEAR(f.size, 1e-5, 1e-9);
+  ASSERT_GE(f.face, 0);
+  EXPECT_EQ(f.other, -1);
+  const int nva = static_cast<int>(a.vertices.size()), nfa = static_cast<int>(a.faces.size());
+  EXPECT_NE(f.vertex < nva, f.face < nfa);  // the vertex of one box, the face of the other
+  EXPECT_NEAR(std::abs(ab.vertices[f.vertex].x() - 10), 0.0, 1e-5 + 1e-12);
+
+  const SurfaceFeature p = smallestFeature(pinchedSphere());
+  EXPECT_LT(p.size, 1.2e-6);
+  EXPECT_GT(p.medianEdge, 0.3);
+  EXPECT_TRUE(p.vertex == 10 || p.vertex == 12) << p.vertex;
+  EXPECT_GE(p.face, 0);
 }

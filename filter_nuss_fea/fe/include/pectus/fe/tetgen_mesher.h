@@ -1,6 +1,7 @@
 // Tetrahedralisation of a closed, labelled triangle surface with TetGen 1.5 (Debian libtet1.5-dev).
 #pragma once
 #include <array>
+#include <limits>
 #include <optional>
 #include <utility>
 #include <vector>
@@ -47,8 +48,24 @@ void checkSurfaceForTetgen(const SurfaceMesh& s);
 /// in at least one tet (TetGen numbers the points it keeps consecutively and drops a point in no face
 /// outside the volume or a duplicate: the nodes are renumbered back, and a vertex TetGen left out or no tet
 /// uses throws InputError). `tetFace`, if given, receives that nearest surface face per tet (e.g. to carry
-/// further face labels onto the tets).
+/// further face labels onto the tets). When TetGen fails (InputError: it stopped on an assertion, ran past
+/// the time limit, made a flat tet...), the message also names the surface's smallest feature if it is
+/// under 1e-3 of the median edge (smallestFeature), which is where such failures come from.
 TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt = {}, std::vector<int>* tetFace = nullptr);
+
+/// The surface's smallest feature: its shortest edge, or the smallest distance from a vertex to a face it
+/// is not a corner of (two sheets that nearly touch, a vertex nearly on another face, a sliver), whichever
+/// is smaller, beside the median edge length. A feature far below the edges (near-duplicate vertices, a
+/// pinch) is what TetGen's refinement fails on: when it fails, tetrahedralize's InputError names this
+/// feature if it is under 1e-3 of the median edge. Grid search; vertex and face are -1 for an empty surface.
+struct SurfaceFeature {
+  int vertex = -1;  ///< the vertex near a face, or the short edge's first vertex
+  int other = -1;   ///< the short edge's second vertex; -1 for a vertex near a face
+  int face = -1;    ///< the face the vertex is near; -1 for a short edge
+  double size = std::numeric_limits<double>::infinity();  ///< edge length or distance, mm
+  double medianEdge = 0;                                   ///< mm
+};
+SurfaceFeature smallestFeature(const SurfaceMesh& s);
 
 /// Index of the face of s nearest to each query point (uniform grid search).
 std::vector<int> nearestFaces(const SurfaceMesh& s, const std::vector<Eigen::Vector3d>& points);
