@@ -2,7 +2,7 @@
 // (weld, labels) -> surface checks (closed, self-intersection) -> TetGen -> TET10 -> boundary faces - on
 // small, possibly broken closed meshes.
 // Properties: every tet has valid, distinct nodes, a tissue label and positive volume; the input vertices
-// keep their indices and are in a tet.
+// keep their indices and are in a tet; the surface's smallest feature (named when TetGen fails) is valid.
 // TetGen may add at most kAddedPoints points per input (TetgenOptions::maxAddedPoints): the bytes' most
 // demanding bounds (radius-edge 1.2, tets of 0.004 of the box) make 5,000-26,000 tets in 0.3-5 s, which held
 // a campaign to 12-30 inputs/s, all of it in TetGen's refinement and not in this project's code. The
@@ -51,6 +51,18 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     PECTUS_FUZZ_CHECK(cage.surface.faces.size() == cage.surface.faceTissue.size());
     PECTUS_FUZZ_CHECK(cage.facePart.size() == cage.surface.faces.size());
     PECTUS_FUZZ_CHECK(cage.nodeOfVertex.size() == m.vert.size());
+    // the feature a TetGen failure's message names: a valid vertex, an edge or a face it is not a corner of,
+    // no larger than the median edge
+    const fe::SurfaceFeature sf = fe::smallestFeature(cage.surface);
+    if (sf.vertex >= 0) {
+      const int nsv = int(cage.surface.vertices.size());
+      PECTUS_FUZZ_CHECK(sf.vertex < nsv && (sf.face < 0) == (sf.other >= 0));
+      PECTUS_FUZZ_CHECK(sf.face < 0 || sf.face < int(cage.surface.faces.size()));
+      if (sf.face >= 0)
+        for (int v : cage.surface.faces[std::size_t(sf.face)]) PECTUS_FUZZ_CHECK(v != sf.vertex);
+      PECTUS_FUZZ_CHECK(sf.other < nsv);
+      PECTUS_FUZZ_CHECK(!(sf.size > sf.medianEdge) && !(sf.size < 0));
+    }
     std::vector<int> tetFace;
     const auto tm = fe::tetrahedralize(cage.surface, to, &tetFace);
     const int nn = tm.numNodes();
