@@ -89,7 +89,7 @@ Vector3d closestOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d&
 
 // The face of s nearest to p among those `skip` does not exclude, by shells of grid cells around p's cell
 // (only their cells inside the grid: a shell costs its area, not the cube it bounds, which made a vertex of
-// a flat 200 x 200 x 1 grid take 0.5-5 s under ASan, found by fuzz_fe_model), and its squared distance
+// a flat 200 x 200 x 1 grid cost ~1e9 cells and an input 10-120 s under ASan, found by fuzz_fe_model), and its squared distance
 // (best2); -1 if there is none closer than `within` (mm; infinity: any face).
 template <class Skip>
 int nearestFace(const SurfaceMesh& s, const Grid& grid, const Vector3d& p, double within, const Skip& skip, double& best2) {
