@@ -1,14 +1,11 @@
 #!/usr/bin/env python3
-"""Issue #7: how the rib cage generator's smooth-union fillet (RibCageParams::blend) changes the Nuss FE
+"""How the rib cage generator's smooth-union fillet (RibCageParams::blend) changes the Nuss FE
 compliance, for the one-surface (labelled) cage and the per-tissue layers joined by tissue_join. One
 pectus_nuss_cli run per blend radius and input (default: 6 mm edges, TET10, small strain, Fe = 10 N);
 prints faces, tets, sternal elevation and tet volume per tissue.
 
     python3 bench/cage_fillet.py [--tool build/filter_nuss_fea/pectus_nuss_cli] [--blends auto,0,1,3]
                                  [--edge 6] [--quality 1.6] [--force 10]
-
-Measured at 0b9516f + branch joinstiff (age 7, index 4, 6 mm, quality 1.6): one surface auto (1.95 mm) / 0 / 1 / 3 mm:
-68.06 / 79.31 / 72.66 / 60.84 mm; joined auto / 0: 86.93 / 85.99 mm.
 """
 import argparse
 import re

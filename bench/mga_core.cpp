@@ -1,5 +1,5 @@
 // The smoothing core alone on an OFF file (no meshlabserver, no file IO in the timing): for tuning and
-// profiling MGA and the gradient baseline (bench/mga_core.py drives it on the femur and the bunny).
+// profiling MGA and the gradient baseline (e.g. on libcgal-demo's femur and bunny, as bench/mga_smooth.py uses them).
 //
 //   bench_mga_core in.off [key=value ...] [out=path.off]
 //     method=mga|cg  sweeps=10  tol=1e-4  acc=1e-3  gens=20  restarts=4  pop=5  feature=60  singular=90

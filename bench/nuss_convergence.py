@@ -3,7 +3,7 @@
 pectus index 5.3, 5 mm surface edges) meshed ever finer by TetGen's maximum tet volume, the same elevating
 force, the sternum-end displacement per mesh and its change from the previous mesh (the thesis accepted
 < 1 %). Prints one table, with each run's peak memory (maximum resident set size from wait4; the FE
-issue's budget: 3 GB for a ~300k-tet model).
+analysis' memory budget: 3 GB for a ~300k-tet model).
 
     python3 bench/nuss_convergence.py [--tool build/filter_nuss_fea/pectus_nuss_cli] [--order 2] [--force 10] [--nonlinear]
 """

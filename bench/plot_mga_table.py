@@ -30,7 +30,7 @@ def main():
     ap.add_argument("table")
     ap.add_argument("png")
     ap.add_argument("--plateau", type=float, help="measured plateau of fixed connectivity (a dashed line)")
-    ap.add_argument("--target", type=float, help="the issue's target (a dotted line)")
+    ap.add_argument("--target", type=float, help="the quality target (a dotted line)")
     ap.add_argument("--ymin", type=float, help="leave out rows whose mean is below this (named in the legend)")
     a = ap.parse_args()
     title, data = rows(a.table)

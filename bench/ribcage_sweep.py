@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Rib cage generator sweep (issue 7): for every (age, pectus index, edge length) of a grid, generate the cage
+"""Rib cage generator sweep: for every (age, pectus index, edge length) of a grid, generate the cage
 with pectus_ribcage_cli --check and print one table row: faces, decimation passes, time, the index measured on
 the mesh, and the self-intersecting faces by CGAL's exact check (must be 0), non-manifold edges, components.
 

@@ -1,6 +1,6 @@
 #!/usr/bin/env python3
 """Run the Nuss analysis and the volume/index measures over a cohort of patient rib cages, one meshlabserver
-per patient, and collect one summary CSV (issue 9). Standard library only (+ the project's pectus_mlx).
+per patient, and collect one summary CSV. Standard library only (+ the project's pectus_mlx).
 
 A cohort folder holds patients.csv (columns: case,sex,age,elevation_mm) and, per case, CASE.ply (the closed
 rib cage with tissue labels as face colour + face quality, e.g. from 'Create Pectus Excavatum Rib Cage' saved

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""The thesis pipeline in one MeshLab script, run by the real meshlabserver (issue 9):
+"""The thesis pipeline in one MeshLab script, run by the real meshlabserver:
 
   create the pectus rib cage (thesis patient 1: boy of 8, pectus index 5.3) -> element quality ->
   MGA smoothing -> Nuss FE analysis with the force calibrated to the measured elevation (44.7 mm) ->

@@ -15,7 +15,7 @@ for b in meshlab meshlabserver; do
 done
 ln -sfn "$SYSLIB/libmeshlab-common.so" "$PREFIX/lib/x86_64-linux-gnu/meshlab/libmeshlab-common.so"
 PD="$PREFIX/lib/x86_64-linux-gnu/meshlab/plugins"
-# drop stale links (a plugin that no longer exists in the build)
+# drop every link, then link the plugins anew (no stale link to a plugin the build does not have)
 find "$PD" -maxdepth 1 -type l -delete
 for p in "$SYSLIB"/plugins/*.so; do ln -sfn "$p" "$PD/$(basename "$p")"; done
 # Debian's MeshLab resources (shaders etc.) are found relative to the binary too

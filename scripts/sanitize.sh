@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # The cores' GoogleTests and the fuzz corpus replays under AddressSanitizer + UndefinedBehaviorSanitizer
 # (CMake preset `asan`: gcc, no MeshLab plugins, build dir build-asan/). Any report fails the run.
-#   scripts/sanitize.sh          # configure, build everything, ctest (every suite; too slow for CI, see README)
+#   scripts/sanitize.sh          # configure, build everything, ctest (every suite; too slow for CI, see docs/robustness.md)
 #   scripts/sanitize.sh ci       # the CI stage (.ci/run): the suites that build no rib cage, and the corpus
 #                                # replays of c1, mga, quad and volume, under ASan + UBSan
 #   scripts/sanitize.sh tsan     # the same under ThreadSanitizer (clang + libomp + Archer), not in CI

@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Screenshots of the real MeshLab GUI under Xvfb, for the README: the Filters menu with our filter,
+# Screenshots of the real MeshLab GUI under Xvfb, for the docs: the Filters menu with our filter,
 # and a mesh after running it from the GUI. Needs: xvfb xdotool imagemagick (installed by setup.sh
 # when SCREENSHOT_DEPS=1) and a built prefix.
 #   scripts/screenshot_gui.sh MESH.ply OUTDIR

@@ -23,17 +23,78 @@ for p in "${PKGS[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
 done
 
-# deb-src entry for bookworm main, same URI and keyring as the deb entry
+# The deb-src counterpart of this machine's `deb` entry for the Debian archive (the entry whose suites
+# include the release's codename and whose components include main), as deb822 on stdout: the same URIs,
+# suites, components and Signed-By. Read from the deb822 files /etc/apt/sources.list.d/*.sources and the
+# one-line files /etc/apt/sources.list and sources.list.d/*.list (there, every `deb` line of a URI that
+# carries the codename's main). Prints nothing if there is no such entry.
+#   debsrc_entry [APT_DIR [CODENAME]]   defaults: /etc/apt, VERSION_CODENAME of /etc/os-release
+debsrc_entry() {
+  local etc="${1:-/etc/apt}" codename="${2:-}"
+  if [ -z "$codename" ]; then codename="$(. /etc/os-release 2>/dev/null && echo "${VERSION_CODENAME:-}")"; fi
+  [ -n "$codename" ] || return 0
+  local deb822=() oneline=() f
+  for f in "$etc"/sources.list.d/*.sources; do [ -f "$f" ] && deb822+=("$f"); done
+  for f in "$etc"/sources.list "$etc"/sources.list.d/*.list; do [ -f "$f" ] && oneline+=("$f"); done
+  local out=""
+  if [ ${#deb822[@]} -gt 0 ]; then
+    # paragraph mode: one stanza per record; continuation lines (a leading blank) belong to the field above
+    out+="$(awk -v cn="$codename" 'BEGIN { RS = ""; FS = "\n" }
+      function has(list, word,   n, w, i) { n = split(list, w, /[ \t]+/); for (i = 1; i <= n; i++) if (w[i] == word) return 1; return 0 }
+      {
+        split("", f); key = ""
+        for (i = 1; i <= NF; i++) {
+          line = $i
+          if (line ~ /^#/) continue
+          if (line ~ /^[ \t]/) { if (key != "") f[key] = f[key] "\n" line; continue }
+          p = index(line, ":"); if (!p) { key = ""; continue }
+          key = tolower(substr(line, 1, p - 1)); v = substr(line, p + 1)
+          sub(/^[ \t]+/, "", v); sub(/[ \t]+$/, "", v); f[key] = v
+        }
+        if (tolower(f["enabled"]) == "no" || !has(f["types"], "deb") || !has(f["suites"], cn) || !has(f["components"], "main")) next
+        if (n++) print ""
+        print "Types: deb-src"; print "URIs: " f["uris"]; print "Suites: " f["suites"]; print "Components: " f["components"]
+        if ("signed-by" in f) print "Signed-By:" (f["signed-by"] ~ /^\n/ ? "" : " ") f["signed-by"]
+      }' "${deb822[@]}")"
+  fi
+  if [ ${#oneline[@]} -gt 0 ]; then
+    local lines
+    lines="$(awk -v cn="$codename" '
+      { sub(/#.*/, "") }
+      $1 == "deb" {
+        opts = ""; i = 2
+        if ($2 ~ /^\[/) { for (; i <= NF; i++) { opts = opts " " $i; if ($i ~ /\]$/) { i++; break } } }
+        if (i + 1 > NF) next
+        uri = $i; suite = $(i + 1); comps = ""
+        for (j = i + 2; j <= NF; j++) comps = comps (comps == "" ? "" : " ") $j
+        gsub(/[][]/, " ", opts); key = ""; nopt = split(opts, o, /[ \t]+/)
+        for (j = 1; j <= nopt; j++) if (tolower(o[j]) ~ /^signed-by=/) key = substr(o[j], 11)
+        n++; U[n] = uri; S[n] = suite; C[n] = comps; K[n] = key
+        if (suite == cn && (" " comps " ") ~ / main /) main[uri] = 1
+      }
+      END {
+        for (j = 1; j <= n; j++) {
+          if (!(U[j] in main)) continue
+          if (m++) print ""
+          print "Types: deb-src"; print "URIs: " U[j]; print "Suites: " S[j]; print "Components: " C[j]
+          if (K[j] != "") print "Signed-By: " K[j]
+        }
+      }' "${oneline[@]}")"
+    if [ -n "$lines" ]; then out+="${out:+$'\n\n'}$lines"; fi
+  fi
+  [ -z "$out" ] || printf '%s\n' "$out"
+}
+
+# deb-src for MeshLab's source package (its headers, below), from the machine's own apt sources
 SRCLIST=/etc/apt/sources.list.d/pectus-debsrc.sources
 need_update=0
 if [ ! -f "$SRCLIST" ]; then
-  $SUDO tee "$SRCLIST" >/dev/null <<'SRC'
-Types: deb-src
-URIs: http://deb.debian.org/debian
-Suites: bookworm bookworm-updates
-Components: main
-Signed-By: /usr/share/keyrings/debian-archive-keyring.gpg
-SRC
+  entry="$(debsrc_entry)"
+  if [ -z "$entry" ]; then
+    echo "[setup] no deb entry for the Debian archive (this release's suite, component main) in /etc/apt: add one"
+    exit 1
+  fi
+  printf '%s\n' "$entry" | $SUDO tee "$SRCLIST" >/dev/null
   need_update=1
 fi
 if [ ${#missing[@]} -gt 0 ] || [ $need_update = 1 ]; then

@@ -8,7 +8,7 @@ start=$(date +%s)
 echo "[test] setup + build took $(( $(date +%s) - start )) s"
 cd "$ROOT/build"
 ctest --output-on-failure -j"$(nproc)" --timeout 1500
-# the cores under AddressSanitizer + UBSan (the suites that build no rib cage; README "Hardening");
+# the cores under AddressSanitizer + UBSan (the suites that build no rib cage; docs/robustness.md);
 # PECTUS_SANITIZE=0 skips it
 if [ "${PECTUS_SANITIZE:-1}" != 0 ]; then "$ROOT/scripts/sanitize.sh" ci; fi
 echo "[test] total $(( $(date +%s) - start )) s"

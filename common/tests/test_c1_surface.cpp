@@ -475,8 +475,8 @@ TEST(C1Surface, DegenerateAndIsolatedInputGivesNoNaN) {
   for (const auto& v : s.refine(3).V) EXPECT_TRUE(v.allFinite());
 }
 
-// found by fuzzing (tests/fuzz/fuzz_c1): a query whose grid cell index does not fit in an int (a tiny mesh,
-// a far point) was converted to int before clamping, undefined behaviour (UBSan: float-cast-overflow)
+// a query whose grid cell index does not fit in an int (a tiny mesh, a far point): the index is clamped in
+// floating point before the conversion to int, which would otherwise be undefined (UBSan: float-cast-overflow)
 TEST(C1Surface, ClosestPointOfAFarQueryOnATinyMesh) {
   TriMesh m;
   m.V = {Vec3(0, 0, 0), Vec3(1e-6, 0, 0), Vec3(0, 1e-6, 0), Vec3(0, 0, 1e-6)};
@@ -491,8 +491,8 @@ TEST(C1Surface, ClosestPointOfAFarQueryOnATinyMesh) {
   }
 }
 
-// beyond ~1e154 the squared distances overflow: the search used to find no face (face -1, then an
-// out-of-range read); it now compares distances scaled by a power of two
+// beyond ~1e154 the squared distances overflow, and a search comparing them would find no face (face -1,
+// then an out-of-range read): the search compares distances scaled by a power of two
 TEST(C1Surface, ClosestPointOfAQueryAt1e300) {
   TriMesh m;
   m.V = {Vec3(0, 0, 0), Vec3(1, 0, 0), Vec3(0, 1, 0), Vec3(0, 0, 1)};

@@ -225,8 +225,9 @@ inline double elementQuality(const Mesh& M, const Element& e, const Vec3* p, int
 /// pass: the worst element's quality up to the cap, plus kCapSumWeight times the sum) if none is folded
 /// (elementQuality() above) and the worst is not below the guard, else below any valid value. A worst
 /// element below the guard ranks below everything else, invalid stars included: the node's start respects
-/// its guard, so the guard holds whatever the star (found by fuzzing: a star starting with two elements
-/// folded against the surface normal traded one of them for an element of alpha 1.5e-5, below the guard).
+/// its guard, so the guard holds whatever the star (else a star starting with two elements folded against
+/// the surface normal can trade one of them for an element of alpha 1.5e-5, below the guard:
+/// tests/fuzz/corpus/mga/guard-folded-bipyramid).
 /// Invalid stars rank lexicographically: first by the elements invalid in themselves (a reflex, folded or
 /// degenerate quad along its own normal, a degenerate triangle), then by those folded only against the
 /// surface normal at a node, then by the sum; so a star that starts with an element folded against the

@@ -27,8 +27,9 @@ TriMesh grid(int n, double jitter, unsigned seed, std::vector<std::array<int, 4>
     for (int i = 0; i < n; ++i) {
       Vec3 p(i, j, 0);
       if (i > 0 && j > 0 && i < n - 1 && j < n - 1) {
-        // drawn in a fixed order (y first, as gcc evaluated the former Vec3(u(rng), u(rng), 0)): the order of
-        // function arguments is unspecified and clang's differs, which gave the TSan build another grid
+        // drawn in a fixed order (y first, as gcc evaluates Vec3(u(rng), u(rng), 0)): the order of function
+        // arguments is unspecified and clang's differs, so drawing in the arguments gives the TSan build
+        // another grid
         const double dy = u(rng), dx = u(rng);
         p += Vec3(dx, dy, 0);
       }
@@ -158,9 +159,9 @@ TEST(MgaSmooth, SaddleTriangles) {
               r.colours, dev, r.seconds);
   EXPECT_GT(r.after.mean, 0.865);  // measured 0.868 (seed 11, 15 sweeps, guard 0.35)
   EXPECT_GT(r.after.min, r.before.min);
-  // the bound of this mesh is 0.3133, two corner triangles whose three nodes are boundary nodes (the
-  // issue's 0.40 cannot be reached while the boundary stays fixed; bench/saddle_bound.py); the search is
-  // stochastic: measured 0.3133 with std::mt19937_64, 0.2868 with the xoshiro256** stream (seed 11)
+  // the bound of this mesh is 0.3133, two corner triangles whose three nodes are boundary nodes (a minimum
+  // of 0.40 cannot be reached while the boundary stays fixed; bench/saddle_bound.py); the search is
+  // stochastic: 0.2868 with seed 11 (xoshiro256**), the bound with a std::mt19937_64 stream
   EXPECT_GT(r.after.min, 0.28);
   EXPECT_LT(dev, 0.01);
 }
@@ -338,9 +339,9 @@ TEST(MgaSmooth, FoldedElementsNeverIncrease) {
 }
 
 TEST(MgaSmooth, GuardHoldsForAFoldedStar) {
-  // found by fuzzing (tests/fuzz/corpus/mga/guard-folded-bipyramid): a jittered triangular bipyramid
-  // whose ring node 3 starts with two faces folded against the C1 surface normal there; the search traded
-  // one fold for a face of alpha 1.5e-5, below the guard, because an invalid star ignored the guard
+  // the input of tests/fuzz/corpus/mga/guard-folded-bipyramid: a jittered triangular bipyramid whose ring
+  // node 3 starts with two faces folded against the C1 surface normal there; a search whose invalid stars
+  // ignore the guard trades one fold for a face of alpha 1.5e-5, below the guard
   TriMesh t;
   t.V = {{0, 0, -0.81244373235675593},
          {0.87372298579091856, -0.21003524895910325, 0.35645207301319376},
@@ -428,7 +429,7 @@ TEST(GradientSmooth, GuardAndFinalWorstElementPass) {
 }
 
 TEST(GradientSmooth, QuadSaddleTarget) {
-  // issue 5's quad target (mean beta >= 0.85, min >= 0.40) on a jittered 25 x 25 quad grid on the saddle,
+  // the quad target (mean beta >= 0.85, min >= 0.40) on a jittered 25 x 25 quad grid on the saddle,
   // with guard 0.4 and the final worst-element pass below 0.45 (bench/mga_smooth.py has the same row)
   std::vector<std::array<int, 4>> quads;
   TriMesh t = grid(25, 0.3, 5, &quads);

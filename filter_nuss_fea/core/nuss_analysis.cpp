@@ -253,7 +253,7 @@ void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const
     throw InputError("No lower sternum end landmark (code 500) and no sternum point given: the elevating force goes there.");
   bool anySternum = false;
   for (size_t f = 0; f < cage.surface.faces.size() && !anySternum; ++f) anySternum = sternumFace(f);
-  if (!anySternum) throw InputError("The cage has no sternum faces (tissue 3): the elevating force acts on the sternum.");
+  if (!anySternum) throw InputError("The cage has no sternum faces (tissue code 3): the elevating force acts on the sternum.");
   s.sternumNodes = surfaceNodesNear(cage, sp, pl.sternumLoadRadius, sternumFace);
   if (s.sternumNodes.empty())
     throw InputError("No sternum surface node lies within " + mm(pl.sternumLoadRadius) + " mm of the lower sternum end " + pointText(sp) +

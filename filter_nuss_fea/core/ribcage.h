@@ -1,4 +1,4 @@
-// Parametric pectus excavatum rib cage (issue 3): one watertight, manifold, self-intersection-free
+// Parametric pectus excavatum rib cage: one watertight, manifold, self-intersection-free
 // triangle surface of ribs, costal cartilages and sternum, with per-face tissue labels and landmarks
 // (conventions in common/include/pectus/labels.h). Host-free: vcglib CMeshO + Eigen, no Qt.
 //
@@ -52,7 +52,7 @@ struct RibCageStats {
   double transverseInner = 0, apMin = 0, zDeepest = 0;
   double gridSpacing = 0;
   std::size_t rawFaces = 0;     ///< faces before decimation
-  int decimationRetries = 0;    ///< 1: the first decimation intersected itself and was redone with the embedding guard
+  int decimationRetries = 0;    ///< decimations redone (with the embedding guard) as the result intersected itself
   double secondsField = 0, secondsExtract = 0, secondsDecimate = 0, secondsLabel = 0;
 };
 

@@ -8,8 +8,8 @@
 // surface they lie on. Tets (after TetGen) take the tissue of the input solid containing their centroid;
 // where solids overlap, the one the centroid lies deeper in (farther from its surface), so the interface
 // sits in the middle of the overlap as it does at a real junction; ties: cartilage, sternum, bone —
-// CageSurface::labelTets. (Letting cartilage win the whole overlap lengthened every costal cartilage by
-// the overlaps at both of its ends and made the joined cage 34 % softer than the one-surface cage.)
+// CageSurface::labelTets. (Letting cartilage win the whole overlap would lengthen every costal cartilage
+// by the overlaps at both of its ends and make the joined cage 34 % softer than the one-surface cage.)
 //
 // Parts: a layer carrying face labels (as 'Create Pectus Excavatum Rib Cage' writes them) keeps its
 // parts. Otherwise: each connected piece of a bone layer is the rib of the nearest costovertebral joint

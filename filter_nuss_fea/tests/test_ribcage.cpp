@@ -244,10 +244,11 @@ TEST(RibCage, BadInputNamesParameterAndRange) {
   expectError(p, "blend");
 }
 
-// The generator at coarse edges where the decimation used to fold the surface (age 11, index 4.0 at 6 mm: three
-// faces of the left 6th rib through each other; the retries with frozen vertices then blew the mesh up to 349k
-// faces): no self-intersection by the exact check, and the face count of a decimation to the edge length
-// (the redo with the embedding guard keeps the same target). bench/ribcage_sweep.py sweeps the whole range.
+// The generator at coarse edges where an unguarded decimation can fold the surface (age 11, index 4.0 at 6 mm:
+// three faces of the left 6th rib through each other; retrying with frozen vertices instead of the embedding
+// guard would blow the mesh up to 349k faces): no self-intersection by the exact check, and the face count of
+// a decimation to the edge length (the redo with the embedding guard keeps the same target).
+// bench/ribcage_sweep.py sweeps the whole range.
 TEST(RibCage, SweepAtCoarseEdgesHasNoSelfIntersection) {
   struct Case { double age, haller, edge; };
   for (const Case& c : std::vector<Case>{{11, 4.0, 6.0}}) {  // the other ages, indices and 8 mm: the bench (slow)
@@ -262,7 +263,7 @@ TEST(RibCage, SweepAtCoarseEdgesHasNoSelfIntersection) {
     std::printf("[sweep] age %.0f, index %.1f, %.0f mm: %d faces, %d decimation retries, %d self-intersecting faces\n", c.age,
                 c.haller, c.edge, m.fn, st.decimationRetries, t.selfIntersections);
     EXPECT_EQ(t.selfIntersections, 0) << "age " << c.age << " index " << c.haller;
-    // area / (0.433 edge^2) faces are asked for; these cages have 50-200k mm^2 of surface (349k faces was 12.6M)
+    // area / (0.433 edge^2) faces are asked for; these cages have 50-200k mm^2 of surface (349k faces would be 12.6M)
     EXPECT_LT(m.fn * c.edge * c.edge, 7e5) << "age " << c.age << ": " << m.fn << " faces";
     EXPECT_GT(m.fn * c.edge * c.edge, 1.2e5) << "age " << c.age << ": " << m.fn << " faces";
     EXPECT_EQ(topology(m).boundary, 0);

@@ -119,12 +119,12 @@ TEST(TissueJoin, BadLayersAreNamed) {
   EXPECT_NE(err({{"rib", &rib}, {"cartilage", &empty}}).find("Layer 'cartilage' has no faces"), std::string::npos);
 }
 
-// Issue #7: the generated cage joined from one layer per tissue was 28 % softer than the one-surface cage
-// (6 mm edges, TET10, linear, Fe = 10 N: 86.9 against 68.1 mm). The layers have no smooth-union fillet where
-// a cartilage meets the sternum or a neighbouring rib; the one-surface cage has (blend 1.95 mm), and without
-// it the one-surface cage rises 79.3 mm. So the two inputs are compared with the same fillet treatment
-// (blend 0, none on either side): same volume (measured 0.02 % apart) and the sternal elevation within 12 %
-// (measured +8.4 % with TetGen quality 1.6 and 2.5: 85.0 against 78.4 mm with 75k and 41k tets, so the rest of
+// The generated cage joined from one layer per tissue is 28 % softer than the one-surface cage (6 mm edges,
+// TET10, linear, Fe = 10 N: 86.9 against 68.1 mm): the layers have no smooth-union fillet where a cartilage
+// meets the sternum or a neighbouring rib; the one-surface cage has one (blend 1.95 mm), and without it the
+// one-surface cage rises 79.3 mm. So the two inputs are compared with the same fillet treatment (blend 0,
+// none on either side): same volume (0.02 % apart) and the sternal elevation within 12 %
+// (+8.4 % with TetGen quality 1.6 and 2.5: 85.0 against 78.4 mm with 75k and 41k tets, so the rest of
 // the gap is not the joined mesh's denser tets; +9.6 % as here, without quality refinement for speed: 78.3
 // against 71.4 mm with 13.6k and 8.6k tets).
 TEST(TissueJoin, GeneratedLayersMatchTheOneSurfaceCageWithoutFillets) {

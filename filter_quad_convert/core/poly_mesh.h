@@ -48,9 +48,9 @@ PolyMesh fromCMesh(const CMeshO& m, bool quads, std::vector<int>* vertexIndex = 
 /// shared edge v0-v2 faux in both (what vcg::tri::PolygonSupport and MeshLab's OFF importer produce).
 void toCMesh(const PolyMesh& p, CMeshO& m);
 
-/// Input checks of the cores (a direct caller has no MeshLab layer check before it; found by fuzzing).
+/// Input checks of the cores (a direct caller has no MeshLab layer check before it).
 /// Throws InputError naming the first vertex with a NaN or infinite coordinate, used by an element or not (the
-/// conversion keeps every vertex, so an unused one went through into its output).
+/// conversion keeps every vertex, so an unused one would go through into its output).
 void requireFiniteVertices(const std::vector<Vec3>& V);
 /// Throws InputError unless element `index` (`kind`: "triangle", "element") has `nv` vertex indices in
 /// [0, vertices) and no vertex twice.

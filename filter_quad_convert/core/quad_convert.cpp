@@ -115,8 +115,9 @@ PolyMesh splitToQuads(const PolyMesh& m, const PlaceFn& place, std::size_t* newN
 ConvertResult convertToQuads(const c1::TriMesh& tri, const ConvertOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
   if (tri.F.empty()) throw InputError("the mesh has no triangle to convert");
-  // (found by fuzzing: a NaN vertex, used or not, went through into the output; a bad index was read out of
-  // range; a triangle with a repeated vertex went through as a leftover element with that vertex twice)
+  // (unchecked, a NaN vertex, used or not, would go through into the output, a bad index would be read out
+  // of range, and a triangle with a repeated vertex would go through as a leftover element with that vertex
+  // twice)
   requireFiniteVertices(tri.V);
   for (std::size_t f = 0; f < tri.F.size(); ++f) requireElementIndices("triangle", f, tri.F[f].data(), 3, tri.V.size());
   ConvertResult r;

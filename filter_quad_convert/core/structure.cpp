@@ -392,7 +392,7 @@ class Work {
 
 StructureResult improveStructure(const PolyMesh& in, const c1::C1Surface* surface, const StructureOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  requirePolyMesh(in);  // (a NaN vertex went through; a bad index was read out of range)
+  requirePolyMesh(in);  // (unchecked, a NaN vertex would go through and a bad index be read out of range)
   StructureResult r;
   r.before = polyStats(in);
   r.mesh = in;

@@ -211,7 +211,7 @@ TEST(quad_convert, BadInput) {
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("isolated"), std::string::npos);
   }
-  // found by fuzzing: a NaN vertex went through into the output, a bad index was read out of range
+  // a NaN vertex must not go through into the output, a bad index must not be read out of range
   const auto pair = squarePair();
   for (const ConvertOptions& o : kBothModes) {
     auto nan = pair;
@@ -223,8 +223,8 @@ TEST(quad_convert, BadInput) {
     bad.F[1][2] = -1;
     EXPECT_THROW(convertToQuads(bad, o), InputError);
     EXPECT_EQ(convertToQuads(pair, o).merged, 1u);
-    // found by fuzzing (tests/fuzz/corpus/quad/collapsed-leftover-triangle): a triangle with a vertex twice
-    // went through as a leftover element with that vertex twice
+    // the input of tests/fuzz/corpus/quad/collapsed-leftover-triangle: a triangle with a vertex twice, which
+    // must not go through as a leftover element with that vertex twice
     auto collapsed = pair;
     collapsed.V.push_back({0.5, -1, 0.3});
     collapsed.F.push_back({4, 4, 1});
@@ -233,10 +233,10 @@ TEST(quad_convert, BadInput) {
 }
 
 TEST(quad_convert, UnusedInfVertexIsRefused) {
-  // found by fuzzing (tests/fuzz/corpus/quad/unused-inf-vertex: a 3 x 4 torus whose vertex 4, welded into
-  // vertex 10 so no triangle uses it, had z = Inf): the NaN check only looked at the vertices the triangles use,
-  // and the conversion copies every vertex into its output, so the Inf went through (MeshLab's layer check
-  // refuses it; a direct caller got it back)
+  // the input of tests/fuzz/corpus/quad/unused-inf-vertex is a 3 x 4 torus whose vertex 4, welded into vertex
+  // 10 so no triangle uses it, has z = Inf: the conversion copies every vertex into its output, so a NaN check
+  // of only the vertices the triangles use would let the Inf through (MeshLab's layer check refuses it; a
+  // direct caller would get it back). Here: a square pair with an unused vertex at Inf.
   auto t = squarePair();
   t.V.push_back({0.63, -0.0094, std::numeric_limits<double>::infinity()});
   for (const ConvertOptions& o : kBothModes) {
@@ -405,8 +405,8 @@ TEST(quad_structure, QuadOperators) {
 }
 
 TEST(quad_structure, BadInputIsRefused) {
-  // the structure operators had no input check: a NaN node went through into the output, a bad index or a
-  // pentagon was read out of range
+  // the structure operators check their input: a NaN node must not go through into the output, a bad index
+  // or a pentagon must not be read out of range
   StructureOptions o;
   PolyMesh nan = quadGrid(3), badIndex = quadGrid(3), repeated = quadGrid(3), pentagon = quadGrid(3);
   nan.V[5].x() = std::numeric_limits<double>::quiet_NaN();  // an interior node

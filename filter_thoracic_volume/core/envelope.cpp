@@ -276,7 +276,7 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
     if (std::max({a.z(), b.z(), c.z()}) < ezLo || std::min({a.z(), b.z(), c.z()}) > ezHi) continue;
     const double e = std::max({(a - b).norm(), (b - c).norm(), (c - a).norm()});
     if (e <= target) continue;
-    const int q = int(std::min(64.0, std::ceil(e / target)));  // clamped before the cast (fuzz_volume: e / target 1.4e18)
+    const int q = int(std::min(64.0, std::ceil(e / target)));  // clamped before the cast (e / target can be 1e18)
     for (int x = 0; x <= q; ++x)
       for (int y = 0; x + y <= q; ++y) {
         if ((x == 0 && y == 0) || (x == q) || (y == q)) continue;

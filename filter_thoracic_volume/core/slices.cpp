@@ -239,7 +239,7 @@ long long rasterCount(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vec
   double ylo = 1e300, yhi = -1e300;
   for (const auto& p : poly) ylo = std::min(ylo, p.y()), yhi = std::max(yhi, p.y());
   // rows and columns clamped to the grid in floating point before any cast: a polygon far outside the
-  // grid (relative to the pixel size) would overflow int (found by fuzz_volume)
+  // grid (relative to the pixel size) would overflow int
   const int r0 = clampedCell((ylo - o.y()) / h - 0.5, rows), r1 = clampedCell(std::ceil((yhi - o.y()) / h), rows);
   const std::size_t n = poly.size();
   for (int r = r0; r <= r1; ++r) {
@@ -282,7 +282,7 @@ SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p,
     if (!regions[k].empty()) polyArea[k] = regions[k].polygonArea();
     if (progress && k % std::max(1, N / 10) == 0) progress(10 + 60 * k / N, "slice regions");
   }
-  // a region whose polygon has no area (every ray stopped at the seed: found by fuzz_volume) counts as
+  // a region whose polygon has no area (every ray stopped at the seed) counts as
   // empty: it would set no extent (with only such regions the pixel size would be 0 / resolution) and
   // lie anywhere outside the raster
   auto hasArea = [&](int k) { return !regions[k].empty() && std::abs(polyArea[k]) > 0; };

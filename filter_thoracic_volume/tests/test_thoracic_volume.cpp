@@ -64,8 +64,8 @@ TEST(ThoracicVolumeSlice, GapRuleBeatsChords) {
 
 // hits in a narrow arc only (a coarse probe of a deformed cage: 3 of 64 rays hit): the closure of the gap of
 // more than half a turn stays inside the farthest hit; the chord's line, nearly parallel to some of the
-// gap's rays, gave radii of kilometres and a raster box that swallowed every other slice (the main job's
-// envelope probe on the FE result, session 8)
+// gap's rays, would give radii of kilometres and a raster box that swallows every other slice (as in the
+// envelope filter's coarse probe of an FE result)
 TEST(ThoracicVolumeSlice, GapOfMoreThanHalfATurnStaysInside) {
   std::vector<Seg2> arc;
   const double r = 100;
@@ -215,9 +215,9 @@ TEST(ThoracicVolumeSlice, RasterResolutionIsUsed) {
   EXPECT_LT(std::abs(f.volume - f.polygonVolume) / f.polygonVolume, 5e-4);
 }
 
-// found by fuzz_volume (UBSan: NaN cast to int): an open, wavy sheet whose one slice region collapsed to a
-// point (every ray stopped at the seed), so the slices' common box had no extent and the pixel size was
-// 0 / resolution. A region without area now counts as empty, and a range with only such regions is refused.
+// an open, wavy sheet whose one slice region collapses to a point (every ray stops at the seed): the slices'
+// common box would have no extent and the pixel size would be 0 / resolution (UBSan: NaN cast to int). A
+// region without area counts as empty, and a range with only such regions is refused.
 TEST(ThoracicVolumeSlice, RegionsWithoutAreaAreRefused) {
   Soup s;
   s.V = {{-41.4578, -4.26848, 1.37812},  {17.7676, -4.26848, -0.121875}, {76.9887, -4.26848, 5.87741},

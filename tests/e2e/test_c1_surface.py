@@ -97,7 +97,7 @@ if os.path.exists(out2):
     P = h.read_ply(out2)["V"]
     q = np.sqrt(((P / AXES) ** 2).sum(axis=1))
     h.check(len(P) == len(V2), "projected layer keeps its vertices")
-    h.check(np.abs(q - 1).max() < 0.01, f"projected vertices on the ellipsoid within 1% (was 5%): {np.abs(q - 1).max():.4f}")
+    h.check(np.abs(q - 1).max() < 0.01, f"projected vertices on the ellipsoid within 1%: {np.abs(q - 1).max():.4f}")
     # projecting the projection changes nothing (the points are on the surface)
     out3 = os.path.join(W, "projected2.ply")
     r2 = h.run([src, out2], script("c1_project.mlx", surfaceMesh=0), outputs=[(out3, "", 1)])

@@ -1,4 +1,4 @@
-"""Cohort scripts (issue 9, item 4): a two-patient demo cohort at a coarse edge length runs through
+"""Cohort scripts: a two-patient demo cohort at a coarse edge length runs through
 scripts/cohort.sh (GNU parallel) in quick mode; cohort_summary.csv has one row per patient, each reaching
 its own target elevation, rows equal to the per-case summaries; the job-array script run for task 2 alone
 gives the same calibrated force as the parallel run."""

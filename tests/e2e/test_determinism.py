@@ -1,4 +1,4 @@
-"""E2E (issue #10, determinism): every filter, run by meshlabserver with OMP_NUM_THREADS=1 and =2 on the
+"""E2E, determinism: every filter, run by meshlabserver with OMP_NUM_THREADS=1 and =2 on the
 same input and seed (the valid inputs of the bad-input matrix, 6x finer, and the example parameters; the Nuss FE
 analysis on the coarse 8 mm cage, linear TET4, calibrated to 10 mm; the Nuss Bar Planner likewise, quick mode,
 space 4 with one and with two bars, writing its CSV), gives byte-identical outputs: every layer saved after it,

@@ -1,8 +1,8 @@
-"""E2E (issue #10): tissue labels and the filters that overwrite face colour and quality.
+"""E2E: tissue labels and the filters that overwrite face colour and quality.
 The rib cage generator keeps the labels as named face attributes and writes them as face colour/quality
 for files. 'Compute Element Quality' (and MGA/gradient smoothing, which call it, and the quad filters)
-overwrite face colour and quality: in the same session the Nuss FE analysis still reads the attributes;
-a cage saved after such a filter has lost its labels, and the analysis says so and why."""
+overwrite face colour and quality: in the same meshlabserver run the Nuss FE analysis still reads the
+attributes; a cage saved after such a filter has lost its labels, and the analysis says so and why."""
 import os
 
 import harness as h
@@ -16,9 +16,9 @@ QUALITY = mlx.load_script(os.path.join(h.SOURCE, "filter_mga_smooth", "examples"
 FAST = dict(analysis=1, order=1, tetQuality=0.0, targetElevation=10.0)
 cage, lms = os.path.join(W, "cage_coloured.ply"), os.path.join(W, "cage_landmarks.ply")
 
-# one session: generate, colour the cage by element quality, analyse (labels from the attributes)
+# one run: generate, colour the cage by element quality, analyse (labels from the attributes)
 r = h.run([], mlx.Script([GEN, QUALITY, nuss_fea(landmarkLayer=1, **FAST)]), [(cage, "fc fq", 0), (lms, "vq", 1)])
-check(r.rc == 0, "same session: the analysis runs after the cage was coloured by quality", "\n".join(r.log[-4:]))
+check(r.rc == 0, "same run: the analysis runs after the cage is coloured by quality", "\n".join(r.log[-4:]))
 
 # the coloured cage saved and loaded again: the labels are gone, and the message says why
 r = h.run([lms, cage], mlx.Script([nuss_fea(landmarkLayer=0, **FAST)]))

@@ -4,11 +4,11 @@
 // Properties: every tet has valid, distinct nodes, a tissue label and positive volume; the input vertices
 // keep their indices and are in a tet; the surface's smallest feature (named when TetGen fails) is valid.
 // TetGen may add at most kAddedPoints points per input (TetgenOptions::maxAddedPoints): the bytes' most
-// demanding bounds (radius-edge 1.2, tets of 0.004 of the box) make 5,000-26,000 tets in 0.3-5 s, which held
+// demanding bounds (radius-edge 1.2, tets of 0.004 of the box) make 5,000-26,000 tets in 0.3-5 s, which holds
 // a campaign to 12-30 inputs/s, all of it in TetGen's refinement and not in this project's code. The
 // regression replay (ctest fuzz_replay_fe_model) sets PECTUS_FUZZ_FULL_TETGEN=1 and meshes without the cap,
-// so the findings made on full refinements (TetGen's assertion, its endless refinement, a flat tet) replay
-// as they were found.
+// so the corpus inputs that need full refinement (TetGen's assertion, its endless refinement, a flat tet)
+// replay as the filter meshes them.
 #include "fuzz_mesh.h"
 #include "nuss_analysis.h"
 #include "pectus/errors.h"

@@ -32,7 +32,8 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   std::vector<char> fixed;
   if (r.flag())
     for (std::size_t i = 0; i < m.vert.size(); ++i) fixed.push_back(char(r.u8() % 4 == 0));
-  // the element search (read last: older corpus inputs keep their meaning; an exhausted input reads false)
+  // the element search, read last so that the bytes before it mean the same whatever it is (an input that
+  // ends before it reads false: every element)
   o.elementSearch = r.flag() ? smooth::ElementSearch::Guided : smooth::ElementSearch::Every;
   if (o.elementSearch == smooth::ElementSearch::Guided && r.flag()) o.elementSearch = smooth::ElementSearch::GuidedLocal;
   try {

@@ -42,7 +42,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       p.initialStep = r.flag() ? 0.0 : r.real(0, 50);
       // keep the run short: the step halves down to this (0.05 mm by default), and every level moves each key
       // point inwards in steps from the envelope's start: at least 1/64 of the box keeps a level to ~100
-      // sweeps (an input at 1/400 took 2.9 s in Release, over the 30 s timeout under ASan)
+      // sweeps (an input at 1/400 takes 2.9 s in Release, over the 30 s timeout under ASan)
       Eigen::AlignedBox3d box;
       for (const auto& v : s.V) box.extend(v);
       p.minStep = std::max(r.real(0.5, 8), box.sizes().head<2>().maxCoeff() / 64);

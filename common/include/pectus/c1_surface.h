@@ -19,7 +19,7 @@
 //    minimize the curvature energy of the edge network (Nielson 1983, the estimate behind scipy's
 //    Clough-Tocher): sum over edges of L^-1/2 * integral of p''(s)^2 along the edge, p the cubic Hermite
 //    curve of the end values and end directional derivatives; a sparse SPD system (Eigen LDLT), linear
-//    data reproduced exactly. The L^-1/2 edge weight (Nielson: 1) favours short edges; it was chosen on
+//    data reproduced exactly. The L^-1/2 edge weight (Nielson: 1) favours short edges; it is chosen on
 //    Table 3-1's sets (36-point grid, Franke 33/100) and checked on other jittered grids and functions.
 //    VertexNormal frame: the per-vertex QuadraticFit below (no global height to minimize over).
 //  - GradientMethod::QuadraticFit: weighted least-squares fit of a quadratic height over the 2-ring (3-ring

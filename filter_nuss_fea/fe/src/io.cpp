@@ -37,7 +37,7 @@ std::string setName(int t) {
   return n ? std::string(n) : "TISSUE" + std::to_string(t);
 }
 // Text written through a buffer that goes to the file in 1 MB pieces; numbers by std::to_chars with 12
-// significant digits (what the stream's precision(12) gave: the same text), without the stream's
+// significant digits (the same text as the stream's precision(12)), without the stream's
 // per-number locale and virtual calls (the rib cage's 360k-tet .vtu: 2.5 s through the stream).
 class TextOut {
  public:
@@ -246,7 +246,7 @@ std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::s
     const auto r = std::from_chars(t.data(), t.data() + t.size(), i);
     if (!t.empty() && r.ec == std::errc() && r.ptr == t.data() + t.size()) return i;
     const double v = number(t);  // 1.0, 1e3, +1, or an error
-    // the range first: casting a double outside long's range is undefined (fuzz_inp, UBSan: 1e300)
+    // the range first: casting a double outside long's range (e.g. 1e300) is undefined behaviour
     if (!(std::abs(v) <= 2e9) || v != std::floor(v)) fail("'" + std::string(t) + "' is not an integer");
     return static_cast<int>(v);
   };

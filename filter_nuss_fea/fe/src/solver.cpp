@@ -101,8 +101,8 @@ double eqStrainOf(const Matrix3d& e, double nu) {
 // CHOLMOD's supernodal factorisation calls the BLAS for its dense blocks. Debian's OpenBLAS (pthreads
 // build) starts its own busy-waiting threads for every call; beside this program's OpenMP threads, or on a
 // machine whose cores are taken by other jobs, they oversubscribe the cores and a factorisation of the rib
-// cage's systems (small supernodes, ~1e8-1e9 flops) became 5-10x slower than on one BLAS thread (measured:
-// 2.94 s against 0.27 s for a 127k-dof cage). So the BLAS gets one thread for small factorisations and
+// cage's systems (small supernodes, ~1e8-1e9 flops) is 5-10x slower than on one BLAS thread (a 127k-dof
+// cage: 2.94 s against 0.27 s). So the BLAS gets one thread for small factorisations and
 // OpenMP's thread count from kBlasThreadFlops on (the long cantilever benchmark: 2e11 flops). The call is
 // looked up at run time (the BLAS behind libblas.so.3 is chosen by Debian's alternatives; the reference
 // BLAS has no threads to set). PECTUS_BLAS_THREADS=n forces n.
@@ -197,7 +197,7 @@ struct Solver::Impl {
   int nen = 4;
   std::vector<int> freeIndex;                 // per dof: free index or -1
   std::vector<const Material*> mat;           // per tet
-  std::vector<const Eigen::Matrix<double, 6, 6>*> D;  // per tet, into Dby (a copy per tet was 288 bytes)
+  std::vector<const Eigen::Matrix<double, 6, 6>*> D;  // per tet, into Dby (a pointer, not a 288-byte copy)
   std::map<int, Eigen::Matrix<double, 6, 6>> Dby;
   Eigen::VectorXd fext;                        // full, 3n
   Eigen::VectorXd prescribed;                  // full, 3n (0 for free dofs)
@@ -234,7 +234,7 @@ struct Solver::Impl {
   }
 
   // element gradients dN/dX at a point with reference derivatives dN (shapeDerivs), returns det(J) * w.
-  // Fixed sizes throughout: a dynamic topRows(nen) product went through Eigen's blocked GEMM kernel.
+  // Fixed sizes throughout: a dynamic topRows(nen) product would go through Eigen's blocked GEMM kernel.
   template <int NEN>
   double gradientsT(int t, const Eigen::Matrix<double, 10, 3>& dN10, double w, Eigen::Matrix<double, NEN, 3>& G) const {
     const Eigen::Matrix<double, NEN, 3> dN = dN10.template topRows<NEN>();
@@ -267,9 +267,9 @@ struct Solver::Impl {
     // (byte-identical results with 1 or N threads; atomic adds would sum in thread-timing order).
     // A colour of a few hundred tets is assembled in one thread: a parallel region per colour costs a
     // barrier, and on a machine whose cores are busy with other jobs a barrier waits for a descheduled
-    // thread (measured, 480-tet cantilever, 40 Newton iterations, load ~7: 0.07 s on one thread, 6.7-14 s
-    // with two threads and a region per colour). Colouring single tets instead of chunks made every
-    // colour a sweep over all of K: the rib cage's 360k-tet assembly took 0.5-0.8 s instead of 0.35 s.
+    // thread (a 480-tet cantilever, 40 Newton iterations, load ~7: 0.07 s on one thread, 6.7-14 s with
+    // two threads and a region per colour). Colouring single tets instead of chunks would make every
+    // colour a sweep over all of K (the rib cage's 360k-tet assembly: 0.5-0.8 s against 0.35 s).
     const int nt = m->numTets();
     for (const std::vector<int>& group : colors) {
       const int ng = static_cast<int>(group.size());
@@ -332,7 +332,7 @@ struct Solver::Impl {
     for (int r = 0; r < ND; ++r) fi[dofs[r]] += fe(r);
     // the element's dofs by free index (constrained ones, -1, first): a column's rows are then the dofs
     // after it, ascending, found by one forward walk along the column (a binary search per entry
-    // mispredicted most of its branches)
+    // mispredicts most of its branches)
     int byIndex[ND];
     for (int r = 0; r < ND; ++r) byIndex[r] = r;
     for (int r = 1; r < ND; ++r)
@@ -489,7 +489,7 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
       throw InputError("Tetrahedron " + std::to_string(t) + " is inverted or flat (volume <= 0).");
     // a TET10 whose mid-edge nodes lie far from its edges' midpoints can fold inside although its corners
     // do not: its Jacobian must be positive at every quadrature point and at the centroid (where the
-    // stresses are taken), else its stiffness and stresses are meaningless (fuzz_inp: NaN stresses)
+    // stresses are taken), else its stiffness and stresses are meaningless (NaN stresses)
     if (I.nen == 10) {
       Eigen::Matrix<double, 10, 3> G;
       bool ok = I.gradientsT<10>(t, I.centroidDN, 1.0, G) > 0;

@@ -88,9 +88,9 @@ Vector3d closestOnTriangle(const Vector3d& p, const Vector3d& a, const Vector3d&
 }
 
 // The face of s nearest to p among those `skip` does not exclude, by shells of grid cells around p's cell
-// (only their cells inside the grid: a shell costs its area, not the cube it bounds, which made a vertex of
-// a flat 200 x 200 x 1 grid cost ~1e9 cells and an input 10-120 s under ASan, found by fuzz_fe_model), and its squared distance
-// (best2); -1 if there is none closer than `within` (mm; infinity: any face).
+// (only their cells inside the grid: a shell costs its area, not the cube it bounds; iterating the cubes,
+// a vertex of a flat 200 x 200 x 1 grid would cost ~1e9 cells, 10-120 s under ASan), and its squared
+// distance (best2); -1 if there is none closer than `within` (mm; infinity: any face).
 template <class Skip>
 int nearestFace(const SurfaceMesh& s, const Grid& grid, const Vector3d& p, double within, const Skip& skip, double& best2) {
   int c[3];
@@ -127,8 +127,8 @@ int nearestFace(const SurfaceMesh& s, const Grid& grid, const Vector3d& p, doubl
 }
 
 // A sentence on the surface's smallest feature when it is far below its edges (< 1e-3 of the median edge):
-// what TetGen's failures on a closed, self-intersection-free surface come from (fuzz_fe_model's findings
-// all had one); empty otherwise.
+// what TetGen's failures on a closed, self-intersection-free surface come from (every such failure in the
+// fuzz corpus has one); empty otherwise.
 std::string smallFeatureHint(const SurfaceMesh& s) {
   const SurfaceFeature f = smallestFeature(s);
   if (!(f.size < 1e-3 * f.medianEdge) || f.vertex < 0) return {};
@@ -146,11 +146,6 @@ std::string smallFeatureHint(const SurfaceMesh& s) {
   return m.str();
 }
 
-/// New index of each TetGen output point such that surface vertex i is node i (the promise of
-/// tetrahedralize) and the other points follow in TetGen's order. TetGen drops input points it does not
-/// mesh (a point in no face outside the volume, a duplicate) and numbers the rest consecutively (found by
-/// fuzzing); it keeps the coordinates of the points it keeps, so they are matched exactly. Throws
-/// InputError if a surface vertex is not among them.
 // What the mesher reads of TetGen's output: points (x, y, z) and linear tets (4 point indices each)
 struct TetgenOutput {
   std::vector<double> points;
@@ -212,7 +207,7 @@ bool readAll(int fd, void* data, std::size_t n, const Deadline* deadline, bool& 
 }
 
 // TetGen in a child process. Debian's TetGen 1.5 keeps its assertions, and on some valid-looking surfaces
-// its Delaunay refinement stops on one (insertpoint: assert(0), found by fuzz_fe_model) or crashes: in this
+// its Delaunay refinement stops on one (insertpoint: assert(0)) or crashes: in this
 // process that would abort MeshLab with the user's unsaved work. The child (fork: a copy-on-write image of
 // this one, only the calling thread) runs TetGen and sends the points and tets back through a pipe; a
 // child that dies becomes an InputError, and so does one still running after `timeLimit` seconds (> 0),
@@ -289,6 +284,11 @@ TetgenOutput runTetgen(const std::string& switches, tetgenio& in, double timeLim
   return r;
 }
 
+/// New index of each TetGen output point such that surface vertex i is node i (the promise of
+/// tetrahedralize) and the other points follow in TetGen's order. TetGen drops input points it does not
+/// mesh (a point in no face outside the volume, a duplicate) and numbers the rest consecutively; it keeps
+/// the coordinates of the points it keeps, so they are matched exactly. Throws InputError if a surface
+/// vertex is not among them.
 std::vector<int> inputVerticesFirst(const SurfaceMesh& s, const TetgenOutput& out) {
   const int nv = static_cast<int>(s.vertices.size()), np = out.numPoints();
   const double* pointlist = out.points.data();

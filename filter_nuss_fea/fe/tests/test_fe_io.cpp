@@ -241,7 +241,7 @@ TEST(Calibration, IncrementObservationsCutTheSolves) {
       44.7, o);
   const auto plain = calibrateForce([&](double F) { return curve(F); }, 44.7, o);
   EXPECT_NEAR(curve(withObs.force), 44.7, 0.1);
-  EXPECT_LE(withObs.evaluations, 4);  // the target: calibration in <= 4 nonlinear solves
+  EXPECT_LE(withObs.evaluations, 4);  // the target: calibration in <= 4 nonlinear solves
   EXPECT_LT(withObs.evaluations, plain.evaluations);
 }
 

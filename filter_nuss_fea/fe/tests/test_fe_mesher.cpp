@@ -126,8 +126,9 @@ TEST(FeMesher, OpenSurfaceIsAnError) {
 }
 
 TEST(FeMesher, SurfaceVertexIsNodeOfTheSameIndex) {
-  // TetGen drops an input point it does not mesh and numbers the rest consecutively, so node i was
-  // another point than surface vertex i after it (an FE load or a deformed-layer vertex on the wrong node)
+  // TetGen drops an input point it does not mesh and numbers the rest consecutively; without renumbering,
+  // node i would be another point than surface vertex i after it (an FE load or a deformed-layer vertex on
+  // the wrong node)
   const SurfaceMesh box = boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 100);
   TetgenOptions o;
   o.maxVolume = 20;
@@ -204,16 +205,16 @@ TEST(FeMesher, TetgenBoxLabelsVolumeAndSeriesBar) {
   EXPECT_NEAR(uz / exact, 1.0, 0.03);  // the tissue interface inside is jagged (nearest-face labels)
 }
 
-// the faces of fuzz_mesh.h's smallest closed UV sphere (14 vertices: two poles, three rings of four), on
-// which the decoder's near-duplicate-vertex edit made the TetGen findings below
+// the faces of fuzz_mesh.h's smallest closed UV sphere (14 vertices: two poles, three rings of four); the
+// decoder's near-duplicate-vertex edit on it gives the two fe_model corpus inputs below
 const std::vector<std::array<int, 3>> kUvSphere14Faces = {
     {0, 2, 1}, {0, 3, 2}, {0, 4, 3}, {0, 1, 4}, {1, 2, 6}, {1, 6, 5}, {2, 3, 7}, {2, 7, 6},
     {3, 4, 8}, {3, 8, 7}, {4, 1, 5}, {4, 5, 8}, {5, 6, 10}, {5, 10, 9}, {6, 7, 11}, {6, 11, 10},
     {7, 8, 12}, {7, 12, 11}, {8, 5, 9}, {8, 9, 12}, {13, 9, 10}, {13, 10, 11}, {13, 11, 12}, {13, 12, 9},
 };
 
-// Debian's TetGen keeps its assertions: on this closed, self-intersection-free sphere (fuzz_fe_model's
-// first finding, corpus/fe_model/crash-tetgen-insertpoint-assert: two vertices 1e-6 apart at its centre,
+// Debian's TetGen keeps its assertions: on this closed, self-intersection-free sphere
+// (tests/fuzz/corpus/fe_model/crash-tetgen-insertpoint-assert: two vertices 1e-6 apart at its centre,
 // where the surface pinches) its quality refinement stops on assert(0) in insertpoint. TetGen runs in a
 // child process, so that is an InputError here and not the end of the program (and of MeshLab).
 static SurfaceMesh pinchedSphere() {
@@ -252,8 +253,8 @@ TEST(FeMesher, TetgenAssertionIsAnErrorNotAnAbort) {
   EXPECT_GT(tetrahedralize(boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 5)).numTets(), 0);
 }
 
-// TetGen's quality refinement can go on without end: on this 14-vertex sphere (fuzz_fe_model's second
-// finding, corpus/fe_model/timeout-tetgen-refinement) it ran for more than 9 minutes. The child is killed
+// TetGen's quality refinement can go on without end: on this 14-vertex sphere
+// (tests/fuzz/corpus/fe_model/timeout-tetgen-refinement) it runs for more than 9 minutes. The child is killed
 // at the time limit and the call is an InputError.
 TEST(FeMesher, TetgenThatDoesNotFinishIsStoppedAtTheTimeLimit) {
   SurfaceMesh s;
@@ -301,7 +302,7 @@ TEST(FeMesher, MaxAddedPointsBoundsTheMesh) {
   double vol = 0, largest = 0;
   for (int t = 0; t < m.numTets(); ++t) vol += m.tetVolume(t), largest = std::max(largest, m.tetVolume(t));
   EXPECT_NEAR(vol, 4000.0, 1e-6);
-  EXPECT_GT(largest, 4.0);  // the bound was not reached: the cap stopped the refinement
+  EXPECT_GT(largest, 4.0);  // the bound is not reached: the cap stops the refinement
   for (size_t i = 0; i < s.vertices.size(); ++i) EXPECT_EQ((m.nodes[i] - s.vertices[i]).norm(), 0.0);
   o.maxAddedPoints = -1;
   EXPECT_GT(tetrahedralize(s, o).numNodes(), int(s.vertices.size()) + 30);

@@ -120,9 +120,9 @@ TEST(FeSolver, SameResultWithOneAndTwoThreads) {
 }
 TEST(FeSolver, PatchTestTet10) { patchTest(2); }
 
-// the default ordering (METIS on the node graph, each node's free dofs kept together) solves the same
-// system as CHOLMOD's own orderings of the dofs: same displacements to round-off, also with nodes that
-// have only some dofs fixed (rollers on the side y = 0: their x and z dofs stay free)
+// the default ordering (CHOLMOD's AMD-or-METIS choice on the node graph, each node's free dofs kept
+// together) solves the same system as CHOLMOD's own orderings of the dofs: same displacements to round-off,
+// also with nodes that have only some dofs fixed (rollers on the side y = 0: their x and z dofs stay free)
 TEST(FeSolver, NodeOrderingSolvesTheSameSystemAsCholmodsOwn) {
   const TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 2, 2, 16, 1));
   Problem p = cantilever(q, 20.0);
@@ -255,7 +255,7 @@ TEST(FeSolver, MissingMaterialIsAnError) {
 }
 
 // a TET10 whose corners are fine but whose mid-edge node is moved far off its edge folds inside: refused
-// before any solve, naming the tet (fuzz_inp found NaN stresses from such a deck); the straight-sided
+// before any solve, naming the tet (its stresses would be NaN); the straight-sided
 // mesh solves
 TEST(FeSolver, FoldedQuadraticTetIsRefused) {
   TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 1, 1, 2, 1));

@@ -22,8 +22,10 @@ struct CalibrationResult {
 };
 
 /// displacement(F) must be increasing in F with displacement(0) = 0 (it is not evaluated at 0).
-/// Secant steps through the origin and the last points, kept inside the bracket once the target is
-/// bracketed (Illinois-style fallback to bisection). Throws pectus::InputError when the target is not
+/// The next force interpolates F(d) through every state seen so far: inverse quadratic through the three
+/// points around the target, kept inside the bracket once there is one (else linear on the bracket); before
+/// that, extrapolation through the last points (secant as the fallback), at most 4 times the highest force
+/// below the target. Throws pectus::InputError when the target is not
 /// reached up to maxForce, the displacement has the wrong sign, or maxEvaluations is exceeded.
 /// A NewtonDidNotConverge from displacement() (solver.h) is a failed evaluation: when a state observed
 /// before it (Observer below) lies beyond the target, the search goes on below the failing force;

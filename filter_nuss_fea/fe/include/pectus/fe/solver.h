@@ -76,7 +76,7 @@ struct Result {
 /// reuse it across load cases (calibration) to skip the analysis.
 class Solver {
  public:
-  explicit Solver(const Problem& p);  ///< checks the problem, builds the pattern, analyses it
+  explicit Solver(const Problem& p);  ///< checks the problem, orders the nodes, builds the pattern of K
   ~Solver();
   Solver(const Solver&) = delete;
   Solver& operator=(const Solver&) = delete;
