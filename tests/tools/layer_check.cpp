@@ -3,6 +3,11 @@
 // meshlabserver cannot show this: after a failed filter it exits without saving anything.
 //
 //   pectus_layer_check <plugin dir> <filter name> <params file> <out prefix> <in.ply>...
+//   pectus_layer_check --params <plugin dir> [in.ply...]
+//
+// --params prints every filter of the plugins in <plugin dir> with its parameters as the plugin declares them
+// (name, type, default, description, tool-tip; MeshLab's own .mlx form of each parameter) as one XML document,
+// for the test that checks the docs' parameter tables. The document holds the given layers, or one tetrahedron.
 //
 // params file: one parameter per line, "<type> <name> <value...>" with type Float, Int, Bool, Enum,
 // Mesh (layer index), Point3 (x y z), String or SaveFile (the rest of the line). Parameters not listed
@@ -10,12 +15,14 @@
 // vertex/face quality and colour) and prints "applyFilter <0|1>". Exit code 0 unless the tool itself fails.
 #include <QCoreApplication>
 #include <QDir>
+#include <QDomDocument>
 #include <QPluginLoader>
 #include <common/interfaces.h>
 #include <wrap/io_trimesh/export_ply.h>
 #include <wrap/io_trimesh/import_ply.h>
 #include <vcg/complex/algorithms/update/bounding.h>
 #include <vcg/complex/algorithms/update/normal.h>
+#include <vcg/complex/algorithms/create/platonic.h>
 
 #include <fstream>
 #include <iostream>
@@ -36,36 +43,86 @@ void save(MeshModel& m, const std::string& path) {
   ExporterPLY<CMeshO>::Save(m.cm, path.c_str(), mask, false);
 }
 
-}  // namespace
+struct LoadedFilter {
+  MeshFilterInterface* plugin;
+  QAction* action;
+  QString library;
+};
 
-int main(int argc, char** argv) {
-  if (argc < 6) return fail("usage: pectus_layer_check <plugin dir> <filter name> <params> <out prefix> <in.ply>...");
-  QCoreApplication app(argc, argv);
-  const QString filter = QString::fromUtf8(argv[2]);
-
-  MeshFilterInterface* plugin = nullptr;
-  QAction* action = nullptr;
-  for (const QString& f : QDir(argv[1]).entryList({"lib*.so"}, QDir::Files)) {
-    auto* loader = new QPluginLoader(QDir(argv[1]).absoluteFilePath(f));
+/// every filter of every MeshLab filter plugin (lib*.so) in `dir`
+std::vector<LoadedFilter> loadFilters(const QString& dir) {
+  std::vector<LoadedFilter> out;
+  for (const QString& f : QDir(dir).entryList({"lib*.so"}, QDir::Files)) {
+    auto* loader = new QPluginLoader(QDir(dir).absoluteFilePath(f));
     auto* p = qobject_cast<MeshFilterInterface*>(loader->instance());
     if (p == nullptr) continue;
-    for (QAction* a : p->actions())
-      if (p->filterName(a) == filter) plugin = p, action = a;
+    for (QAction* a : p->actions()) out.push_back({p, a, f});
   }
-  if (action == nullptr) return fail("no plugin in " + std::string(argv[1]) + " has the filter " + argv[2]);
+  return out;
+}
 
-  MeshDocument md;
-  std::vector<MeshModel*> layers;
-  for (int i = 5; i < argc; ++i) {
-    MeshModel* m = md.addNewMesh(argv[i], QFileInfo(argv[i]).fileName(), true);
+/// the PLY files as layers of `md`; an error message, or empty
+std::string loadLayers(MeshDocument& md, char** files, int count, std::vector<MeshModel*>& layers) {
+  for (int i = 0; i < count; ++i) {
+    MeshModel* m = md.addNewMesh(files[i], QFileInfo(files[i]).fileName(), true);
     int mask = 0;
-    vcg::tri::io::ImporterPLY<CMeshO>::LoadMask(argv[i], mask);
+    vcg::tri::io::ImporterPLY<CMeshO>::LoadMask(files[i], mask);
     m->Enable(mask);
-    if (vcg::tri::io::ImporterPLY<CMeshO>::Open(m->cm, argv[i], mask) != 0) return fail(std::string("cannot read ") + argv[i]);
+    if (vcg::tri::io::ImporterPLY<CMeshO>::Open(m->cm, files[i], mask) != 0) return std::string("cannot read ") + files[i];
     vcg::tri::UpdateBounding<CMeshO>::Box(m->cm);
     if (!(mask & vcg::tri::io::Mask::IOM_VERTNORMAL)) vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFace(m->cm);
     layers.push_back(m);
   }
+  return {};
+}
+
+int listParameters(int argc, char** argv) {
+  MeshDocument md;
+  std::vector<MeshModel*> layers;
+  const std::string err = loadLayers(md, argv + 3, argc - 3, layers);
+  if (!err.empty()) return fail(err);
+  if (layers.empty()) {
+    MeshModel* m = md.addNewMesh("", "tetrahedron", true);
+    vcg::tri::Tetrahedron(m->cm);
+    vcg::tri::UpdateBounding<CMeshO>::Box(m->cm);
+    vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFace(m->cm);
+  }
+  QDomDocument doc;
+  QDomElement root = doc.createElement("PectusFilters");
+  doc.appendChild(root);
+  for (const LoadedFilter& f : loadFilters(QString::fromUtf8(argv[2]))) {
+    RichParameterList par;
+    f.plugin->initParameterSet(f.action, md, par);
+    QDomElement e = doc.createElement("filter");
+    e.setAttribute("name", f.plugin->filterName(f.action));
+    e.setAttribute("library", f.library);
+    for (const RichParameter& p : par) e.appendChild(p.fillToXMLDocument(doc, true));
+    root.appendChild(e);
+  }
+  std::cout << doc.toString(1).toStdString();
+  return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  QCoreApplication app(argc, argv);
+  if (argc >= 3 && std::string(argv[1]) == "--params") return listParameters(argc, argv);
+  if (argc < 6)
+    return fail("usage: pectus_layer_check <plugin dir> <filter name> <params> <out prefix> <in.ply>...\n"
+                "       pectus_layer_check --params <plugin dir> [in.ply...]");
+  const QString filter = QString::fromUtf8(argv[2]);
+
+  MeshFilterInterface* plugin = nullptr;
+  QAction* action = nullptr;
+  for (const LoadedFilter& f : loadFilters(QString::fromUtf8(argv[1])))
+    if (f.plugin->filterName(f.action) == filter) plugin = f.plugin, action = f.action;
+  if (action == nullptr) return fail("no plugin in " + std::string(argv[1]) + " has the filter " + argv[2]);
+
+  MeshDocument md;
+  std::vector<MeshModel*> layers;
+  const std::string err = loadLayers(md, argv + 5, argc - 5, layers);
+  if (!err.empty()) return fail(err);
   const std::string out = argv[4];
   for (std::size_t i = 0; i < layers.size(); ++i) save(*layers[i], out + "before_" + std::to_string(i) + ".ply");
 

@@ -1,0 +1,102 @@
+"""Every filter has a page in docs/filters whose parameter table lists exactly the parameters the plugin
+declares (the plugins loaded in-process by pectus_layer_check --params), in the declared order, with the
+same type and default; the README links every page."""
+from __future__ import annotations
+
+import os
+import re
+import subprocess
+import xml.etree.ElementTree as ET
+
+from docs_pages import FILTER_PAGES, PARAM_COLUMNS, SOURCE, parameter_table, read
+from harness import check, finish
+
+BUILD = os.environ.get("PECTUS_BUILD", os.path.join(SOURCE, "build"))
+PLUGINS = os.environ.get("PECTUS_PLUGINS", os.path.join(BUILD, "plugins"))
+
+
+def declared() -> dict:
+    """filter name -> [(name, type, default text, enum labels)] as the plugins declare them"""
+    out = subprocess.run(["xvfb-run", "-a", os.path.join(BUILD, "bin", "pectus_layer_check"), "--params", PLUGINS],
+                         capture_output=True, text=True, timeout=300)
+    if out.returncode != 0:
+        raise SystemExit(f"pectus_layer_check --params failed ({out.returncode}): {out.stderr}")
+    filters = {}
+    for f in ET.fromstring(out.stdout).iter("filter"):
+        params = []
+        for p in f.iter("Param"):
+            a = p.attrib
+            kind = a["type"][len("Rich"):] if a["type"].startswith("Rich") else a["type"]
+            labels = [a[f"enum_val{i}"] for i in range(int(a.get("enum_cardinality", 0)))]
+            if kind == "Point3f":
+                value = f"{a['x']}, {a['y']}, {a['z']}"
+            else:
+                value = a.get("value", "")
+            params.append((a["name"], kind, value, labels))
+        filters[f.attrib["name"]] = params
+    return filters
+
+
+def same_number(doc: str, code: str) -> bool:
+    try:
+        d, c = float(doc), float(code)
+    except ValueError:
+        return False
+    return abs(d - c) <= 1e-6 * max(1.0, abs(c))
+
+
+def default_matches(kind: str, doc: str, code: str, labels: list) -> bool:
+    doc = doc.strip()
+    if "(computed)" in doc or kind == "Mesh":
+        return True
+    if kind in ("Float", "Int"):
+        return same_number(doc.strip("`"), code)
+    if kind == "Bool":
+        return doc.strip("`").lower() == code.lower()
+    if kind == "Enum":
+        return 0 <= int(code) < len(labels) and doc.strip("`") == labels[int(code)]
+    if kind == "Point3f":
+        d = [x.strip() for x in doc.strip("`").split(",")]
+        c = [x.strip() for x in code.split(",")]
+        return len(d) == 3 and all(same_number(a, b) for a, b in zip(d, c))
+    # String, SaveFile
+    return (doc == "(empty)" and code == "") or doc.strip("`") == code
+
+
+def main():
+    filters = declared()
+    check(len(filters) >= 14, f"the plugins declare {len(filters)} filters")
+    pages = {}
+    for path in FILTER_PAGES:
+        title, header, rows = parameter_table(path)
+        name = os.path.relpath(path, SOURCE)
+        check(title in filters, f"{name}: its title '{title}' is a filter's name")
+        check(header == PARAM_COLUMNS, f"{name}: a '## Parameters' table with columns {PARAM_COLUMNS}", str(header))
+        pages[title] = (name, rows)
+    for fname, params in filters.items():
+        if not check(fname in pages, f"'{fname}' has a page in docs/filters"):
+            continue
+        page, rows = pages[fname]
+        doc_names = [r[0].strip("`") for r in rows]
+        code_names = [p[0] for p in params]
+        check(doc_names == code_names, f"{page}: the parameters as declared, in order",
+              f"\n  page:   {doc_names}\n  plugin: {code_names}")
+        by_name = {r[0].strip("`"): r for r in rows}
+        for name, kind, value, labels in params:
+            r = by_name.get(name)
+            if r is None or len(r) != len(PARAM_COLUMNS):
+                continue
+            check(r[1] == kind, f"{page}: {name} is {kind}", f"page says {r[1]!r}")
+            shown = labels[int(value)] if kind == "Enum" and value.isdigit() and int(value) < len(labels) else value
+            check(default_matches(kind, r[2], value, labels), f"{page}: {name} defaults to {shown}",
+                  f"page says {r[2]!r}")
+            check(r[4] != "", f"{page}: {name} is described")
+    readme = read(os.path.join(SOURCE, "README.md"))
+    for path in FILTER_PAGES:
+        rel = os.path.relpath(path, SOURCE)
+        check(re.search(r"\]\(" + re.escape(rel) + r"\)", readme) is not None, f"README links {rel}")
+    finish()
+
+
+if __name__ == "__main__":
+    main()
