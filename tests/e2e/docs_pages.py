@@ -59,3 +59,27 @@ def shell_blocks(path: str) -> list[tuple[int, str, str]]:
         out.append((start, m.group(1), "\n".join(body) + "\n"))
         i += 1
     return out
+
+
+def anchor(heading: str) -> str:
+    """GitHub's anchor of a Markdown heading"""
+    text = re.sub(r"[^\w\- ]", "", heading.strip().lower().replace("`", ""))
+    return text.replace(" ", "-")
+
+
+def broken_links(path: str) -> list[str]:
+    """relative links of a Markdown file whose file or #anchor does not exist"""
+    out, base = [], os.path.dirname(path)
+    text = re.sub(r"```.*?```", "", read(path), flags=re.S)
+    for target in re.findall(r"\]\(([^)\s]+)\)", text):
+        if re.match(r"^[a-z]+:", target):
+            continue
+        file, _, frag = target.partition("#")
+        dest = os.path.normpath(os.path.join(base, file)) if file else path
+        if not os.path.exists(dest):
+            out.append(target)
+        elif frag and dest.endswith(".md"):
+            heads = [anchor(l.lstrip("#")) for l in read(dest).splitlines() if l.startswith("#")]
+            if frag not in heads:
+                out.append(target)
+    return out

@@ -1,6 +1,6 @@
 """Every filter has a page in docs/filters whose parameter table lists exactly the parameters the plugin
 declares (the plugins loaded in-process by pectus_layer_check --params), in the declared order, with the
-same type and default; the README links every page."""
+same type and default; the README links every page; no relative link of the README or docs/ is broken."""
 from __future__ import annotations
 
 import os
@@ -8,7 +8,9 @@ import re
 import subprocess
 import xml.etree.ElementTree as ET
 
-from docs_pages import FILTER_PAGES, PARAM_COLUMNS, SOURCE, parameter_table, read
+import glob
+
+from docs_pages import FILTER_PAGES, PARAM_COLUMNS, SOURCE, broken_links, parameter_table, read
 from harness import check, finish
 
 BUILD = os.environ.get("PECTUS_BUILD", os.path.join(SOURCE, "build"))
@@ -95,6 +97,10 @@ def main():
     for path in FILTER_PAGES:
         rel = os.path.relpath(path, SOURCE)
         check(re.search(r"\]\(" + re.escape(rel) + r"\)", readme) is not None, f"README links {rel}")
+    docs = [os.path.join(SOURCE, "README.md")] + glob.glob(os.path.join(SOURCE, "docs", "**", "*.md"), recursive=True)
+    for path in sorted(docs):
+        bad = broken_links(path)
+        check(not bad, f"{os.path.relpath(path, SOURCE)}: every relative link resolves", str(bad))
     finish()
 
 
