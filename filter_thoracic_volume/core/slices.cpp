@@ -1,4 +1,5 @@
-// Slice (intersection) method, thesis 6.3.1, with an automatic intrathoracic region (rule in the header).
+// Slice (intersection) method, thesis 6.3.1, with an automatic intrathoracic region and the bridging of
+// slices that cut nothing (rules in the header).
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -306,12 +307,42 @@ SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p,
   const int cols = int(std::ceil((hi.x() - lo.x()) / px)) + 2, rows = int(std::ceil((hi.y() - lo.y()) / px)) + 2;
   const Eigen::Vector2d o = lo - Eigen::Vector2d(px, px);
   res.area.assign(N, 0.0);
+  res.bridged.assign(N, 0);
+  int below = -1;  // the nearest slice with area below k
   for (int k = 0; k < N; ++k) {
     const auto& r = regions[k];
     if (!hasArea(k)) {
       ++res.emptySlices;
+      int above = k + 1;
+      while (above < N && !hasArea(above)) ++above;
+      if (below < 0 || above >= N) {
+        // beyond the last slice with area at either end of the range: nothing to interpolate, zero area
+        ++res.endEmptySlices;
+        continue;
+      }
+      // Bridged slice (a plane between two ribs, or through a missing or thin rib). Its region is
+      // interpolated ray by ray: the boundary point on ray j moves linearly in z from the region below to
+      // the region above (both regions have the same K ray angles, so the point is the interpolated
+      // centroid plus the interpolated radius along the same direction: the bridged region is
+      // star-shaped like the others and lies in the slices' common box). A wall running straight between
+      // the two cuts is reproduced exactly, and the area follows the square of the interpolated radii,
+      // as a tapering section's area does (interpolating the area itself would be linear in z). The
+      // region is rasterised like the measured ones, so the raster and polygon volumes stay comparable.
+      const auto& P0 = regions[below].polygon;
+      const auto& P1 = regions[above].polygon;
+      const double t = (res.z[k] - res.z[below]) / (res.z[above] - res.z[below]);
+      std::vector<Eigen::Vector2d> poly(P0.size());
+      for (std::size_t j = 0; j < poly.size(); ++j) poly[j] = (1 - t) * P0[j] + t * P1[j];
+      SliceRegion B;
+      B.polygon = std::move(poly);
+      ++res.bridgedSlices;
+      res.bridged[k] = 1;
+      res.area[k] = double(rasterCount(B.polygon, o, px, cols, rows)) * px * px;
+      res.volume += res.area[k] * h;
+      res.polygonVolume += B.polygonArea() * h;
       continue;
     }
+    below = k;
     res.minCoverage = std::min(res.minCoverage, r.coverage());
     res.area[k] = double(rasterCount(r.polygon, o, px, cols, rows)) * px * px;
     res.volume += res.area[k] * h;

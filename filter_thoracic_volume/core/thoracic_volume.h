@@ -95,15 +95,26 @@ struct SliceResult {
   double polygonVolume = 0;  ///< mm^3: the same with the polygons' exact areas (raster check)
   double spacingUsed = 0;  ///< spacing adjusted so that the planes fill [zLo,zHi] (midpoint rule)
   double pixel = 0;        ///< raster pixel size, mm
-  int slices = 0, emptySlices = 0;
+  int slices = 0;
+  int emptySlices = 0;     ///< slices whose cut encloses no area (bridged ones and those at the ends)
+  int bridgedSlices = 0;   ///< empty slices between two slices with area: region interpolated
+  int endEmptySlices = 0;  ///< empty slices below the first or above the last slice with area: zero area
   double minCoverage = 1;  ///< smallest fraction of hit rays over the non-empty slices
   std::vector<double> z, area;
+  std::vector<char> bridged;  ///< per slice: 1 when its area is bridged
 };
 
 /// Slice method (thesis 6.3.1): planes at the midpoints of ceil((zHi-zLo)/spacing) equal layers,
 /// each region rasterised on a common resolution x resolution grid (pixel centres inside the region
 /// polygon are counted) and summed as area x layer thickness. Throws InputError when no plane cuts
 /// anything.
+///
+/// Bridging: a slice whose cut encloses no area (a plane between two ribs, horizontal or sloping, or
+/// through a missing or thin rib) lying between two slices with area is bridged: its region is
+/// interpolated ray by ray, linearly in z, between the nearest slices with area below and above (the
+/// boundary point on each ray moves from the lower region's to the upper region's), then rasterised
+/// like the others. Empty slices below the first or above the last slice with area are not bridged
+/// (nothing to interpolate): they count as zero area (endEmptySlices).
 SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p, const Progress& progress = {});
 
 // -------------------------------------------------------------------------------------------

@@ -2,6 +2,7 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
 
 #include "analytic_cages.h"
 #include "pectus/errors.h"
@@ -43,6 +44,73 @@ TEST(ThoracicVolumeSlice, BandedEllipsoidWithin0p2Percent) {
   const auto r = sliceVolume(cage, {-110, 110}, SliceParams{});
   const double exact = ellipsoidSegmentVolume(a, b, c, -110, 110);
   EXPECT_LT(rel(r.volume, exact), 2e-3) << r.volume << " vs " << exact << " min coverage " << r.minCoverage;
+}
+
+namespace {
+/// horizontal rib bands (no slope, no sternum or spine strip): bands [25 k, 25 k + 15) mm, gaps of 10 mm,
+/// so 40 % of the planes cut nothing
+RibMask horizontalBands() {
+  RibMask m;
+  m.pitch = 25, m.ribFraction = 0.6, m.tilt = 0, m.stripHalfAngle = 0;
+  return m;
+}
+/// the volume the slices with a cut of their own give (the bridged slices counted as zero)
+double unbridgedVolume(const SliceResult& r) {
+  double v = 0;
+  for (int k = 0; k < r.slices; ++k)
+    if (!r.bridged[k]) v += r.area[k] * r.spacingUsed;
+  return v;
+}
+}  // namespace
+
+TEST(ThoracicVolumeSlice, HorizontalBandsWithGapsAreBridged) {
+  const double a = 130, b = 90;
+  const auto cage = bandedCylinder(a, b, 8, 0, 240, 720, 240, horizontalBands());
+  const Range range{5, 210};  // both ends inside a band
+  const auto r = sliceVolume(cage, range, SliceParams{});
+  const double exact = kPi * a * b * (range.zHi - range.zLo);
+  std::printf("horizontal bands, cylinder: %d slices, %d bridged; error %.4f %% (unbridged %.2f %%)\n", r.slices,
+              r.bridgedSlices, 100 * rel(r.volume, exact), 100 * rel(unbridgedVolume(r), exact));
+  EXPECT_GT(r.bridgedSlices, r.slices / 4) << "the test cage must have planes that cut nothing";
+  EXPECT_EQ(r.bridgedSlices, r.emptySlices);
+  EXPECT_EQ(r.endEmptySlices, 0);
+  EXPECT_LT(unbridgedVolume(r), 0.7 * exact) << "without bridging the gaps count as zero";
+  EXPECT_LT(rel(r.volume, exact), 5e-3) << r.volume << " vs " << exact;
+  EXPECT_LT(rel(r.polygonVolume, exact), 5e-3) << r.polygonVolume << " vs " << exact;
+}
+
+TEST(ThoracicVolumeSlice, HorizontalBandsOnATaperingCageAreBridged) {
+  // the section changes between the bands: the bridged regions follow the wall between the cuts
+  const double a = 120, b = 85, c = 150;
+  const auto cage = bandedEllipsoid(a, b, c, 8, 130, 720, 520, horizontalBands());
+  const Range range{-120, 110};  // both ends inside a band
+  const auto r = sliceVolume(cage, range, SliceParams{});
+  const double exact = ellipsoidSegmentVolume(a, b, c, range.zLo, range.zHi);
+  std::printf("horizontal bands, ellipsoid: %d slices, %d bridged; error %.4f %% (unbridged %.2f %%)\n", r.slices,
+              r.bridgedSlices, 100 * rel(r.volume, exact), 100 * rel(unbridgedVolume(r), exact));
+  EXPECT_GT(r.bridgedSlices, r.slices / 4);
+  EXPECT_EQ(r.endEmptySlices, 0);
+  EXPECT_LT(rel(r.volume, exact), 5e-3) << r.volume << " vs " << exact;
+}
+
+TEST(ThoracicVolumeSlice, EmptySlicesAtTheEndsAreNotBridged) {
+  // the range starts and ends in a gap: the planes below the first band and above the last one have
+  // nothing to interpolate from and count as zero; those between the bands are bridged
+  const auto cage = bandedCylinder(130, 90, 8, 0, 240, 720, 240, horizontalBands());
+  const auto r = sliceVolume(cage, {18, 222}, SliceParams{});
+  ASSERT_GT(r.endEmptySlices, 1);
+  EXPECT_GT(r.bridgedSlices, 0);
+  EXPECT_EQ(r.emptySlices, r.bridgedSlices + r.endEmptySlices);
+  int lowEnd = 0, highEnd = 0;
+  while (r.area[lowEnd] == 0) ++lowEnd;
+  while (r.area[r.slices - 1 - highEnd] == 0) ++highEnd;
+  EXPECT_GT(lowEnd, 0);
+  EXPECT_GT(highEnd, 0);
+  EXPECT_EQ(lowEnd + highEnd, r.endEmptySlices);
+  for (int k = 0; k < r.slices; ++k) {
+    EXPECT_EQ(r.area[k] > 0, k >= lowEnd && k < r.slices - highEnd) << "slice " << k << " z = " << r.z[k];
+    EXPECT_EQ(bool(r.bridged[k]), r.area[k] > 0 && r.z[k] >= 25 && std::fmod(r.z[k], 25.0) >= 15) << "slice " << k;
+  }
 }
 
 TEST(ThoracicVolumeSlice, GapRuleBeatsChords) {
