@@ -150,7 +150,11 @@ FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
       "section (its inner side); rays through the gaps between sections get their radius by a cubic Hermite "
       "interpolation in the angle between the neighbouring hit rays (slopes fitted on up to four hit rays each "
       "side), so gaps are bridged by the curve continuing the walls. The pixels whose centres lie in that closed "
-      "boundary are counted.") + kRangeHelp + kCompareHelp;
+      "boundary are counted.<br><b>Slices that cut nothing</b> (a plane between two ribs, or through a missing or "
+      "thin rib) are bridged: their region is interpolated ray by ray, linearly in z, between the nearest slices "
+      "with a region below and above, and rasterised like the others. Empty slices beyond the last slice with a "
+      "region at either end of the range have nothing to interpolate and count as zero; the Log gives both "
+      "numbers.") + kRangeHelp + kCompareHelp;
   s.cls = MeshFilterInterface::Measure;
   addFilter(this, s);
 
@@ -266,7 +270,9 @@ void FilterThoracicVolumePlugin::runSlice(FilterContext& ctx) {
     ctx.log("Slice method, layer '" + lab(mm) + "': intrathoracic volume " + cm3(r.volume) + " (" +
             std::to_string(r.slices) + " slices of " + fmt(r.spacingUsed, 3) + " mm from z = " + fmt(c.range.zLo, 2) +
             " to " + fmt(c.range.zHi, 2) + " mm, pixel " + fmt(r.pixel, 3) + " mm, polygon volume " +
-            cm3(r.polygonVolume) + ", empty slices " + std::to_string(r.emptySlices) + ", min ray coverage " +
+            cm3(r.polygonVolume) + ", empty slices " + std::to_string(r.emptySlices) + ": " +
+            std::to_string(r.bridgedSlices) + " bridged, " + std::to_string(r.endEmptySlices) +
+            " at the ends counted as zero, min ray coverage " +
             fmt(100 * r.minCoverage, 1) + " %, " + fmt(seconds(t0), 3) + " s)");
     requireEnclosure(r, lab(mm), c.range);
     return r.volume;
