@@ -591,7 +591,7 @@ struct Solver::Impl {
       o.precision(4);
       o << "tetrahedron " << t << " of tissue " << tis << (tis >= 1 && tis <= 3 ? kNames[tis] : "") << " ("
         << materialModelName(mat[t]->model) << ", E " << mat[t]->E << " MPa) at (" << c.x() << ", " << c.y() << ", " << c.z()
-        << ") mm, displaced by (" << uc.x() << ", " << uc.y() << ", " << uc.z() << ") mm, inverts (det F = " << minJ << ")";
+        << ") mm, displaced by (" << uc.x() << ", " << uc.y() << ", " << uc.z() << ") mm (det F = " << minJ << ")";
       return o.str();
     }
     return {};
@@ -616,6 +616,7 @@ struct Solver::Impl {
     double L = 0;  // displacement control: load factor of the converged state
     int cut = 0;
     Eigen::VectorXd uLast;  // the last state evaluated (the failure report looks for an inverted tet there)
+    std::string inversion;  // the first inverted tet met at a non-finite residual since the last converged increment
     while (lam < 1.0 - 1e-12) {
       double target = std::min(1.0, lam + dlam);
       for (double st : opt.stops)
@@ -642,7 +643,10 @@ struct Solver::Impl {
         const double ref = std::max({ctrl ? std::abs(Lt) * fFree.norm() : target * fextNorm, std::sqrt(reactions), 1e-30});
         const double rn = r.norm();
         if (opt.onIteration) opt.onIteration(res.increments, it, rn);
-        if (!std::isfinite(rn)) break;
+        if (!std::isfinite(rn)) {
+          if (inversion.empty()) inversion = invertedAt(uTrial);
+          break;
+        }
         const double g = ctrl ? ctrl->dot(freePart(uTrial)) - target * dTarget : 0.0;  // constraint violation
         if (rn <= opt.tolResidual * ref && std::abs(g) <= opt.tolDisplacement * std::abs(dTarget) &&
             (it == 0 || duNorm <= opt.tolDisplacement * std::max(uTrial.norm(), 1e-30))) {
@@ -685,6 +689,7 @@ struct Solver::Impl {
               if (freeIndex[d] >= 0) uNew(d) += a * du(freeIndex[d]);
             const Eigen::VectorXd r1 = residual(uNew, factorAt(Lt + a * dL), false);
             if (!r1.allFinite()) {
+              if (inversion.empty()) inversion = invertedAt(uNew);
               finite = false;
               a *= 0.25;
               continue;
@@ -711,6 +716,7 @@ struct Solver::Impl {
         lam = target;
         ++res.increments;
         cut = opt.adaptiveSteps ? 0 : cut;
+        inversion.clear();
         if (opt.adaptiveSteps) {
           if (it <= opt.targetIterations) dlam = std::min(1.5 * dlam, maxStep);
           else if (it > 3 * opt.targetIterations) dlam *= 0.5;
@@ -718,7 +724,8 @@ struct Solver::Impl {
         if (opt.onIncrement) opt.onIncrement(ctrl ? L : lam, u);
       } else {
         if (++cut > opt.maxCutbacks) {
-          const std::string inv = invertedAt(uLast);
+          std::string inv = invertedAt(uLast);
+          if (inv.empty()) inv = inversion;  // an earlier trial of this increment inverted an element
           std::ostringstream s;
           s << "The nonlinear (Newton) solve did not converge at " << (ctrl ? "displacement fraction " : "load factor ") << target
             << " after " << opt.maxCutbacks << (opt.adaptiveSteps ? " step cut-backs in a row" : " step cut-backs") << ": ";

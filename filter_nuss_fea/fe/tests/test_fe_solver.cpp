@@ -462,3 +462,95 @@ TEST(FeSolver, NeoHookeanNewtonConvergesQuadratically) {
     EXPECT_LT(d, 0.4 * L);
   }
 }
+
+// Line search and automatic steps -------------------------------------------------------------------
+
+// a neo-Hookean cantilever loaded in one increment to a linear tip deflection of 1.2 x its length: full
+// Newton steps overshoot into inverted elements and the solve gives up; with the line search and the step
+// control it follows the path and ends on the solution reached with 20 small increments
+TEST(FeSolver, LineSearchAndStepControlFollowAHardPath) {
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 2, 2, 20, 1));
+  Problem p = cantilever(q, 1.2 * kL / timoshenko(1.0));
+  p.materials.at(1).model = MaterialModel::NeoHookean;
+  NewtonOptions plain;
+  plain.loadSteps = 1;
+  plain.maxCutbacks = 2;
+  EXPECT_THROW(solveNonlinear(p, plain), NewtonDidNotConverge);
+  NewtonOptions robust = plain;
+  robust.lineSearch = true;
+  robust.adaptiveSteps = true;
+  robust.maxCutbacks = 6;
+  std::vector<double> factors;
+  robust.onIncrement = [&](double f, const Eigen::VectorXd&) { factors.push_back(f); };
+  const Result r = solveNonlinear(p, robust);
+  NewtonOptions fine;
+  fine.loadSteps = 20;
+  const Result ref = solveNonlinear(p, fine);
+  const double d = tipDeflection(q, r), dref = tipDeflection(q, ref);
+  std::printf("[line search] tip %.6f mm (20 increments: %.6f mm), %d increments, %d iterations (20 increments: %d)\n", d, dref,
+              r.increments, r.newtonIterations, ref.newtonIterations);
+  EXPECT_NEAR(d / dref, 1.0, 1e-7);
+  EXPECT_LT(r.newtonIterations, ref.newtonIterations);
+  ASSERT_FALSE(factors.empty());
+  EXPECT_EQ(factors.back(), 1.0);
+  for (std::size_t k = 1; k < factors.size(); ++k) EXPECT_GT(factors[k], factors[k - 1]);
+}
+
+// automatic steps grow and shrink the increments but still stop exactly at every requested load factor,
+// and the path is the same with one and two threads
+TEST(FeSolver, AutomaticStepsHitTheStopsAndAreDeterministic) {
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 2, 2, 20, 1));
+  const int grain = minParallelTets();
+  setMinParallelTets(1);
+  std::vector<std::vector<double>> seen;
+  std::vector<Eigen::VectorXd> u;
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    Problem p = cantilever(q, 0.6 * kL / timoshenko(1.0));
+    p.materials.at(1).model = MaterialModel::NeoHookeanDecoupled;
+    NewtonOptions o;
+    o.loadSteps = 3;
+    o.lineSearch = true;
+    o.adaptiveSteps = true;
+    o.targetIterations = 5;
+    o.stops = {0.05, 0.1, 0.35, 0.7, 0.71};
+    seen.emplace_back();
+    o.onIncrement = [&](double f, const Eigen::VectorXd&) { seen.back().push_back(f); };
+    u.push_back(solveNonlinear(p, o).u);
+  }
+  omp_set_num_threads(omp_get_num_procs());
+  setMinParallelTets(grain);
+  std::printf("[steps] load factors:");
+  for (double f : seen[0]) std::printf(" %.4f", f);
+  std::printf("\n");
+  for (double s : {0.05, 0.1, 0.35, 0.7, 0.71, 1.0})
+    EXPECT_NE(std::find(seen[0].begin(), seen[0].end(), s), seen[0].end()) << s;
+  EXPECT_EQ(seen[0], seen[1]);
+  ASSERT_EQ(u[0].size(), u[1].size());
+  EXPECT_EQ(std::memcmp(u[0].data(), u[1].data(), sizeof(double) * std::size_t(u[0].size())), 0);
+}
+
+// when Newton fails because an element inverts (full Newton steps under an absurd load), the message
+// names it, its tissue and where it is
+TEST(FeSolver, FailureNamesTheInvertedElement) {
+  const TetMesh m = structuredBox(kB, kB, kL, 1, 1, 10, 1);
+  for (MaterialModel model : {MaterialModel::StVenantKirchhoff, MaterialModel::NeoHookean}) {
+    Problem p = cantilever(m, 50 * kL / timoshenko(1.0));  // absurd load: deflection 50 x length
+    p.materials.at(1).model = model;
+    NewtonOptions o;
+    o.loadSteps = 1;
+    o.maxIterations = model == MaterialModel::StVenantKirchhoff ? 4 : 25;  // until a full step inverts an element
+    o.maxCutbacks = 1;
+    try {
+      solveNonlinear(p, o);
+      FAIL() << "no exception";
+    } catch (const NewtonDidNotConverge& e) {
+      const std::string w = e.what();
+      std::printf("[inverted] %s: %s\n", materialModelName(model), w.c_str());
+      EXPECT_NE(w.find("inverts"), std::string::npos) << w;
+      EXPECT_NE(w.find("tetrahedron "), std::string::npos) << w;
+      EXPECT_NE(w.find("of tissue 1 (bone)"), std::string::npos) << w;
+      EXPECT_NE(w.find(") mm"), std::string::npos) << w;
+    }
+  }
+}
