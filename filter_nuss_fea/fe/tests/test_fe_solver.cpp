@@ -554,3 +554,55 @@ TEST(FeSolver, FailureNamesTheInvertedElement) {
     }
   }
 }
+
+// Displacement control ---------------------------------------------------------------------------
+
+// the tip's mean deflection driven to a target: the load factor found, applied as a force (load
+// control), gives the same deflection; the constraint holds at every increment
+TEST(FeSolver, DisplacementControlFindsTheLoadOfADeflection) {
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 2, 2, 20, 1));
+  for (MaterialModel model : {MaterialModel::StVenantKirchhoff, MaterialModel::NeoHookean}) {
+    Problem p = cantilever(q, 1.0);  // unit load: the load factor is the force (N)
+    p.materials.at(1).model = model;
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(3 * q.numNodes());
+    int n = 0;
+    for (int i = 0; i < q.numNodes(); ++i) n += q.nodes[i].z() > kL - 1e-9;
+    for (int i = 0; i < q.numNodes(); ++i)
+      if (q.nodes[i].z() > kL - 1e-9) w(3 * i + 1) = 1.0 / n;
+    const double target = 0.4 * kL;
+    Solver s(p);
+    NewtonOptions o;
+    o.loadSteps = 5;
+    std::vector<std::pair<double, double>> path;
+    o.onIncrement = [&](double L, const Eigen::VectorXd& u) { path.emplace_back(L, w.dot(u)); };
+    const Result r = s.solveControlled(w, target, o);
+    ASSERT_EQ(path.size(), 5u);
+    for (std::size_t k = 0; k < path.size(); ++k) EXPECT_NEAR(path[k].second, target * double(k + 1) / 5, 1e-6 * target);
+    for (std::size_t k = 1; k < path.size(); ++k) EXPECT_GT(path[k].first, path[k - 1].first);  // stiffening: force rises
+    NewtonOptions lc;
+    lc.loadSteps = 5;
+    const Result byForce = s.solveNonlinear(lc, r.loadFactor);
+    const double d = tipDeflection(q, r), dForce = tipDeflection(q, byForce);
+    std::printf("[control] %s: target %.3f mm -> load %.4f N, deflection %.6f; that load as a force: %.6f mm; iterations %d / %d\n",
+                materialModelName(model), target, r.loadFactor, d, dForce, r.newtonIterations, byForce.newtonIterations);
+    EXPECT_NEAR(d, target, 1e-6 * target);
+    EXPECT_NEAR(dForce / target, 1.0, 1e-6);
+    EXPECT_GT(r.loadFactor, target / timoshenko(1.0));  // more than the linear estimate (the beam stiffens)
+  }
+}
+
+TEST(FeSolver, DisplacementControlRefusesPrescribedDisplacements) {
+  const TetMesh m = structuredBox(kB, kB, kL, 1, 1, 4, 1);
+  Problem p = cantilever(m, 1.0);
+  p.fixed.push_back({m.numNodes() - 1, 0, 0.5});
+  Solver s(p);
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(3 * m.numNodes());
+  w(3 * (m.numNodes() - 1) + 1) = 1;
+  try {
+    s.solveControlled(w, 1.0);
+    FAIL() << "no exception";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("zero prescribed displacements"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(s.solveControlled(Eigen::VectorXd::Zero(3), 1.0), pectus::InputError);
+}
