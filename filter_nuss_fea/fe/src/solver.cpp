@@ -680,7 +680,7 @@ struct Solver::Impl {
         duNorm = du.norm();
         double a = 1;
         if (opt.lineSearch) {
-          const double s0 = du.dot(r);
+          const double s0 = du.dot(r), sRef = std::abs(s0);
           Eigen::VectorXd uNew(uTrial.size());
           bool finite = false;
           for (int k = 0; k < opt.lineSearchSteps; ++k) {
@@ -696,7 +696,10 @@ struct Solver::Impl {
             }
             finite = true;
             const double s1 = du.dot(r1);
-            if (std::abs(s1) <= opt.lineSearchTol * std::abs(s0)) break;
+            // a step that lowers the residual's norm, or leaves little of s, is taken as it is. Under
+            // displacement control s is no merit function's slope (the step is driven by the constraint: the
+            // secant's root is ~0 at the predictor), so only the back-off from non-finite residuals applies.
+            if (ctrl || std::abs(s1) <= opt.lineSearchTol * sRef || r1.norm() < r.norm()) break;
             const double an = a * s0 / (s0 - s1);  // the root of s(a) linear through (0, s0) and (a, s1)
             if (!std::isfinite(an) || an >= a) break;  // s still as large ahead: the full step is the best guess
             a = std::max(an, 0.1 * a);

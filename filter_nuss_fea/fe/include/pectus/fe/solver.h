@@ -82,8 +82,9 @@ struct NewtonOptions {
 
   /// Line search along each Newton step du: back off (a quarter each time) while the residual at
   /// u + a du is not finite (an element inverted: the neo-Hookean energy is infinite there), then secant
-  /// steps on s(a) = du . r(u + a du) until |s(a)| <= lineSearchTol |s(0)| (at most lineSearchSteps
-  /// residual evaluations, without the tangent). Off: full steps, a non-finite residual fails the increment.
+  /// steps on s(a) = du . r(u + a du) until |s(a)| <= lineSearchTol |s(0)| or ||r(u + a du)|| < ||r(u)||
+  /// (at most lineSearchSteps residual evaluations, without the tangent; under displacement control the
+  /// back-off only). Off: full steps, a non-finite residual fails the increment.
   bool lineSearch = false;
   double lineSearchTol = 0.8;
   int lineSearchSteps = 6;
