@@ -6,7 +6,8 @@
                      [--cage-tool build/filter_nuss_fea/pectus_nuss_cli] [--solve-tool build/filter_nuss_fea/fe/pectus_fe_solve]
                      [--cage-maxvol 2.5]
 
-small: accuracy on small meshes (tip-centre displacement within 0.5%, --check makes it an exit code);
+small: accuracy on small meshes (tip-centre displacement within 0.5%, --check makes it an exit code): linear,
+       NLGEOM St Venant-Kirchhoff (*ELASTIC) and NLGEOM neo-Hookean (*HYPERELASTIC, NEO HOOKE);
 bench: wall time and peak memory (/usr/bin/time -v) of both on a ~300k-tet TET4 mesh (linear) and a
        TET10 mesh of similar DOF count; both solvers get the same number of threads (--threads).
 cage:  the same on the Nuss model itself: the default rib cage (thesis patient 1: boy of 8, index 5.3,
@@ -56,9 +57,10 @@ def ccx_tip(dat_path, node):
     raise RuntimeError("node %s not in %s" % (node, dat_path))
 
 
-def run_case(a, work, name, n, order, load, nlgeom, steps, env, bench):
+def run_case(a, work, name, n, order, load, nlgeom, steps, env, bench, material="svk"):
     inp = os.path.join(work, name + ".inp")
-    base = [a.tool, "--n"] + [str(x) for x in n] + ["--order", str(order), "--load", str(load), "--steps", str(steps)]
+    base = [a.tool, "--n"] + [str(x) for x in n] + ["--order", str(order), "--load", str(load), "--steps", str(steps),
+                                                    "--material", material]
     if nlgeom:
         base.append("--nlgeom")
     # the deck from our mesh (not timed), then our solve (timed), then ccx on the deck (timed)
@@ -133,12 +135,15 @@ def main():
         for order in (1, 2):
             cases.append(("lin_tet%d" % (4 if order == 1 else 10), (2, 2, 20), order, 20.0, False, 1, False))
             cases.append(("nlgeom_tet%d" % (4 if order == 1 else 10), (2, 2, 20), order, 700.0, True, 10, False))
+            # the same with CalculiX's NEO HOOKE (*HYPERELASTIC in the deck; ours: neo-hookean-ccx)
+            cases.append(("nlgeom_neo_tet%d" % (4 if order == 1 else 10), (2, 2, 20), order, 700.0, True, 10, False,
+                          "neo-hookean-ccx"))
     if a.cases in ("bench", "all"):
         cases.append(("bench_lin_tet4_300k", (20, 20, 125), 1, 20.0, False, 1, True))
         cases.append(("bench_lin_tet10", (10, 10, 50), 2, 20.0, False, 1, True))
     rows, failed = [], False
     for c in cases:
-        r = run_case(a, work, *c[:6], env=env, bench=c[6])
+        r = run_case(a, work, *c[:6], env=env, bench=c[6], material=c[7] if len(c) > 7 else "svk")
         rows.append(r)
         failed |= not r["rel"] <= 0.005
         failed |= not r.get("deck_rel", 0.0) <= 1e-6

@@ -406,10 +406,22 @@ double elevationOf(const Eigen::VectorXd& u, const Analysis& a, const Vector3d& 
 
 }  // namespace
 
+const char* calibrationMethodName(CalibrationMethod m) {
+  return m == CalibrationMethod::DisplacementControl ? "displacement" : "force";
+}
+
+CalibrationMethod parseCalibrationMethod(const std::string& name) {
+  for (CalibrationMethod m : {CalibrationMethod::ForceSearch, CalibrationMethod::DisplacementControl})
+    if (name == calibrationMethodName(m)) return m;
+  throw InputError("Unknown calibration method '" + name +
+                   "': use force (a search over the elevating force) or displacement (one solve driving the sternal "
+                   "patch to the target elevation).");
+}
+
 fe::Problem problemAt(const Analysis& a, const Options& opt, double force) {
   fe::Problem p;
   p.mesh = &a.mesh;
-  p.materials = fe::thesisMaterials(opt.nuBone, opt.nuCartilage);
+  p.materials = fe::thesisMaterials(opt.nuBone, opt.nuCartilage, opt.material);
   for (int n : a.fixedNodes) p.fixNode(n);
   addLoads(p, a, opt.place.direction.normalized(), force);
   return p;
@@ -519,7 +531,48 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
     return r;
   };
 
-  if (opt.targetElevation > 0) {
+  if (opt.targetElevation > 0 && opt.nonlinear && opt.calibration == CalibrationMethod::DisplacementControl) {
+    // one solve: the sternal patch's mean displacement along the force direction is stepped to the target
+    // (steps of about curveStep N at the linear compliance), Fe is the load factor of the unit-force problem
+    progress(30, "Driving the sternum to " + mm(opt.targetElevation) + " mm");
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(3 * a.mesh.numNodes());
+    for (int n : a.sternumNodes) w.segment<3>(3 * n) = dir / double(a.sternumNodes.size());
+    fe::NewtonOptions no = opt.newton;
+    no.stops.clear();
+    no.loadSteps = std::max(no.loadSteps, static_cast<int>(std::ceil(opt.targetElevation / (a.linearCompliance * opt.curveStep))));
+    a.curve.assign(1, {0.0, 0.0});
+    no.onIncrement = [&](double F, const Eigen::VectorXd& u) { a.curve.push_back({F, elevationOf(u, a, dir)}); };
+    try {
+      a.result = solver.solveControlled(w, opt.targetElevation, no);
+    } catch (const fe::NewtonDidNotConverge& e) {
+      const auto& last = a.curve.back();
+      std::ostringstream s;
+      s << "No converged state reaches the target displacement " << opt.targetElevation << " mm: driving the sternum up, "
+        << "the nonlinear solve stops converging beyond " << last.second << " mm at " << last.first << " N (" << e.what()
+        << "). Lower the target, or check the model where it deforms most (an element inverting at the load).";
+      throw InputError(s.str());
+    }
+    ++a.nonlinearSolves;
+    a.newtonIterations += a.result.newtonIterations;
+    a.factorizations += a.result.factorizations;
+    a.force = a.result.loadFactor;
+    const double d = elevationOf(a.result.u, a, dir);
+    if (!(a.force > 0))
+      throw InputError("Calibration: the sternum reaches the target only under a force <= 0 (" + mm(a.force, 2) +
+                       " N) along the force direction; check the force direction and the load placement.");
+    if (a.force > opt.maxForce) {
+      std::ostringstream s;
+      s << "No force up to " << opt.maxForce << " N reaches the target displacement " << opt.targetElevation << " mm (it takes "
+        << a.force << " N). Lower the target or raise the maximum force.";
+      throw InputError(s.str());
+    }
+    fe::CalibrationResult c;
+    c.force = a.force;
+    c.displacement = d;
+    c.evaluations = 1;
+    c.history.emplace_back(a.force, d);
+    a.calibration = c;
+  } else if (opt.targetElevation > 0) {
     fe::CalibrationOptions co;
     co.tolerance = opt.tolerance;
     co.maxForce = opt.maxForce;

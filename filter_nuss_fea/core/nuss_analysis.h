@@ -85,10 +85,21 @@ inline fe::NewtonOptions analysisNewton() {
   return n;
 }
 
+/// How a target elevation is reached: a search over the force (a nonlinear solve per trial force,
+/// calibrate.h), or one displacement-controlled solve (fe::Solver::solveControlled) that drives the mean
+/// displacement of the sternal load patch along the force direction to the target and finds Fe (with
+/// Fe = 2 Fs = 4 Fsr) as its load factor. The linear model needs no search: both give target / compliance.
+enum class CalibrationMethod { ForceSearch, DisplacementControl };
+/// "force", "displacement"; parseCalibrationMethod throws InputError listing them
+const char* calibrationMethodName(CalibrationMethod m);
+CalibrationMethod parseCalibrationMethod(const std::string& name);
+
 struct Options {
   fe::TetgenOptions mesh;           ///< quality, max volume, order (1 TET4, 2 TET10)
   double nuBone = 0.3, nuCartilage = 0.4;
-  bool nonlinear = true;            ///< large displacement (total Lagrangian St Venant-Kirchhoff)
+  bool nonlinear = true;            ///< large displacement (total Lagrangian, `material`)
+  fe::MaterialModel material = fe::MaterialModel::StVenantKirchhoff;  ///< every tissue's large-displacement model
+  CalibrationMethod calibration = CalibrationMethod::ForceSearch;      ///< when targetElevation > 0
   fe::NewtonOptions newton = analysisNewton();  ///< loadSteps is a minimum; the curve step adds stops
   double force = 140;               ///< Fe (N) when targetElevation <= 0
   double targetElevation = 0;       ///< mm; > 0: calibrate Fe to this sternal elevation
@@ -127,7 +138,9 @@ struct Analysis {
   double elevation = 0;               ///< mm
   double linearCompliance = 0;        ///< mm/N of the linear model
   std::optional<fe::CalibrationResult> calibration;
-  std::vector<std::pair<double, double>> curve;  ///< (Fe N, elevation mm) from 0: every increment (incl. each curveStep N)
+  /// (Fe N, elevation mm) from 0: every increment (force search or a given force: incl. each curveStep N;
+  /// displacement control: every elevation step, about curveStep N apart at the linear compliance)
+  std::vector<std::pair<double, double>> curve;
   std::vector<double> nodalStress, nodalStrain;  ///< volume-averaged to nodes
   double maxStress = 0, maxStrain = 0;           ///< away from the joints and load patches
   Location maxStressAt, maxStrainAt;

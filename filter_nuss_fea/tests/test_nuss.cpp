@@ -192,3 +192,41 @@ TEST(NussAnalysis, TissueLayersJoinedIntoTheCagesVolume) {
   EXPECT_GT(n[3], 0);
   EXPECT_EQ(n[0], 0);
 }
+
+// calibration by prescribed elevation: one displacement-controlled solve lands on the target and finds
+// the force the force search finds (within what its 0.1 mm tolerance allows); the neo-Hookean tissues
+// calibrate the same way; unknown names of a material or a method are refused with the choices
+TEST(NussAnalysis, DisplacementControlCalibratesInOneSolve) {
+  const auto surf = nuss::cageFromMesh(cage().mesh);
+  const auto& lms = cage().lms;
+  auto o = coarse();
+  o.nonlinear = true;
+  o.targetElevation = 10.0;
+  const nuss::Model model = nuss::buildModel(surf, o.mesh);
+  const nuss::Analysis search = nuss::analyze(surf, model, lms, o);
+  o.calibration = nuss::CalibrationMethod::DisplacementControl;
+  const nuss::Analysis control = nuss::analyze(surf, model, lms, o);
+  std::printf("[nuss control] force search: %.4f N at %.4f mm, %d solves, %d iterations, %.2f s; displacement control: "
+              "%.4f N at %.4f mm, %d solve, %d iterations, %.2f s\n",
+              search.force, search.elevation, search.nonlinearSolves, search.newtonIterations, search.secondsSolve, control.force,
+              control.elevation, control.nonlinearSolves, control.newtonIterations, control.secondsSolve);
+  EXPECT_EQ(control.nonlinearSolves, 1);
+  EXPECT_NEAR(control.elevation, 10.0, 1e-4);
+  ASSERT_TRUE(control.calibration.has_value());
+  EXPECT_EQ(control.calibration->evaluations, 1);
+  // the search stops within 0.1 mm of the target: its force is off by at most 0.1 mm over the local slope
+  const double slope = (search.curve.back().second - search.curve.front().second) / search.curve.back().first;  // mm/N, secant
+  EXPECT_NEAR(control.force, search.force, 0.1 / slope * 1.5);
+  EXPECT_GT(control.force, 0.0);
+  ASSERT_GE(control.curve.size(), 3u);
+  for (std::size_t k = 1; k < control.curve.size(); ++k) EXPECT_GT(control.curve[k].second, control.curve[k - 1].second);
+  o.material = fe::MaterialModel::NeoHookean;
+  o.newton.lineSearch = true;
+  o.newton.adaptiveSteps = true;
+  const nuss::Analysis neo = nuss::analyze(surf, model, lms, o);
+  std::printf("[nuss control] neo-Hookean: %.4f N at %.4f mm, %d iterations\n", neo.force, neo.elevation, neo.newtonIterations);
+  EXPECT_NEAR(neo.elevation, 10.0, 1e-4);
+  EXPECT_NEAR(neo.force / control.force, 1.0, 0.1);  // the same small-strain limit; strains of a few %
+  EXPECT_NE(errorOf([] { nuss::parseCalibrationMethod("arc"); }).find("displacement"), std::string::npos);
+  EXPECT_NE(errorOf([] { fe::parseMaterialModel("mooney"); }).find("neo-hookean"), std::string::npos);
+}

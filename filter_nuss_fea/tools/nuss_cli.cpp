@@ -1,12 +1,15 @@
 // Command-line driver of the Nuss FE analysis core (bench/nuss_convergence.py, quick studies):
 //   pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]
 //                   [--target mm | --force N] [--linear] [--space s] [--threads n] [--vtu out.vtu] [--layers]
-//                   [--inp deck.inp] [--blend mm]
+//                   [--inp deck.inp] [--blend mm] [--material svk|neo-hookean|neo-hookean-ccx]
+//                   [--calibration force|displacement] [--line-search] [--adaptive-steps] [--help]
 // Builds the default rib cage (--layers: as one layer per tissue, joined as the filter's 'One layer per
 // tissue' input does), runs the analysis and prints one line of key=value figures, the mean displacement
 // of the sternal load patch's nodes and the tets' volume per tissue. --inp writes the same model at the
 // final force as a CalculiX deck (as the filter's BASE.inp), printing the sternal patch's nodes, which is
-// what bench/fe_vs_ccx.py --cases cage compares.
+// what bench/fe_vs_ccx.py --cases cage compares. --material: every tissue's large-displacement model;
+// --calibration: how --target is reached (a force search, or one displacement-controlled solve);
+// --line-search, --adaptive-steps: the Newton options of those names (fe/solver.h).
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -50,6 +53,28 @@ int main(int argc, char** argv) {
     else if (a == "--layers") layers = true;
     else if (a == "--inp") inp = next();
     else if (a == "--blend") rp.blend = std::atof(next());
+    else if (a == "--material" || a == "--calibration") {
+      const std::string v = next();
+      try {
+        if (a == "--material") o.material = fe::parseMaterialModel(v);
+        else o.calibration = nuss::parseCalibrationMethod(v);
+      } catch (const InputError& e) {
+        std::fprintf(stderr, "error: %s\n", e.what());
+        return 2;
+      }
+    }
+    else if (a == "--line-search") o.newton.lineSearch = true;
+    else if (a == "--adaptive-steps") o.newton.adaptiveSteps = true;
+    else if (a == "--help" || a == "-h") {
+      std::printf(
+          "pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]\n"
+          "                [--target mm | --force N] [--linear] [--space s] [--vtu out.vtu] [--layers] [--inp deck.inp]\n"
+          "                [--blend mm] [--material svk|neo-hookean|neo-hookean-ccx] [--calibration force|displacement]\n"
+          "                [--line-search] [--adaptive-steps]\n"
+          "Builds the generator's rib cage, runs the Nuss FE analysis and prints key=value figures.\n"
+          "Defaults: St Venant-Kirchhoff, force search, plain Newton (the analysis' defaults).\n");
+      return 0;
+    }
     else { std::fprintf(stderr, "usage: see the header of tools/nuss_cli.cpp (unknown argument %s)\n", argv[i]); return 2; }
   }
   try {
@@ -72,11 +97,12 @@ int main(int argc, char** argv) {
     const auto a = nuss::analyze(surf, lms, o);
     std::printf("faces=%zu tets=%d nodes=%d order=%d dofs=%d force=%.2f elevation=%.3f compliance=%.5f "
                 "maxStress=%.3f maxStrain=%.4f strainCart=%.4f strainBone=%.5f maxStressAll=%.3f nlSolves=%d newton=%d factor=%d "
-                "tCage=%.2f tMesh=%.2f tSolve=%.2f\n",
+                "tCage=%.2f tMesh=%.2f tSolve=%.2f material=%s calibration=%s\n",
                 surf.surface.faces.size(), a.mesh.numTets(), a.mesh.numNodes(), a.mesh.order,
                 3 * a.mesh.numNodes() - 3 * int(a.fixedNodes.size()), a.force, a.elevation, a.linearCompliance,
                 a.maxStress, a.maxStrain, a.maxStrainCartilage, a.maxStrainBone, a.maxStressAll, a.nonlinearSolves,
-                a.newtonIterations, a.factorizations, tCage, a.secondsMesh, a.secondsSolve);
+                a.newtonIterations, a.factorizations, tCage, a.secondsMesh, a.secondsSolve, fe::materialModelName(o.material),
+                nuss::calibrationMethodName(o.calibration));
     std::printf("max stress at %s\nmax strain at %s\n", a.maxStressAt.describe().c_str(), a.maxStrainAt.describe().c_str());
     std::printf("fixed %zu, sternum %zu, supports", a.fixedNodes.size(), a.sternumNodes.size());
     for (size_t k = 0; k < a.supportNodes.size(); ++k) std::printf(" %s:%zu", a.supportNames[k].c_str(), a.supportNodes[k].size());

@@ -144,7 +144,21 @@ void writeCalculixInp(const std::string& path, const Problem& p, const InpOption
   for (int tis : tissues) {
     auto it = p.materials.find(tis);
     if (it == p.materials.end()) throw InputError("writeCalculixInp: no material for tissue " + std::to_string(tis) + ".");
-    f << "*MATERIAL, NAME=" << setName(tis) << "\n*ELASTIC\n" << it->second.E << ", " << it->second.nu << '\n';
+    const Material& mt = it->second;
+    f << "*MATERIAL, NAME=" << setName(tis) << '\n';
+    if (opt.nlgeom && mt.model != MaterialModel::StVenantKirchhoff) {
+      // CalculiX's NEO HOOKE: W = C10 (I1bar - 3) + (J - 1)^2 / D1 with the same small-strain E and nu
+      // (C10 = mu / 2, D1 = 2 / K). It is MaterialModel::NeoHookeanDecoupled; the ln J form has no ccx
+      // equivalent, and this is the nearest (same shear term, another volumetric one).
+      const double mu = mt.E / (2 * (1 + mt.nu)), K = mt.E / (3 * (1 - 2 * mt.nu));
+      if (mt.model == MaterialModel::NeoHookean)
+        f << "** " << setName(tis) << ": pectus_fe's neo-Hookean W = mu/2 (I1 - 3) - mu ln J + lambda/2 (ln J)^2 written as "
+             "CalculiX's NEO HOOKE (other volumetric term)\n";
+      f << "*HYPERELASTIC, NEO HOOKE\n" << mu / 2 << ", " << 2 / K << '\n';
+    } else {
+      // a small-strain step solves Hooke's law for every model (their common limit)
+      f << "*ELASTIC\n" << mt.E << ", " << mt.nu << '\n';
+    }
     f << "*SOLID SECTION, ELSET=E" << setName(tis) << ", MATERIAL=" << setName(tis) << '\n';
   }
   if (!opt.printNodes.empty()) {
@@ -293,6 +307,9 @@ std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::s
         const auto it = kv.find("TYPE");
         if (it != kv.end() && it->second != "ISO") fail("only isotropic *ELASTIC is read");
         if (currentMaterial.empty()) fail("*ELASTIC outside a *MATERIAL");
+      } else if (key == "*HYPERELASTIC") {
+        if (!kv.count("NEO HOOKE")) fail("only *HYPERELASTIC, NEO HOOKE is read");
+        if (currentMaterial.empty()) fail("*HYPERELASTIC outside a *MATERIAL");
       } else if (key == "*SOLID SECTION") {
         const auto set = kv.find("ELSET"), mat = kv.find("MATERIAL");
         if (set == kv.end() || mat == kv.end()) fail("*SOLID SECTION needs ELSET and MATERIAL");
@@ -328,6 +345,13 @@ std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::s
     } else if (block == "*ELASTIC") {
       if (t.size() < 2) fail("*ELASTIC needs E and the Poisson ratio");
       materials[currentMaterial] = {number(t[0]), number(t[1])};
+    } else if (block == "*HYPERELASTIC") {
+      // C10, D1 -> mu = 2 C10, K = 2 / D1 -> E, nu (the same small-strain limit)
+      if (t.size() < 2) fail("*HYPERELASTIC, NEO HOOKE needs C10 and D1");
+      const double c10 = number(t[0]), d1 = number(t[1]);
+      if (!(c10 > 0 && d1 > 0)) fail("*HYPERELASTIC, NEO HOOKE needs C10 > 0 and D1 > 0 (pectus_fe models compressible tissue)");
+      const double mu = 2 * c10, K = 2 / d1;
+      materials[currentMaterial] = {9 * K * mu / (3 * K + mu), (3 * K - 2 * mu) / (2 * (3 * K + mu)), MaterialModel::NeoHookeanDecoupled};
     } else if (block == "*NSET") {
       for (std::string_view id : t)
         if (!id.empty()) nsets[currentSet].push_back(integer(id));

@@ -31,8 +31,78 @@ constexpr int kChunkTets = 256;  // the assembly's unit of work: consecutive tet
 void setMinParallelTets(int tets) { gMinParallelTets = std::max(1, tets); }
 int minParallelTets() { return gMinParallelTets; }
 
-std::map<int, Material> thesisMaterials(double nuBone, double nuCartilage) {
-  return {{1, {11500.0, nuBone}}, {2, {12.25, nuCartilage}}, {3, {11500.0, nuBone}}};
+std::map<int, Material> thesisMaterials(double nuBone, double nuCartilage, MaterialModel model) {
+  return {{1, {11500.0, nuBone, model}}, {2, {12.25, nuCartilage, model}}, {3, {11500.0, nuBone, model}}};
+}
+
+const char* materialModelName(MaterialModel m) {
+  switch (m) {
+    case MaterialModel::NeoHookean: return "neo-hookean";
+    case MaterialModel::NeoHookeanDecoupled: return "neo-hookean-ccx";
+    default: return "svk";
+  }
+}
+
+MaterialModel parseMaterialModel(const std::string& name) {
+  for (MaterialModel m : {MaterialModel::StVenantKirchhoff, MaterialModel::NeoHookean, MaterialModel::NeoHookeanDecoupled})
+    if (name == materialModelName(m)) return m;
+  throw InputError("Unknown material model '" + name +
+                   "': use svk (St Venant-Kirchhoff), neo-hookean (FEBio's compressible form) or neo-hookean-ccx "
+                   "(CalculiX's NEO HOOKE, deviatoric/volumetric split).");
+}
+
+namespace {
+// D(a, b) += s * (A_IJ B_KL) over Voigt pairs a = (IJ), b = (KL)
+inline void addDyad(Eigen::Matrix<double, 6, 6>& D, double s, const Matrix3d& A, const Matrix3d& B) {
+  static const int I[6] = {0, 1, 2, 0, 1, 0}, J[6] = {0, 1, 2, 1, 2, 2};
+  for (int a = 0; a < 6; ++a)
+    for (int b = 0; b < 6; ++b) D(a, b) += s * A(I[a], J[a]) * B(I[b], J[b]);
+}
+// D(a, b) += s * 1/2 (A_IK A_JL + A_IL A_JK); with A = C^-1 this is -d(C^-1)/dC
+inline void addSymProduct(Eigen::Matrix<double, 6, 6>& D, double s, const Matrix3d& A) {
+  static const int I[6] = {0, 1, 2, 0, 1, 0}, J[6] = {0, 1, 2, 1, 2, 2};
+  for (int a = 0; a < 6; ++a)
+    for (int b = 0; b < 6; ++b)
+      D(a, b) += s * 0.5 * (A(I[a], I[b]) * A(J[a], J[b]) + A(I[a], J[b]) * A(J[a], I[b]));
+}
+}  // namespace
+
+double materialResponse(const Material& m, const Matrix3d& F, Matrix3d& S, Eigen::Matrix<double, 6, 6>& D) {
+  const double lam = m.E * m.nu / ((1 + m.nu) * (1 - 2 * m.nu)), mu = m.E / (2 * (1 + m.nu));
+  const double J = F.determinant();
+  D.setZero();
+  if (m.model == MaterialModel::StVenantKirchhoff) {
+    D.topLeftCorner<3, 3>().setConstant(lam);
+    for (int i = 0; i < 3; ++i) D(i, i) += 2 * mu, D(3 + i, 3 + i) = mu;
+    const Matrix3d E = 0.5 * (F.transpose() * F - Matrix3d::Identity());
+    S = lam * E.trace() * Matrix3d::Identity() + 2 * mu * E;
+    return J;
+  }
+  if (!(J > 0)) {
+    S.setConstant(std::numeric_limits<double>::quiet_NaN());
+    D.setConstant(std::numeric_limits<double>::quiet_NaN());
+    return J;
+  }
+  const Matrix3d C = F.transpose() * F, Ci = C.inverse(), I = Matrix3d::Identity();
+  if (m.model == MaterialModel::NeoHookean) {
+    // S = mu (I - C^-1) + lambda ln J C^-1; D = lambda C^-1 x C^-1 + 2 (mu - lambda ln J) dC^-1
+    const double lnJ = std::log(J);
+    S = mu * (I - Ci) + lam * lnJ * Ci;
+    addDyad(D, lam, Ci, Ci);
+    addSymProduct(D, 2 * (mu - lam * lnJ), Ci);
+  } else {
+    // isochoric: S = mu J^(-2/3) (I - I1/3 C^-1), D = 2/3 mu J^(-2/3) [I1 dC^-1 + I1/3 C^-1 x C^-1 - I x C^-1 - C^-1 x I]
+    // volumetric U = K/2 (J - 1)^2 (= (J - 1)^2 / D1): p = K (J - 1), S = J p C^-1,
+    // D = J (p + J K) C^-1 x C^-1 - 2 J p dC^-1   (Holzapfel, Nonlinear Solid Mechanics, 6.4)
+    const double K = m.E / (3 * (1 - 2 * m.nu)), I1 = C.trace(), j23 = std::pow(J, -2.0 / 3.0), p = K * (J - 1);
+    S = mu * j23 * (I - I1 / 3 * Ci) + J * p * Ci;
+    const double c = 2.0 / 3.0 * mu * j23;
+    addSymProduct(D, c * I1 - 2 * J * p, Ci);
+    addDyad(D, c * I1 / 3 + J * (p + J * K), Ci, Ci);
+    addDyad(D, -c, I, Ci);
+    addDyad(D, -c, Ci, I);
+  }
+  return J;
 }
 
 void Problem::addForce(int node, const Vector3d& f) {
@@ -245,17 +315,18 @@ struct Solver::Impl {
     return det * w;
   }
 
-  // assemble tangent (free-free lower) and internal forces (all dofs) at displacement u
-  void assemble(const Eigen::VectorXd& u, bool nonlinear, Eigen::VectorXd& fint) {
+  // assemble tangent (free-free lower; tangent = false: K is left as it is) and internal forces (all
+  // dofs) at displacement u
+  void assemble(const Eigen::VectorXd& u, bool nonlinear, Eigen::VectorXd& fint, bool tangent = true) {
     if (nen == 10)
-      assembleT<10>(u, nonlinear, fint);
+      assembleT<10>(u, nonlinear, fint, tangent);
     else
-      assembleT<4>(u, nonlinear, fint);
+      assembleT<4>(u, nonlinear, fint, tangent);
   }
 
   template <int NEN>
-  void assembleT(const Eigen::VectorXd& u, bool nonlinear, Eigen::VectorXd& fint) {
-    std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
+  void assembleT(const Eigen::VectorXd& u, bool nonlinear, Eigen::VectorXd& fint, bool tangent) {
+    if (tangent) std::fill(K.valuePtr(), K.valuePtr() + K.nonZeros(), 0.0);
     fint.setZero(u.size());
     double* val = K.valuePtr();
     double* fi = fint.data();
@@ -276,11 +347,11 @@ struct Solver::Impl {
   #pragma omp parallel for schedule(dynamic, 1) if (ng > 1 && ng * kChunkTets >= gMinParallelTets)
       for (int gi = 0; gi < ng; ++gi)
         for (int oi = group[gi] * kChunkTets; oi < std::min(nt, (group[gi] + 1) * kChunkTets); ++oi)
-          assembleTet<NEN>(tetOrder[std::size_t(oi)], u, nonlinear, val, fi);
+          assembleTet<NEN>(tetOrder[std::size_t(oi)], u, nonlinear, tangent ? val : nullptr, fi);
     }
   }
 
-  // one tet's tangent and internal forces, added into K's values and fint
+  // one tet's tangent and internal forces, added into K's values (val null: forces only) and fint
   template <int NEN>
   void assembleTet(int t, const Eigen::VectorXd& u, bool nonlinear, double* val, double* fi) const {
     constexpr int ND = 3 * NEN;
@@ -288,26 +359,34 @@ struct Solver::Impl {
     Eigen::Matrix<double, ND, 1> fe = Eigen::Matrix<double, ND, 1>::Zero();
     Eigen::Matrix<double, NEN, 3> G, ue;
     for (int a = 0; a < NEN; ++a) ue.row(a) = u.template segment<3>(3 * m->tets[t][a]).transpose();
-    const auto& Dm = *D[t];
+    const bool hyper = nonlinear && mat[t]->model != MaterialModel::StVenantKirchhoff;
+    Eigen::Matrix<double, 6, 6> Dq;  // the hyperelastic tangent at a quadrature point
     for (std::size_t q = 0; q < quad.size(); ++q) {
       const double w = gradientsT<NEN>(t, quadDN[q], quad[q].w, G);
       const Matrix3d H = ue.transpose() * G;  // du_i/dX_j
       Matrix3d F = Matrix3d::Identity();
-      Matrix3d E;
-      if (nonlinear) {
-        F += H;
-        E = 0.5 * (H + H.transpose() + H.transpose() * H);
-      } else {
-        E = 0.5 * (H + H.transpose());
-      }
-      const Eigen::Matrix<double, 6, 1> Sv = Dm * voigt(E, true);
       Matrix3d S;
-      S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
+      if (hyper) {
+        F += H;
+        materialResponse(*mat[t], F, S, Dq);  // NaN when inverted: the residual is not finite, Newton backs off
+      } else {
+        Matrix3d E;
+        if (nonlinear) {
+          F += H;
+          E = 0.5 * (H + H.transpose() + H.transpose() * H);
+        } else {
+          E = 0.5 * (H + H.transpose());
+        }
+        const Eigen::Matrix<double, 6, 1> Sv = *D[t] * voigt(E, true);
+        S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
+      }
+      const auto& Dm = hyper ? Dq : *D[t];
       const Matrix3d P = F * S;  // first Piola (linear: sigma)
       Eigen::Matrix<double, 6, ND> B;
       for (int a = 0; a < NEN; ++a) {
         const Vector3d Ga = G.row(a).transpose();
         fe.template segment<3>(3 * a) += w * P * Ga;
+        if (!val) continue;
         for (int i = 0; i < 3; ++i) {
           B(0, 3 * a + i) = F(i, 0) * Ga(0);
           B(1, 3 * a + i) = F(i, 1) * Ga(1);
@@ -317,6 +396,7 @@ struct Solver::Impl {
           B(5, 3 * a + i) = F(i, 0) * Ga(2) + F(i, 2) * Ga(0);
         }
       }
+      if (!val) continue;
       const Eigen::Matrix<double, 6, ND> DB = (w * Dm) * B;
       Ke.noalias() += B.transpose().lazyProduct(DB);
       if (nonlinear) {
@@ -330,6 +410,7 @@ struct Solver::Impl {
     for (int a = 0; a < NEN; ++a)
       for (int i = 0; i < 3; ++i) dofs[3 * a + i] = 3 * m->tets[t][a] + i, fdof[3 * a + i] = freeIndex[3 * m->tets[t][a] + i];
     for (int r = 0; r < ND; ++r) fi[dofs[r]] += fe(r);
+    if (!val) return;
     // the element's dofs by free index (constrained ones, -1, first): a column's rows are then the dofs
     // after it, ascending, found by one forward walk along the column (a binary search per entry
     // mispredicts most of its branches)
@@ -458,9 +539,14 @@ struct Solver::Impl {
       gradientsT<NEN>(t, centroidDN, 1.0, G);
       const Matrix3d H = ue.transpose().lazyProduct(G);
       Matrix3d E = nonlinear ? Matrix3d(0.5 * (H + H.transpose() + H.transpose() * H)) : Matrix3d(0.5 * (H + H.transpose()));
-      const Eigen::Matrix<double, 6, 1> Sv = *D[t] * voigt(E, true);
       Matrix3d S;
-      S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
+      if (nonlinear && mat[t]->model != MaterialModel::StVenantKirchhoff) {
+        Eigen::Matrix<double, 6, 6> Dq;
+        materialResponse(*mat[t], Matrix3d::Identity() + H, S, Dq);
+      } else {
+        const Eigen::Matrix<double, 6, 1> Sv = *D[t] * voigt(E, true);
+        S << Sv(0), Sv(3), Sv(5), Sv(3), Sv(1), Sv(4), Sv(5), Sv(4), Sv(2);
+      }
       if (nonlinear) {
         const Matrix3d F = Matrix3d::Identity() + H;
         S = F * S * F.transpose() / F.determinant();
@@ -468,6 +554,202 @@ struct Solver::Impl {
       res.vonMises[t] = vonMisesOf(S);
       res.eqStrain[t] = eqStrainOf(E, mat[t]->nu);
     }
+  }
+
+  // min det F over the tets' quadrature points and centroids at u (nonlinear kinematics): the first tet
+  // where it is not positive, as a message naming it, its tissue and its place; empty if none
+  std::string invertedAt(const Eigen::VectorXd& u) const {
+    if (u.size() != fext.size() || !u.allFinite()) return {};
+    const int nt = m->numTets();
+    for (int t = 0; t < nt; ++t) {
+      double minJ = std::numeric_limits<double>::infinity();
+      auto check = [&](const Eigen::Matrix<double, 10, 3>& dN) {
+        Eigen::Matrix<double, 10, 3> G10;
+        Matrix3d H = Matrix3d::Zero();
+        if (nen == 10) {
+          Eigen::Matrix<double, 10, 3> G;
+          gradientsT<10>(t, dN, 1.0, G);
+          for (int a = 0; a < 10; ++a) H += u.segment<3>(3 * m->tets[t][a]) * G.row(a);
+        } else {
+          Eigen::Matrix<double, 4, 3> G;
+          gradientsT<4>(t, dN, 1.0, G);
+          for (int a = 0; a < 4; ++a) H += u.segment<3>(3 * m->tets[t][a]) * G.row(a);
+        }
+        minJ = std::min(minJ, (Matrix3d::Identity() + H).determinant());
+      };
+      check(centroidDN);
+      for (const auto& dN : quadDN) check(dN);
+      if (minJ > 0) continue;
+      static const char* kNames[] = {"", " (bone)", " (cartilage)", " (sternum)"};
+      const int tis = m->tissue[std::size_t(t)];
+      const Vector3d c = m->centroid(t), uc = [&] {
+        Vector3d s = Vector3d::Zero();
+        for (int a = 0; a < 4; ++a) s += u.segment<3>(3 * m->tets[t][a]);
+        return Vector3d(s / 4);
+      }();
+      std::ostringstream o;
+      o.precision(4);
+      o << "tetrahedron " << t << " of tissue " << tis << (tis >= 1 && tis <= 3 ? kNames[tis] : "") << " ("
+        << materialModelName(mat[t]->model) << ", E " << mat[t]->E << " MPa) at (" << c.x() << ", " << c.y() << ", " << c.z()
+        << ") mm, displaced by (" << uc.x() << ", " << uc.y() << ", " << uc.z() << ") mm (det F = " << minJ << ")";
+      return o.str();
+    }
+    return {};
+  }
+
+  // Newton with load increments (ctrl null: load factor target * scale on the forces and prescribed
+  // displacements) or displacement control (ctrl: free-dof weights w, w . u stepped to target; the load
+  // factor is the extra unknown of a bordered system)
+  Result path(const NewtonOptions& opt, double scale, const Eigen::VectorXd* ctrl, double dTarget, double& factorSeconds) {
+    if (opt.loadSteps < 1 || opt.maxIterations < 1) throw InputError("Newton: need at least one load step and one iteration.");
+    if (opt.lineSearch && !(opt.lineSearchTol > 0 && opt.lineSearchSteps >= 1))
+      throw InputError("Newton: the line search needs a tolerance > 0 and at least one step.");
+    if (opt.adaptiveSteps && !(opt.targetIterations >= 1 && opt.maxStepGrowth >= 1))
+      throw InputError("Newton: automatic steps need target iterations >= 1 and a maximum growth >= 1.");
+    Result res;
+    res.nonlinear = true;
+    Eigen::VectorXd u = Eigen::VectorXd::Zero(fext.size()), fint, fintConverged = Eigen::VectorXd::Zero(fext.size());
+    const Eigen::VectorXd fFree = freePart(fext);
+    const double fextNorm = fFree.norm() * std::abs(scale);
+    double lam = 0, dlam = 1.0 / opt.loadSteps;
+    const double maxStep = opt.adaptiveSteps ? opt.maxStepGrowth / opt.loadSteps : 1.0;
+    double L = 0;  // displacement control: load factor of the converged state
+    int cut = 0;
+    Eigen::VectorXd uLast;  // the last state evaluated (the failure report looks for an inverted tet there)
+    std::string inversion;  // the first inverted tet met at a non-finite residual since the last converged increment
+    while (lam < 1.0 - 1e-12) {
+      double target = std::min(1.0, lam + dlam);
+      for (double st : opt.stops)
+        if (st > lam + 1e-12 && st < target - 1e-12) { target = st; break; }
+      Eigen::VectorXd uTrial = u;
+      double Lt = L;  // load factor of the trial state (displacement control)
+      for (size_t d = 0; d < freeIndex.size(); ++d)
+        if (isConstrained[d]) uTrial(d) = ctrl ? 0.0 : target * scale * prescribed(d);
+      // the residual (free dofs) at a state: forces at load factor f minus the internal forces
+      const auto residual = [&](const Eigen::VectorXd& uu, double f, bool tangent) {
+        uLast = uu;
+        assemble(uu, true, fint, tangent);
+        return Eigen::VectorXd(f * fFree - freePart(fint));
+      };
+      const auto factorAt = [&](double Lc) { return ctrl ? Lc : target * scale; };
+      bool converged = false;
+      double duNorm = 0, lastRn = 1e300;
+      int it = 0;
+      for (; it <= opt.maxIterations; ++it) {
+        const Eigen::VectorXd r = residual(uTrial, factorAt(Lt), true);
+        double reactions = 0;
+        for (size_t d = 0; d < freeIndex.size(); ++d)
+          if (isConstrained[d]) reactions += fint(d) * fint(d);
+        const double ref = std::max({ctrl ? std::abs(Lt) * fFree.norm() : target * fextNorm, std::sqrt(reactions), 1e-30});
+        const double rn = r.norm();
+        if (opt.onIteration) opt.onIteration(res.increments, it, rn);
+        if (!std::isfinite(rn)) {
+          if (inversion.empty()) inversion = invertedAt(uTrial);
+          break;
+        }
+        const double g = ctrl ? ctrl->dot(freePart(uTrial)) - target * dTarget : 0.0;  // constraint violation
+        if (rn <= opt.tolResidual * ref && std::abs(g) <= opt.tolDisplacement * std::abs(dTarget) &&
+            (it == 0 || duNorm <= opt.tolDisplacement * std::max(uTrial.norm(), 1e-30))) {
+          converged = true;
+          fintConverged = fint;
+          break;
+        }
+        if (it == opt.maxIterations) break;
+        const bool refactor = !opt.modified || it == 0 || !(rn < lastRn / 3);
+        lastRn = rn;
+        if (refactor) try {
+          factorize(factorSeconds);
+          ++res.factorizations;
+        } catch (const InputError&) {
+          // singular at the undeformed state: a real input problem; at a state distorted by prescribed
+          // displacements (their whole increment on the boundary nodes, none yet inside) or deformed by the
+          // load, the tangent lost positive definiteness (distortion, buckling, inversion): cut back
+          if (it == 0 && lam == 0 && uTrial.isZero(0.0)) throw;
+          break;
+        }
+        Eigen::VectorXd du = chol.solve(r);
+        double dL = 0;
+        if (ctrl) {  // bordered system: du = a + dL b, w . (u + du) = target
+          const Eigen::VectorXd b = chol.solve(fFree);
+          const double wb = ctrl->dot(b);
+          if (!(std::abs(wb) > 0) || !std::isfinite(wb)) break;
+          dL = (-g - ctrl->dot(du)) / wb;
+          du += dL * b;
+        }
+        if (!du.allFinite()) break;
+        duNorm = du.norm();
+        double a = 1;
+        if (opt.lineSearch) {
+          const double s0 = du.dot(r), sRef = std::abs(s0);
+          Eigen::VectorXd uNew(uTrial.size());
+          bool finite = false;
+          for (int k = 0; k < opt.lineSearchSteps; ++k) {
+            uNew = uTrial;
+            for (size_t d = 0; d < freeIndex.size(); ++d)
+              if (freeIndex[d] >= 0) uNew(d) += a * du(freeIndex[d]);
+            const Eigen::VectorXd r1 = residual(uNew, factorAt(Lt + a * dL), false);
+            if (!r1.allFinite()) {
+              if (inversion.empty()) inversion = invertedAt(uNew);
+              finite = false;
+              a *= 0.25;
+              continue;
+            }
+            finite = true;
+            const double s1 = du.dot(r1);
+            // a step that lowers the residual's norm, or leaves little of s, is taken as it is. Under
+            // displacement control s is no merit function's slope (the step is driven by the constraint: the
+            // secant's root is ~0 at the predictor), so only the back-off from non-finite residuals applies.
+            if (ctrl || std::abs(s1) <= opt.lineSearchTol * sRef || r1.norm() < r.norm()) break;
+            const double an = a * s0 / (s0 - s1);  // the root of s(a) linear through (0, s0) and (a, s1)
+            if (!std::isfinite(an) || an >= a) break;  // s still as large ahead: the full step is the best guess
+            a = std::max(an, 0.1 * a);
+          }
+          if (!finite) {  // every trial inverted an element: back off once more and let the next iteration see it
+            a *= 0.25;
+          }
+        }
+        for (size_t d = 0; d < freeIndex.size(); ++d)
+          if (freeIndex[d] >= 0) uTrial(d) += a * du(freeIndex[d]);
+        Lt += a * dL;
+        ++res.newtonIterations;
+      }
+      if (converged) {
+        u = uTrial;
+        L = Lt;
+        lam = target;
+        ++res.increments;
+        cut = opt.adaptiveSteps ? 0 : cut;
+        inversion.clear();
+        if (opt.adaptiveSteps) {
+          if (it <= opt.targetIterations) dlam = std::min(1.5 * dlam, maxStep);
+          else if (it > 3 * opt.targetIterations) dlam *= 0.5;
+        }
+        if (opt.onIncrement) opt.onIncrement(ctrl ? L : lam, u);
+      } else {
+        if (++cut > opt.maxCutbacks) {
+          std::string inv = invertedAt(uLast);
+          if (inv.empty()) inv = inversion;  // an earlier trial of this increment inverted an element
+          std::ostringstream s;
+          s << "The nonlinear (Newton) solve did not converge at " << (ctrl ? "displacement fraction " : "load factor ") << target
+            << " after " << opt.maxCutbacks << (opt.adaptiveSteps ? " step cut-backs in a row" : " step cut-backs") << ": ";
+          if (!inv.empty())
+            s << "an element inverts: " << inv
+              << ". The load is too large for the model there; reduce the force or refine the mesh there.";
+          else
+            s << "the load is too large for the model (instability or inverted elements); "
+                 "reduce the force, use more load steps or check the boundary conditions.";
+          throw NewtonDidNotConverge(s.str(), target);
+        }
+        dlam *= 0.5;
+      }
+    }
+    res.u = u;
+    res.loadFactor = ctrl ? L : scale;
+    res.reactions = Eigen::VectorXd::Zero(fext.size());
+    for (size_t d = 0; d < freeIndex.size(); ++d)
+      if (isConstrained[d]) res.reactions(d) = fintConverged(d);
+    stresses(res.u, true, res);
+    return res;
   }
 };
 
@@ -672,72 +954,21 @@ Result Solver::solveLinear(double scale) {
 }
 
 Result Solver::solveNonlinear(const NewtonOptions& opt, double scale) {
+  return impl_->path(opt, scale, nullptr, 0, lastFactorSeconds_);
+}
+
+Result Solver::solveControlled(const Eigen::VectorXd& weights, double target, const NewtonOptions& opt) {
   Impl& I = *impl_;
-  if (opt.loadSteps < 1 || opt.maxIterations < 1) throw InputError("Newton: need at least one load step and one iteration.");
-  Result res;
-  res.nonlinear = true;
-  Eigen::VectorXd u = Eigen::VectorXd::Zero(I.fext.size()), fint;
-  const double fextNorm = I.freePart(I.fext).norm() * std::abs(scale);
-  double lam = 0, dlam = 1.0 / opt.loadSteps;
-  int cut = 0;
-  while (lam < 1.0 - 1e-12) {
-    double target = std::min(1.0, lam + dlam);
-    for (double s : opt.stops)
-      if (s > lam + 1e-12 && s < target - 1e-12) { target = s; break; }
-    Eigen::VectorXd uTrial = u;
-    for (size_t d = 0; d < I.freeIndex.size(); ++d)
-      if (I.isConstrained[d]) uTrial(d) = target * scale * I.prescribed(d);
-    bool converged = false;
-    double duNorm = 0, lastRn = 1e300;
-    for (int it = 0; it <= opt.maxIterations; ++it) {
-      I.assemble(uTrial, true, fint);
-      const Eigen::VectorXd r = I.freePart(target * scale * I.fext - fint);
-      double reactions = 0;
-      for (size_t d = 0; d < I.freeIndex.size(); ++d)
-        if (I.isConstrained[d]) reactions += fint(d) * fint(d);
-      const double ref = std::max({target * fextNorm, std::sqrt(reactions), 1e-30});
-      const double rn = r.norm();
-      if (!std::isfinite(rn)) break;
-      if (rn <= opt.tolResidual * ref && (it == 0 || duNorm <= opt.tolDisplacement * std::max(uTrial.norm(), 1e-30))) {
-        converged = true;
-        break;
-      }
-      if (it == opt.maxIterations) break;
-      const bool refactor = !opt.modified || it == 0 || !(rn < lastRn / 3);
-      lastRn = rn;
-      if (refactor) try {
-        I.factorize(lastFactorSeconds_);
-        ++res.factorizations;
-      } catch (const InputError&) {
-        if (it == 0 && lam == 0) throw;  // singular at the undeformed state: a real input problem
-        break;                             // lost positive definiteness (buckling/inversion): cut back
-      }
-      const Eigen::VectorXd du = I.chol.solve(r);
-      if (!du.allFinite()) break;
-      duNorm = du.norm();
-      for (size_t d = 0; d < I.freeIndex.size(); ++d)
-        if (I.freeIndex[d] >= 0) uTrial(d) += du(I.freeIndex[d]);
-      ++res.newtonIterations;
-    }
-    if (converged) {
-      u = uTrial;
-      lam = target;
-      ++res.increments;
-      if (opt.onIncrement) opt.onIncrement(lam, u);
-    } else {
-      if (++cut > opt.maxCutbacks) {
-        std::ostringstream s;
-        s << "The nonlinear (Newton) solve did not converge at load factor " << target << " after " << opt.maxCutbacks
-          << " step cut-backs: the load is too large for the model (instability or inverted elements); "
-             "reduce the force, use more load steps or check the boundary conditions.";
-        throw NewtonDidNotConverge(s.str(), target);
-      }
-      dlam *= 0.5;
-    }
-  }
-  res.u = u;
-  I.stresses(res.u, true, res);
-  return res;
+  if (weights.size() != I.fext.size())
+    throw InputError("Displacement control: need one weight per degree of freedom (3 x the node count).");
+  if (!(std::abs(target) > 0) || !std::isfinite(target)) throw InputError("Displacement control: the target must be a non-zero number (mm).");
+  for (Eigen::Index d = 0; d < I.prescribed.size(); ++d)
+    if (I.prescribed(d) != 0)
+      throw InputError("Displacement control needs zero prescribed displacements (they would not follow the load "
+                       "factor it finds); prescribe them in a separate step or use load control.");
+  const Eigen::VectorXd w = I.freePart(weights);
+  if (!(w.norm() > 0)) throw InputError("Displacement control: every weighted degree of freedom is fixed; weight free nodes.");
+  return I.path(opt, 1.0, &w, target, lastFactorSeconds_);
 }
 
 std::vector<double> averageToNodes(const TetMesh& m, const std::vector<double>& perTet) {

@@ -147,6 +147,49 @@ TEST(FeIo, CalculixDeckReadsBackAsTheSameModel) {
   }
 }
 
+// a neo-Hookean tissue goes to an NLGEOM deck as *HYPERELASTIC, NEO HOOKE (C10 = mu / 2, D1 = 2 / K) and
+// reads back as CalculiX's form with the same E and nu; a small-strain deck keeps *ELASTIC (Hooke's law,
+// what both programs solve there)
+TEST(FeIo, NeoHookeanTissueIsCalculixNeoHooke) {
+  Bar b(2, 3.0);
+  b.p.materials.at(2).model = MaterialModel::NeoHookeanDecoupled;
+  InpOptions o;
+  o.nlgeom = true;
+  o.increments = 4;
+  const std::string path = tmp("fe_neo.inp"), again = tmp("fe_neo2.inp");
+  writeCalculixInp(path, b.p, o);
+  const std::string text = slurp(path);
+  const double mu = 100.0 / (2 * 1.4), K = 100.0 / (3 * 0.2);
+  const std::size_t at = text.find("*HYPERELASTIC, NEO HOOKE\n");
+  ASSERT_NE(at, std::string::npos);
+  double c10 = 0, d1 = 0;
+  ASSERT_EQ(std::sscanf(text.c_str() + at + 25, "%lf, %lf", &c10, &d1), 2);
+  EXPECT_NEAR(c10 / (mu / 2), 1.0, 1e-11);
+  EXPECT_NEAR(d1 / (2 / K), 1.0, 1e-11);
+  EXPECT_NE(text.find("*ELASTIC\n11500, 0.3"), std::string::npos);  // the bone stays St Venant-Kirchhoff
+  const auto r = readCalculixInp(path);
+  const Material& m2 = r->problem.materials.at(2);
+  EXPECT_EQ(m2.model, MaterialModel::NeoHookeanDecoupled);
+  EXPECT_NEAR(m2.E, 100.0, 1e-9);
+  EXPECT_NEAR(m2.nu, 0.4, 1e-12);
+  EXPECT_EQ(r->problem.materials.at(1).model, MaterialModel::StVenantKirchhoff);
+  writeCalculixInp(again, r->problem, r->options);
+  EXPECT_EQ(slurp(again), text);
+  NewtonOptions no;
+  no.loadSteps = 4;
+  const Eigen::VectorXd u0 = solveNonlinear(b.p, no).u, u1 = solveNonlinear(r->problem, no).u;
+  EXPECT_LT((u0 - u1).norm(), 1e-8 * u0.norm());
+  // the ln J form is written as the nearest ccx form, with a comment saying so
+  b.p.materials.at(2).model = MaterialModel::NeoHookean;
+  writeCalculixInp(path, b.p, o);
+  EXPECT_NE(slurp(path).find("other volumetric term"), std::string::npos);
+  EXPECT_EQ(readCalculixInp(path)->problem.materials.at(2).model, MaterialModel::NeoHookeanDecoupled);
+  o.nlgeom = false;
+  writeCalculixInp(path, b.p, o);
+  EXPECT_EQ(slurp(path).find("HYPERELASTIC"), std::string::npos);
+  EXPECT_NE(slurp(path).find("*ELASTIC\n100, 0.4"), std::string::npos);
+}
+
 TEST(FeIo, CalculixDeckErrorsNameTheLine) {
   Bar b(1, 1.0);
   const std::string path = tmp("fe_bad.inp");

@@ -4,6 +4,8 @@
 
 #include <omp.h>
 
+#include <Eigen/Eigenvalues>
+
 #include <cmath>
 #include <cstring>
 #include <random>
@@ -80,11 +82,11 @@ Problem cantilever(const TetMesh& m, double P) {
   return p;
 }
 
-double tipDeflection(const TetMesh& m, const Result& r) {
+double tipDeflection(const TetMesh& m, const Result& r, double length = kL) {
   double s = 0;
   int n = 0;
   for (int i = 0; i < m.numNodes(); ++i)
-    if (m.nodes[i].z() > kL - 1e-9) s += r.displacement(i).y(), ++n;
+    if (m.nodes[i].z() > length - 1e-9) s += r.displacement(i).y(), ++n;
   return s / n;
 }
 
@@ -293,4 +295,314 @@ TEST(FeSolver, ThesisMaterials) {
   EXPECT_DOUBLE_EQ(mats.at(3).E, 11500.0);
   EXPECT_DOUBLE_EQ(mats.at(1).nu, 0.3);
   EXPECT_DOUBLE_EQ(mats.at(2).nu, 0.4);
+}
+
+// Hyperelastic materials -------------------------------------------------------------------------
+namespace {
+
+// the strain energy of each model as a function of the principal stretches (written from the formula,
+// independently of the solver's stress and tangent code)
+double energy(MaterialModel model, double E, double nu, double l1, double l2, double l3) {
+  const double mu = E / (2 * (1 + nu)), lam = E * nu / ((1 + nu) * (1 - 2 * nu)), K = E / (3 * (1 - 2 * nu));
+  const double J = l1 * l2 * l3, I1 = l1 * l1 + l2 * l2 + l3 * l3;
+  if (model == MaterialModel::NeoHookean) return mu / 2 * (I1 - 3) - mu * std::log(J) + lam / 2 * std::log(J) * std::log(J);
+  return mu / 2 * (std::pow(J, -2.0 / 3.0) * I1 - 3) + K / 2 * (J - 1) * (J - 1);
+}
+// nominal (first Piola) principal stress dW/dl_i by central differences (error ~1e-10 relative)
+double nominal(MaterialModel model, double E, double nu, double l1, double l2, double l3, int i) {
+  const double h = 1e-5;
+  double a[3] = {l1, l2, l3}, b[3] = {l1, l2, l3};
+  a[i] += h, b[i] -= h;
+  return (energy(model, E, nu, a[0], a[1], a[2]) - energy(model, E, nu, b[0], b[1], b[2])) / (2 * h);
+}
+// uniaxial stress at axial stretch l1: the lateral stretch l2 with zero lateral stress (bisection)
+double lateralStretch(MaterialModel model, double E, double nu, double l1) {
+  double lo = 0.2, hi = 3.0;
+  for (int k = 0; k < 200; ++k) {
+    const double mid = 0.5 * (lo + hi);
+    (nominal(model, E, nu, l1, mid, mid, 1) > 0 ? hi : lo) = mid;
+  }
+  return 0.5 * (lo + hi);
+}
+
+}  // namespace
+
+TEST(FeSolver, MaterialTangentIsTheDerivativeOfTheStress) {
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> d(-0.3, 0.3);
+  for (MaterialModel model : {MaterialModel::StVenantKirchhoff, MaterialModel::NeoHookean, MaterialModel::NeoHookeanDecoupled}) {
+    const Material mat{12.25, 0.4, model};
+    Eigen::Matrix3d F = Eigen::Matrix3d::Identity();
+    for (int i = 0; i < 3; ++i)
+      for (int j = 0; j < 3; ++j) F(i, j) += d(rng);
+    ASSERT_GT(F.determinant(), 0);
+    Eigen::Matrix3d S;
+    Eigen::Matrix<double, 6, 6> D, Dn, scratch;
+    materialResponse(mat, F, S, D);
+    // dS = D dE: perturb E (hence C = I + 2E) in one Voigt component, F = sqrt(C) (S depends on C only)
+    const Eigen::Matrix3d C = F.transpose() * F;
+    const int I[6] = {0, 1, 2, 0, 1, 0}, J[6] = {0, 1, 2, 1, 2, 2};
+    const double h = 1e-6;
+    for (int b = 0; b < 6; ++b) {
+      Eigen::Matrix3d dE = Eigen::Matrix3d::Zero();
+      // engineering shear in Voigt: a unit shear strain component gamma = 2 E_ij
+      const double v = b < 3 ? 1.0 : 0.5;
+      dE(I[b], J[b]) += v, dE(J[b], I[b]) += b < 3 ? 0.0 : v;
+      Eigen::Matrix3d Sp, Sm;
+      materialResponse(mat, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C + 2 * h * dE).operatorSqrt(), Sp, scratch);
+      materialResponse(mat, Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(C - 2 * h * dE).operatorSqrt(), Sm, scratch);
+      const Eigen::Matrix3d dS = (Sp - Sm) / (2 * h);
+      for (int a = 0; a < 6; ++a) Dn(a, b) = dS(I[a], J[a]);
+    }
+    const double err = (Dn - D).norm() / D.norm();
+    std::printf("[tangent] %s: |D - dS/dE| / |D| = %.2e\n", materialModelName(model), err);
+    EXPECT_LT(err, 1e-7) << materialModelName(model);
+    EXPECT_TRUE(D.isApprox(D.transpose(), 1e-12)) << materialModelName(model);
+  }
+}
+
+// a 1 x 1 x 2 block stretched or compressed along z by a prescribed top displacement, symmetry planes
+// x = 0, y = 0, z = 0, lateral faces free: homogeneous uniaxial stress, which TET4 and TET10 represent exactly
+TEST(FeSolver, UniaxialBlockMatchesTheEnergysClosedForm) {
+  const double E = 12.25, nu = 0.4, Lz = 2.0;
+  double worst = 0;
+  for (MaterialModel model : {MaterialModel::NeoHookean, MaterialModel::NeoHookeanDecoupled})
+    for (int order : {1, 2})
+      for (double strain : {0.5, -0.5}) {
+        TetMesh m = structuredBox(1, 1, Lz, 2, 2, 4, 1);
+        if (order == 2) m = toQuadratic(m);
+        Problem p;
+        p.mesh = &m;
+        p.materials = {{1, {E, nu, model}}};
+        std::vector<int> top;
+        int corner = -1;
+        for (int i = 0; i < m.numNodes(); ++i) {
+          const Vector3d& x = m.nodes[i];
+          if (x.x() < 1e-9) p.fixed.push_back({i, 0, 0.0});
+          if (x.y() < 1e-9) p.fixed.push_back({i, 1, 0.0});
+          if (x.z() < 1e-9) p.fixed.push_back({i, 2, 0.0});
+          if (x.z() > Lz - 1e-9) p.fixed.push_back({i, 2, strain * Lz}), top.push_back(i);
+          if ((x - Vector3d(1, 1, Lz)).norm() < 1e-9) corner = i;
+        }
+        ASSERT_GE(corner, 0);
+        NewtonOptions o;
+        o.loadSteps = order == 2 && strain < 0 ? 20 : 10;
+        o.tolResidual = 1e-12;
+        o.tolDisplacement = 1e-12;
+        const Result r = solveNonlinear(p, o);
+        double force = 0;
+        for (int i : top) force += r.reactions(3 * i + 2);  // on a 1 x 1 face: the nominal stress
+        const double l1 = 1 + strain, l2 = lateralStretch(model, E, nu, l1);
+        const double P = nominal(model, E, nu, l1, l2, l2, 0), sigma = P * l1 / (l1 * l2 * l2);  // Cauchy = P l1 / J
+        const double errP = std::abs(force / P - 1), errL = std::abs((1 + r.displacement(corner).x()) / l2 - 1);
+        double errS = 0;
+        for (double vm : r.vonMises) errS = std::max(errS, std::abs(vm / std::abs(sigma) - 1));
+        std::printf("[uniaxial] %s TET%d strain %+.0f%%: nominal stress %.6f MPa (closed form %.6f), lateral stretch %.6f "
+                    "(%.6f), errors: stress %.1e, lateral %.1e, Cauchy %.1e; %d iterations\n",
+                    materialModelName(model), order == 1 ? 4 : 10, 100 * strain, force, P, 1 + r.displacement(corner).x(), l2,
+                    errP, errL, errS, r.newtonIterations);
+        EXPECT_LT(errP, 1e-6);
+        EXPECT_LT(errL, 1e-6);
+        EXPECT_LT(errS, 1e-6);
+        worst = std::max({worst, errP, errL, errS});
+      }
+  std::printf("[uniaxial] worst relative error %.1e\n", worst);
+}
+
+// Newton on a neo-Hookean stubby cantilever (10 x 10 x 30 mm, TET10, clamped at z = 0, tip shear) at large
+// deflection (linear tip deflection 40 % of the length): in every increment the residual falls
+// quadratically at the end (rate log(r_k+1 / r_k) / log(r_k / r_k-1) near 2). A stubby beam keeps the
+// system's condition number low, so the round-off of the direct solve (condition x 1e-16 relative)
+// does not add a linear term to the rate.
+TEST(FeSolver, NeoHookeanNewtonConvergesQuadratically) {
+  const double L = 30;
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, L, 2, 2, 6, 1));
+  for (MaterialModel model : {MaterialModel::StVenantKirchhoff, MaterialModel::NeoHookean, MaterialModel::NeoHookeanDecoupled}) {
+    Problem p;
+    p.mesh = &q;
+    p.materials = {{1, {kE, kNu, model}}};
+    std::vector<BoundaryFace> tip;
+    for (const auto& f : boundaryFaces(q))
+      if (q.nodes[f.n[0]].z() > L - 1e-9 && q.nodes[f.n[1]].z() > L - 1e-9 && q.nodes[f.n[2]].z() > L - 1e-9) tip.push_back(f);
+    for (int i = 0; i < q.numNodes(); ++i)
+      if (q.nodes[i].z() < 1e-9) p.fixNode(i);
+    p.force = tractionLoads(q, tip, Vector3d(0, 1.0 / (kB * kB), 0));
+    Solver unit(p);
+    const double compliance = tipDeflection(q, unit.solveLinear(), L);
+    for (auto& f : p.force) f *= 0.4 * L / compliance;
+    NewtonOptions o;
+    o.loadSteps = 4;
+    o.tolResidual = 1e-12;
+    o.tolDisplacement = 1e-12;
+    std::vector<std::vector<double>> rs;
+    o.onIteration = [&](int inc, int, double rn) {
+      if (int(rs.size()) <= inc) rs.resize(std::size_t(inc) + 1);
+      rs[std::size_t(inc)].push_back(rn);
+    };
+    const Result r = solveNonlinear(p, o);
+    ASSERT_EQ(rs.size(), 4u);
+    double worstRate = 10;
+    for (const auto& v : rs) {
+      std::printf("[quadratic] %s increment residuals:", materialModelName(model));
+      for (double x : v) std::printf(" %.3e", x);
+      // the rate of the last triple whose residuals are all above 1e-9 of the largest of the increment
+      // (>= 1e4 x the round-off floor, ~1e-13 of it, so that the floor does not bend the rate)
+      const double above = 1e-9 * *std::max_element(v.begin(), v.end());
+      std::size_t k = v.size() - 1;
+      while (k >= 2 && v[k] < above) --k;
+      ASSERT_GE(k, 2u);
+      const double rate = std::log(v[k] / v[k - 1]) / std::log(v[k - 1] / v[k - 2]);
+      std::printf(" (rate %.2f at %.1e)\n", rate, v[k]);
+      worstRate = std::min(worstRate, rate);
+      EXPECT_LE(v.size(), 8u);
+    }
+    EXPECT_GT(worstRate, 1.7) << materialModelName(model);
+    const double d = tipDeflection(q, r, L);
+    std::printf("[quadratic] %s: tip %.3f mm (linear %.3f mm), %d iterations\n", materialModelName(model), d, 0.4 * L, r.newtonIterations);
+    EXPECT_LT(d, 0.4 * L);
+  }
+}
+
+// Line search and automatic steps -------------------------------------------------------------------
+
+// a neo-Hookean cantilever loaded in one increment to a linear tip deflection of 1.2 x its length: full
+// Newton steps overshoot into inverted elements and the solve gives up; with the line search and the step
+// control it follows the path and ends on the solution reached with 20 small increments
+TEST(FeSolver, LineSearchAndStepControlFollowAHardPath) {
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 2, 2, 20, 1));
+  Problem p = cantilever(q, 1.2 * kL / timoshenko(1.0));
+  p.materials.at(1).model = MaterialModel::NeoHookean;
+  NewtonOptions plain;
+  plain.loadSteps = 1;
+  plain.maxCutbacks = 2;
+  EXPECT_THROW(solveNonlinear(p, plain), NewtonDidNotConverge);
+  NewtonOptions robust = plain;
+  robust.lineSearch = true;
+  robust.adaptiveSteps = true;
+  robust.maxCutbacks = 6;
+  std::vector<double> factors;
+  robust.onIncrement = [&](double f, const Eigen::VectorXd&) { factors.push_back(f); };
+  const Result r = solveNonlinear(p, robust);
+  NewtonOptions fine;
+  fine.loadSteps = 20;
+  const Result ref = solveNonlinear(p, fine);
+  const double d = tipDeflection(q, r), dref = tipDeflection(q, ref);
+  std::printf("[line search] tip %.6f mm (20 increments: %.6f mm), %d increments, %d iterations (20 increments: %d)\n", d, dref,
+              r.increments, r.newtonIterations, ref.newtonIterations);
+  EXPECT_NEAR(d / dref, 1.0, 1e-7);
+  EXPECT_LT(r.newtonIterations, ref.newtonIterations);
+  ASSERT_FALSE(factors.empty());
+  EXPECT_EQ(factors.back(), 1.0);
+  for (std::size_t k = 1; k < factors.size(); ++k) EXPECT_GT(factors[k], factors[k - 1]);
+}
+
+// automatic steps grow and shrink the increments but still stop exactly at every requested load factor,
+// and the path is the same with one and two threads
+TEST(FeSolver, AutomaticStepsHitTheStopsAndAreDeterministic) {
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 2, 2, 20, 1));
+  const int grain = minParallelTets();
+  setMinParallelTets(1);
+  std::vector<std::vector<double>> seen;
+  std::vector<Eigen::VectorXd> u;
+  for (int threads : {1, 2}) {
+    omp_set_num_threads(threads);
+    Problem p = cantilever(q, 0.6 * kL / timoshenko(1.0));
+    p.materials.at(1).model = MaterialModel::NeoHookeanDecoupled;
+    NewtonOptions o;
+    o.loadSteps = 3;
+    o.lineSearch = true;
+    o.adaptiveSteps = true;
+    o.targetIterations = 5;
+    o.stops = {0.05, 0.1, 0.35, 0.7, 0.71};
+    seen.emplace_back();
+    o.onIncrement = [&](double f, const Eigen::VectorXd&) { seen.back().push_back(f); };
+    u.push_back(solveNonlinear(p, o).u);
+  }
+  omp_set_num_threads(omp_get_num_procs());
+  setMinParallelTets(grain);
+  std::printf("[steps] load factors:");
+  for (double f : seen[0]) std::printf(" %.4f", f);
+  std::printf("\n");
+  for (double s : {0.05, 0.1, 0.35, 0.7, 0.71, 1.0})
+    EXPECT_NE(std::find(seen[0].begin(), seen[0].end(), s), seen[0].end()) << s;
+  EXPECT_EQ(seen[0], seen[1]);
+  ASSERT_EQ(u[0].size(), u[1].size());
+  EXPECT_EQ(std::memcmp(u[0].data(), u[1].data(), sizeof(double) * std::size_t(u[0].size())), 0);
+}
+
+// when Newton fails because an element inverts (full Newton steps under an absurd load), the message
+// names it, its tissue and where it is
+TEST(FeSolver, FailureNamesTheInvertedElement) {
+  const TetMesh m = structuredBox(kB, kB, kL, 1, 1, 10, 1);
+  for (MaterialModel model : {MaterialModel::StVenantKirchhoff, MaterialModel::NeoHookean}) {
+    Problem p = cantilever(m, 50 * kL / timoshenko(1.0));  // absurd load: deflection 50 x length
+    p.materials.at(1).model = model;
+    NewtonOptions o;
+    o.loadSteps = 1;
+    o.maxIterations = model == MaterialModel::StVenantKirchhoff ? 4 : 25;  // until a full step inverts an element
+    o.maxCutbacks = 1;
+    try {
+      solveNonlinear(p, o);
+      FAIL() << "no exception";
+    } catch (const NewtonDidNotConverge& e) {
+      const std::string w = e.what();
+      std::printf("[inverted] %s: %s\n", materialModelName(model), w.c_str());
+      EXPECT_NE(w.find("inverts"), std::string::npos) << w;
+      EXPECT_NE(w.find("tetrahedron "), std::string::npos) << w;
+      EXPECT_NE(w.find("of tissue 1 (bone)"), std::string::npos) << w;
+      EXPECT_NE(w.find(") mm"), std::string::npos) << w;
+    }
+  }
+}
+
+// Displacement control ---------------------------------------------------------------------------
+
+// the tip's mean deflection driven to a target: the load factor found, applied as a force (load
+// control), gives the same deflection; the constraint holds at every increment
+TEST(FeSolver, DisplacementControlFindsTheLoadOfADeflection) {
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 2, 2, 20, 1));
+  for (MaterialModel model : {MaterialModel::StVenantKirchhoff, MaterialModel::NeoHookean}) {
+    Problem p = cantilever(q, 1.0);  // unit load: the load factor is the force (N)
+    p.materials.at(1).model = model;
+    Eigen::VectorXd w = Eigen::VectorXd::Zero(3 * q.numNodes());
+    int n = 0;
+    for (int i = 0; i < q.numNodes(); ++i) n += q.nodes[i].z() > kL - 1e-9;
+    for (int i = 0; i < q.numNodes(); ++i)
+      if (q.nodes[i].z() > kL - 1e-9) w(3 * i + 1) = 1.0 / n;
+    const double target = 0.4 * kL;
+    Solver s(p);
+    NewtonOptions o;
+    o.loadSteps = 5;
+    std::vector<std::pair<double, double>> path;
+    o.onIncrement = [&](double L, const Eigen::VectorXd& u) { path.emplace_back(L, w.dot(u)); };
+    const Result r = s.solveControlled(w, target, o);
+    ASSERT_EQ(path.size(), 5u);
+    for (std::size_t k = 0; k < path.size(); ++k) EXPECT_NEAR(path[k].second, target * double(k + 1) / 5, 1e-6 * target);
+    for (std::size_t k = 1; k < path.size(); ++k) EXPECT_GT(path[k].first, path[k - 1].first);  // stiffening: force rises
+    NewtonOptions lc;
+    lc.loadSteps = 5;
+    const Result byForce = s.solveNonlinear(lc, r.loadFactor);
+    const double d = tipDeflection(q, r), dForce = tipDeflection(q, byForce);
+    std::printf("[control] %s: target %.3f mm -> load %.4f N, deflection %.6f; that load as a force: %.6f mm; iterations %d / %d\n",
+                materialModelName(model), target, r.loadFactor, d, dForce, r.newtonIterations, byForce.newtonIterations);
+    EXPECT_NEAR(d, target, 1e-6 * target);
+    EXPECT_NEAR(dForce / target, 1.0, 1e-6);
+    EXPECT_GT(r.loadFactor, target / timoshenko(1.0));  // more than the linear estimate (the beam stiffens)
+  }
+}
+
+TEST(FeSolver, DisplacementControlRefusesPrescribedDisplacements) {
+  const TetMesh m = structuredBox(kB, kB, kL, 1, 1, 4, 1);
+  Problem p = cantilever(m, 1.0);
+  p.fixed.push_back({m.numNodes() - 1, 0, 0.5});
+  Solver s(p);
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(3 * m.numNodes());
+  w(3 * (m.numNodes() - 1) + 1) = 1;
+  try {
+    s.solveControlled(w, 1.0);
+    FAIL() << "no exception";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("zero prescribed displacements"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(s.solveControlled(Eigen::VectorXd::Zero(3), 1.0), pectus::InputError);
 }

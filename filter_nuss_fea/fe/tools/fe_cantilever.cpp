@@ -2,6 +2,7 @@
 // uniform traction on the tip face) on a structured tet mesh; solves it with pectus_fe and/or writes
 // the same model as a CalculiX deck. Used by bench/fe_vs_ccx.py.
 //   pectus_fe_cantilever --n NX NY NZ --order 1|2 --load P [--nlgeom] [--steps S] [--inp file] [--no-solve]
+//                        [--material svk|neo-hookean|neo-hookean-ccx]
 // Prints one line "key=value ..." with the tip centre node displacement and timings.
 #include <chrono>
 #include <cstdio>
@@ -19,6 +20,7 @@ int main(int argc, char** argv) {
   int n[3] = {2, 2, 20}, order = 1, steps = 10;
   double P = 20, L = 100, B = 10, E = 11500, nu = 0.3;
   bool nlgeom = false, solve = true;
+  MaterialModel model = MaterialModel::StVenantKirchhoff;
   std::string inp, vtu;
   for (int i = 1; i < argc; ++i) {
     std::string a = argv[i];
@@ -31,6 +33,14 @@ int main(int argc, char** argv) {
     else if (a == "--inp" && i + 1 < argc) inp = argv[++i];
     else if (a == "--vtu" && i + 1 < argc) vtu = argv[++i];
     else if (a == "--no-solve") solve = false;
+    else if (a == "--material" && i + 1 < argc) {
+      try {
+        model = parseMaterialModel(argv[++i]);
+      } catch (const pectus::InputError& e) {
+        std::fprintf(stderr, "%s\n", e.what());
+        return 2;
+      }
+    }
     else {
       std::fprintf(stderr, "unknown argument %s\n", a.c_str());
       return 2;
@@ -46,7 +56,7 @@ int main(int argc, char** argv) {
     if (order == 2) m = toQuadratic(m);
     Problem p;
     p.mesh = &m;
-    p.materials = {{1, {E, nu}}};
+    p.materials = {{1, {E, nu, model}}};
     int tip = -1;
     for (int i = 0; i < m.numNodes(); ++i) {
       if (m.nodes[i].z() < 1e-9) p.fixNode(i);

@@ -21,7 +21,9 @@ struct InpOptions {
 };
 
 /// CalculiX/Abaqus deck of the problem: *NODE, *ELEMENT TYPE=C3D4|C3D10 with one ELSET per tissue,
-/// *MATERIAL/*ELASTIC/*SOLID SECTION per tissue, *BOUNDARY (prescribed dofs), *STEP [NLGEOM], *STATIC,
+/// *MATERIAL/*ELASTIC/*SOLID SECTION per tissue (in an NLGEOM deck a neo-Hookean tissue is *HYPERELASTIC,
+/// NEO HOOKE with C10 = mu / 2, D1 = 2 / K: exactly MaterialModel::NeoHookeanDecoupled, the nearest ccx form
+/// of MaterialModel::NeoHookean), *BOUNDARY (prescribed dofs), *STEP [NLGEOM], *STATIC,
 /// *CLOAD (nodal forces), *NODE PRINT / *NODE FILE U, *EL FILE S, E. Node and element ids are 1-based.
 void writeCalculixInp(const std::string& path, const Problem& p, const InpOptions& opt = {});
 
@@ -35,7 +37,8 @@ struct InpModel {
 
 /// Reads the subset of the CalculiX/Abaqus input language that writeCalculixInp writes (so a deck written
 /// by the filter, BASE.inp, can be solved again, and the same deck timed against ccx): *NODE, *ELEMENT
-/// TYPE=C3D4|C3D10 with ELSET, *MATERIAL + *ELASTIC (isotropic), *SOLID SECTION, *NSET, *BOUNDARY
+/// TYPE=C3D4|C3D10 with ELSET, *MATERIAL + *ELASTIC (isotropic) or *HYPERELASTIC, NEO HOOKE (C10, D1:
+/// MaterialModel::NeoHookeanDecoupled with E, nu of the same small-strain limit), *SOLID SECTION, *NSET, *BOUNDARY
 /// (node, first dof, last dof[, value]), *STEP[, NLGEOM, INC], *STATIC[, DIRECT], *CLOAD, *NODE PRINT,
 /// *NODE FILE, *EL FILE, *END STEP; comment lines (**) and *HEADING text are skipped. Each ELSET becomes
 /// a tissue label (BONE 1, CARTILAGE 2, STERNUM 3 as written, others 4, 5, ... in order of appearance).

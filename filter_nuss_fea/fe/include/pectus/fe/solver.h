@@ -1,5 +1,6 @@
 // Host-free static solver for the Nuss FE analysis: small-strain linear elasticity and geometrically
-// nonlinear statics (total Lagrangian, St Venant-Kirchhoff, Newton with load increments), TET4/TET10,
+// nonlinear statics (total Lagrangian; St Venant-Kirchhoff or compressible neo-Hookean; Newton with load
+// increments, optionally with a line search, automatic step control or displacement control), TET4/TET10,
 // sparse Cholesky by CHOLMOD (supernodal, symbolic analysis done once per solver), OpenMP assembly.
 // Units: mm, N, MPa. Errors (singular system, non-converged Newton, bad input) throw pectus::InputError.
 #pragma once
@@ -17,15 +18,39 @@
 
 namespace pectus::fe {
 
+/// The strain energy of a tissue under large displacement (solveNonlinear; the linear solve uses Hooke's
+/// law for all). Every model has Hooke's law with the same E and nu as its small-strain limit, with
+/// mu = E / (2 (1 + nu)), lambda = E nu / ((1 + nu)(1 - 2 nu)), bulk modulus K = E / (3 (1 - 2 nu)).
+enum class MaterialModel {
+  /// W = lambda/2 (tr E)^2 + mu E:E, linear in the Green-Lagrange strain E: softens under large compression
+  /// (the stress falls again beyond ~42 % shortening) and lets elements invert
+  StVenantKirchhoff,
+  /// W = mu/2 (I1 - 3) - mu ln J + lambda/2 (ln J)^2 (FEBio's "neo-Hookean", Bonet & Wood): W -> infinity as J -> 0
+  NeoHookean,
+  /// W = C10 (I1bar - 3) + (J - 1)^2 / D1, C10 = mu / 2, D1 = 2 / K, I1bar = J^(-2/3) I1 (CalculiX's and
+  /// Abaqus's *HYPERELASTIC, NEO HOOKE): the form writeCalculixInp can hand to ccx unchanged
+  NeoHookeanDecoupled,
+};
+/// "svk", "neo-hookean", "neo-hookean-ccx"; parseMaterialModel throws InputError listing them
+const char* materialModelName(MaterialModel m);
+MaterialModel parseMaterialModel(const std::string& name);
+
 struct Material {
   double E = 0;   ///< Young's modulus, MPa
   double nu = 0;  ///< Poisson's ratio
+  MaterialModel model = MaterialModel::StVenantKirchhoff;
 };
+
+/// Second Piola-Kirchhoff stress S and material tangent D = 2 dS/dC (Voigt 00, 11, 22, 01, 12, 02, so that
+/// dS = D dE with engineering shears in dE) of a material at deformation gradient F. Returns det F; when
+/// it is not positive S and D are NaN for the hyperelastic models (their energy is infinite there).
+double materialResponse(const Material& m, const Eigen::Matrix3d& F, Eigen::Matrix3d& S, Eigen::Matrix<double, 6, 6>& D);
 
 /// Materials of the thesis (6.2): bone (ribs and sternum) E = 11.5 GPa, pectus costal cartilage
 /// E = 12.25 MPa (half of normal cartilage, Feng et al.). Poisson ratios are literature defaults:
 /// 0.3 for cortical bone, 0.4 for costal cartilage (nearly incompressible hydrated tissue).
-std::map<int, Material> thesisMaterials(double nuBone = 0.3, double nuCartilage = 0.4);
+std::map<int, Material> thesisMaterials(double nuBone = 0.3, double nuCartilage = 0.4,
+                                        MaterialModel model = MaterialModel::StVenantKirchhoff);
 
 struct Dirichlet { int node; int dof; double value; };  ///< dof 0..2 = x,y,z; value in mm
 
@@ -52,6 +77,24 @@ struct NewtonOptions {
   std::vector<double> stops;
   /// called after every converged increment with (load factor, displacements)
   std::function<void(double, const Eigen::VectorXd&)> onIncrement;
+  /// called at every Newton iteration with (increment, iteration, ||r_free||) before the convergence test
+  std::function<void(int, int, double)> onIteration;
+
+  /// Line search along each Newton step du: back off (a quarter each time) while the residual at
+  /// u + a du is not finite (an element inverted: the neo-Hookean energy is infinite there), then secant
+  /// steps on s(a) = du . r(u + a du) until |s(a)| <= lineSearchTol |s(0)| or ||r(u + a du)|| < ||r(u)||
+  /// (at most lineSearchSteps residual evaluations, without the tangent; under displacement control the
+  /// back-off only). Off: full steps, a non-finite residual fails the increment.
+  bool lineSearch = false;
+  double lineSearchTol = 0.8;
+  int lineSearchSteps = 6;
+  /// Automatic load-step control: after an increment converged in at most targetIterations iterations
+  /// the next is 1.5x as large (up to maxStepGrowth / loadSteps), after more than 3 x targetIterations it
+  /// is halved; a failing increment is halved and retried, maxCutbacks times in a row at most (without
+  /// it: maxCutbacks halvings over the whole solve). The stops are still hit exactly.
+  bool adaptiveSteps = false;
+  int targetIterations = 8;
+  double maxStepGrowth = 4.0;
 };
 
 /// Thrown by Solver::solveNonlinear when Newton does not converge after the step cut-backs (an
@@ -65,6 +108,8 @@ struct Result {
   Eigen::VectorXd u;          ///< nodal displacements, 3*numNodes (mm)
   std::vector<double> vonMises;   ///< per tet (MPa): small strain sigma, or Cauchy stress for nonlinear
   std::vector<double> eqStrain;   ///< per tet: ANSYS-style von Mises equivalent strain (Green-Lagrange for NL)
+  Eigen::VectorXd reactions;  ///< nodal forces at the prescribed dofs (N; internal force, 3*numNodes, 0 at free dofs)
+  double loadFactor = 1;      ///< the load factor of u: loadScale, or what solveControlled found
   int newtonIterations = 0;
   int increments = 0;
   int factorizations = 0;
@@ -84,6 +129,15 @@ class Solver {
   /// loadScale multiplies the forces and the prescribed displacements
   Result solveLinear(double loadScale = 1.0);
   Result solveNonlinear(const NewtonOptions& opt = {}, double loadScale = 1.0);
+  /// Displacement control: the load factor L of the forces is an unknown, found with u so that the
+  /// weighted sum of displacements w . u (weights: 3*numNodes, e.g. 1/n along a direction at n nodes:
+  /// their mean displacement along it) reaches `target`. Increments step w . u from 0 to target (the
+  /// stops are fractions of the target); each Newton iteration solves the bordered system
+  /// [K -f; w^T 0] by two back-substitutions with one factorisation of K. onIncrement gets (L, u); the
+  /// result's loadFactor is L. Needs zero prescribed displacements (they would not scale with L) and
+  /// forces with w . K^-1 f > 0; throws NewtonDidNotConverge (its loadFactor: the fraction of the
+  /// target not reached) when the path cannot be followed.
+  Result solveControlled(const Eigen::VectorXd& weights, double target, const NewtonOptions& opt = {});
 
   int numFreeDofs() const;
   double lastSolveSeconds() const { return lastFactorSeconds_; }  ///< wall time of the last factorisation
