@@ -589,7 +589,7 @@ struct Solver::Impl {
       }();
       std::ostringstream o;
       o.precision(4);
-      o << "tetrahedron " << t << " of tissue " << tis << (tis >= 1 && tis <= 3 ? kNames[tis] : "") << " ("
+      o << "tetrahedron " << t << " of tissue code " << tis << (tis >= 1 && tis <= 3 ? kNames[tis] : "") << " ("
         << materialModelName(mat[t]->model) << ", E " << mat[t]->E << " MPa) at (" << c.x() << ", " << c.y() << ", " << c.z()
         << ") mm, displaced by (" << uc.x() << ", " << uc.y() << ", " << uc.z() << ") mm (det F = " << minJ << ")";
       return o.str();

@@ -549,7 +549,7 @@ TEST(FeSolver, FailureNamesTheInvertedElement) {
       std::printf("[inverted] %s: %s\n", materialModelName(model), w.c_str());
       EXPECT_NE(w.find("inverts"), std::string::npos) << w;
       EXPECT_NE(w.find("tetrahedron "), std::string::npos) << w;
-      EXPECT_NE(w.find("of tissue 1 (bone)"), std::string::npos) << w;
+      EXPECT_NE(w.find("of tissue code 1 (bone)"), std::string::npos) << w;
       EXPECT_NE(w.find(") mm"), std::string::npos) << w;
     }
   }
