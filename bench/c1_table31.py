@@ -25,7 +25,7 @@ from scipy.spatial import Delaunay
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
-DATA = os.environ.get("PECTUS_DATA", "/work/shared/data")
+DATA = os.environ.get("PECTUS_DATA", os.path.join(ROOT, "..", "shared", "data"))  # the shared folder beside the repository
 
 
 def F1(x, y):
