@@ -564,7 +564,6 @@ struct Solver::Impl {
     for (int t = 0; t < nt; ++t) {
       double minJ = std::numeric_limits<double>::infinity();
       auto check = [&](const Eigen::Matrix<double, 10, 3>& dN) {
-        Eigen::Matrix<double, 10, 3> G10;
         Matrix3d H = Matrix3d::Zero();
         if (nen == 10) {
           Eigen::Matrix<double, 10, 3> G;
