@@ -1,5 +1,12 @@
 #include "mesh_simplify.h"
 
+#include <stdexcept>
+#include <string>
+
+#include <vcg/complex/append.h>
+
+#include "self_intersections.h"
+
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
@@ -208,6 +215,33 @@ void decimateQuadric(CMeshO& m, int targetFaces, double embeddingCell, const std
   vcg::tri::Allocator<CMeshO>::CompactEveryVector(m);
   m.face.DisableVFAdjacency();
   m.vert.DisableVFAdjacency();
+}
+
+int decimateEmbedded(CMeshO& m, int targetFaces, double edgeLength) {
+  CMeshO raw;
+  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(raw, m);
+  std::vector<vcg::Box3<Scalarm>> guarded;
+  constexpr int kAttempts = 4;
+  for (int attempt = 0; attempt < kAttempts; ++attempt) {
+    if (attempt > 0) {
+      m.Clear();
+      vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(m, raw);
+    }
+    const bool everywhere = attempt == kAttempts - 1;
+    decimateQuadric(m, targetFaces, attempt > 0 ? 0.5 * edgeLength : 0.0, everywhere ? std::vector<vcg::Box3<Scalarm>>{} : guarded);
+    const std::vector<int> si = selfIntersectingFaces(m);
+    if (si.empty()) return attempt;
+    if (everywhere)
+      throw std::runtime_error("the decimated surface intersects itself (" + std::to_string(si.size()) +
+                               " faces); use another edge length");
+    for (int f : si) {
+      vcg::Box3<Scalarm> b;
+      for (int k = 0; k < 3; ++k) b.Add(m.face[std::size_t(f)].P(k));
+      b.Offset(Scalarm(2 * edgeLength));
+      guarded.push_back(b);
+    }
+  }
+  return kAttempts - 1;
 }
 
 }  // namespace pectus::ribcage

@@ -10,4 +10,12 @@
 
 namespace pectus::ribcage {
 void decimateQuadric(CMeshO& m, int targetFaces, double embeddingCell = 0, const std::vector<vcg::Box3<Scalarm>>& guarded = {});
+
+/// Decimates a closed, embedded (self-intersection-free) surface to `targetFaces` and keeps it embedded:
+/// quadric decimation, checked; while the result intersects itself it is redone from the input with the
+/// embedding guard around every place that folded so far (a collapse that would make two faces cross there
+/// is refused; exact predicates); the last attempt guards every collapse. `edgeLength` (mm) sizes the
+/// guard's grid and boxes. Returns the number of attempts redone; throws std::runtime_error if even the
+/// fully guarded decimation intersects itself.
+int decimateEmbedded(CMeshO& m, int targetFaces, double edgeLength);
 }

@@ -262,36 +262,7 @@ void extractSurface(const CageModel& model, const CageField& field, const RibCag
   for (const auto& f : soup.F)
     area += 0.5 * (soup.V[std::size_t(f[1])] - soup.V[std::size_t(f[0])]).cross(soup.V[std::size_t(f[2])] - soup.V[std::size_t(f[0])]).norm();
   soup = TriSoup{};
-  const int target = int(area / (0.433 * p.edgeLength * p.edgeLength));
-  // The marching-tets surface is embedded; quadric decimation can fold it (a rib's faces through each
-  // other where it bends, or across narrow gaps). Decimate, check, and while the result intersects
-  // itself redo it from the extracted surface with the embedding guard around every place that folded
-  // so far (a collapse that would make two faces cross there is refused; exact predicates); the last
-  // attempt guards every collapse. The unguarded collapses elsewhere happen as in the first run.
-  CMeshO raw;
-  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(raw, out);
-  std::vector<vcg::Box3<Scalarm>> guarded;
-  constexpr int kAttempts = 4;
-  for (int attempt = 0; attempt < kAttempts; ++attempt) {
-    if (attempt > 0) {
-      out.Clear();
-      vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(out, raw);
-    }
-    const bool everywhere = attempt == kAttempts - 1;
-    decimateQuadric(out, target, attempt > 0 ? 0.5 * p.edgeLength : 0.0, everywhere ? std::vector<vcg::Box3<Scalarm>>{} : guarded);
-    const std::vector<int> si = selfIntersectingFaces(out);
-    st.decimationRetries = attempt;
-    if (si.empty()) break;
-    if (everywhere)
-      throw std::runtime_error("rib cage: the extracted surface intersects itself (" + std::to_string(si.size()) +
-                               " faces); use another edgeLength");
-    for (int f : si) {
-      vcg::Box3<Scalarm> b;
-      for (int k = 0; k < 3; ++k) b.Add(out.face[std::size_t(f)].P(k));
-      b.Offset(Scalarm(2 * p.edgeLength));
-      guarded.push_back(b);
-    }
-  }
+  st.decimationRetries = decimateEmbedded(out, int(area / (0.433 * p.edgeLength * p.edgeLength)), p.edgeLength);
   st.secondsDecimate += secondsSince(t0);
 }
 

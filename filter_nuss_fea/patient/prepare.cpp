@@ -1,0 +1,760 @@
+#include "prepare.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <sstream>
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <vcg/complex/allocate.h>
+
+#include "mesh_simplify.h"
+#include "pectus/errors.h"
+#include "soup.h"
+#include "tissue_join.h"
+
+namespace pectus::patient {
+
+namespace {
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+
+std::string mm(double v, int digits = 1) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(digits);
+  s << v;
+  return s.str();
+}
+std::string at(const Vec3& p) { return "(" + mm(p.x()) + ", " + mm(p.y()) + ", " + mm(p.z()) + ")"; }
+std::string sideName(int side) { return side == 2 ? "left" : "right"; }
+
+// ---------------------------------------------------------------------------------------------------
+// 1. the structures, by name
+struct Structure {
+  std::string name;  // layer name, or "<layer> piece k"
+  NameClass cls;
+  Soup soup;
+};
+
+std::vector<std::string> words(const std::string& name) {
+  std::string n;
+  for (char c : name) n += std::isalnum(static_cast<unsigned char>(c)) ? char(std::tolower(static_cast<unsigned char>(c))) : ' ';
+  // split letters from digits: "rib3" -> "rib 3", "t12" -> "t 12"
+  std::string m;
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    if (i > 0 && n[i] != ' ' && n[i - 1] != ' ' && bool(std::isdigit(static_cast<unsigned char>(n[i]))) !=
+                                                       bool(std::isdigit(static_cast<unsigned char>(n[i - 1]))))
+      m += ' ';
+    m += n[i];
+  }
+  std::istringstream s(m);
+  std::vector<std::string> w;
+  for (std::string x; s >> x;) w.push_back(x);
+  return w;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// 3. the frame
+struct Frame {
+  Mat3 R = Mat3::Identity();  // rows: patient's left, anterior, superior (in the scaled input frame)
+  std::string how;
+  bool superiorOpen = false;  // the superior sign is still to be decided from the ribs
+};
+
+// Each rib runs down from its vertebral end to its front end: true if most ribs do so in the current
+// frame (z superior), false if most run up (the frame is upside down).
+bool ribsRunDown(const std::vector<std::pair<Vec3, Vec3>>& ends) {
+  int down = 0, up = 0;
+  for (const auto& [back, front] : ends) (back.z() > front.z() ? down : up) += 1;
+  return down >= up;
+}
+
+Frame findFrame(const std::vector<Structure>& all, const PrepareOptions& opt, double size) {
+  Frame fr;
+  if (opt.frame == FrameMode::Model) return {Mat3::Identity(), "stated: the project frame (+x left, +y anterior, +z superior)"};
+  if (opt.frame == FrameMode::RAS) {
+    fr.R << -1, 0, 0, 0, 1, 0, 0, 0, 1;
+    fr.how = "stated: RAS (x right, y anterior, z superior)";
+    return fr;
+  }
+  if (opt.frame == FrameMode::LPS) {
+    fr.R << 1, 0, 0, 0, -1, 0, 0, 0, 1;
+    fr.how = "stated: LPS (x left, y posterior, z superior)";
+    return fr;
+  }
+  Soup sternum, bone;
+  for (const auto& s : all) {
+    if (s.cls.kind == Kind::Sternum) append(sternum, s.soup);
+    if (s.cls.kind == Kind::Rib || s.cls.kind == Kind::Bone || s.cls.kind == Kind::Vertebra) append(bone, s.soup);
+  }
+  const Vec3 cS = centroid(sternum), cB = centroid(bone);
+  Vec3 a = cS - cB;
+  if (a.norm() < 0.05 * size)
+    throw InputError("Cannot find the anatomical frame: the sternum's centre lies at the centre of the bone (" + at(cS) +
+                     "), so the anterior direction is unknown. Check that the sternum layer holds the sternum, or state "
+                     "the frame (parameter 'Frame': RAS, LPS or the project frame).");
+  a.normalize();
+  // long axis: the sternum's principal direction, square to anterior
+  Vec3 mean = Vec3::Zero();
+  for (const auto& p : sternum.V) mean += p;
+  mean /= double(sternum.V.size());
+  Mat3 C = Mat3::Zero();
+  for (const auto& p : sternum.V) C += (p - mean) * (p - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Mat3> eig(C);
+  Vec3 s = eig.eigenvectors().col(2);
+  s = (s - s.dot(a) * a);
+  if (s.norm() < 1e-6)
+    throw InputError("Cannot find the anatomical frame: the sternum's long axis points to the back. State the frame "
+                     "(parameter 'Frame').");
+  s.normalize();
+  // CT exports are axis-aligned: snap both axes to the file's axes when each is within 30 degrees of one
+  auto snap = [](const Vec3& v, int& axis) {
+    v.cwiseAbs().maxCoeff(&axis);
+    return std::abs(v[axis]) > std::cos(30.0 * M_PI / 180.0);
+  };
+  int ia = 0, is = 0;
+  if (snap(a, ia) && snap(s, is) && ia != is) {
+    a = Vec3::Unit(ia) * (a[ia] > 0 ? 1 : -1);
+    s = Vec3::Unit(is) * (s[is] > 0 ? 1 : -1);
+    fr.how = "from the anatomy, snapped to the file's axes";
+  } else {
+    fr.how = "from the anatomy (not aligned with the file's axes)";
+  }
+  // superior: from the rib numbers when the names carry them (rib 1 on top), else from the ribs' slope
+  // (a rib runs down from its vertebral end to the front: the anterior bone lies lower)
+  double numZ = 0, num = 0;
+  std::vector<std::pair<double, double>> nz;
+  for (const auto& st : all)
+    if (st.cls.kind == Kind::Rib && st.cls.number > 0) nz.push_back({double(st.cls.number), centroid(st.soup).dot(s)});
+  bool fromNames = false;
+  if (nz.size() >= 2) {
+    double mn = 0, mz = 0;
+    for (auto [n, z] : nz) mn += n, mz += z;
+    mn /= double(nz.size()), mz /= double(nz.size());
+    for (auto [n, z] : nz) numZ += (n - mn) * (z - mz), num += (n - mn) * (n - mn);
+    fromNames = num > 0 && std::abs(numZ) > 0;
+  }
+  if (fromNames) {
+    if (numZ > 0) s = -s;
+    fr.how += "; superior from the rib numbers";
+  } else {
+    fr.superiorOpen = true;  // decided from the ribs' slope once the ribs are separated (superiorFromSlope)
+  }
+  // the patient's left: scanner frames are right-handed (RAS, LPS): left = superior x anterior;
+  // names with sides decide when they disagree (a mirrored file)
+  Vec3 l = s.cross(a);
+  double leftMinusRight = 0;
+  int sided = 0;
+  for (const auto& st : all)
+    if ((st.cls.kind == Kind::Rib || st.cls.kind == Kind::Cartilage) && st.cls.side)
+      leftMinusRight += (st.cls.side == 2 ? 1 : -1) * (centroid(st.soup) - cS).dot(l), ++sided;
+  if (sided && leftMinusRight < 0) {
+    l = -l;
+    fr.how += "; left from the names (the file is mirrored)";
+  }
+  fr.R.row(0) = l.transpose();
+  fr.R.row(1) = a.transpose();
+  fr.R.row(2) = s.transpose();
+  return fr;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// 4. the vertebral column inside a bone layer: the posterior midline bone that runs the whole height.
+// Returns the half-width of the cut band around the midline (0: no column found).
+double spineHalfWidth(const Soup& bone, double x0, double yMid) {
+  double z0 = 1e300, z1 = -1e300;
+  for (const auto& p : bone.V)
+    if (p.y() < yMid && std::abs(p.x() - x0) < 4) z0 = std::min(z0, p.z()), z1 = std::max(z1, p.z());
+  if (!(z1 - z0 > 40)) return 0;
+  constexpr double bin = 2.0;
+  const int nz = int((z1 - z0) / bin) + 1, nx = 40;
+  std::vector<std::vector<char>> hit(std::size_t(nx), std::vector<char>(std::size_t(nz), 0));
+  for (const auto& p : bone.V) {
+    if (p.y() >= yMid || p.z() < z0 || p.z() > z1) continue;
+    const int ix = int(std::abs(p.x() - x0) / bin);
+    if (ix < nx) hit[std::size_t(ix)][std::size_t(int((p.z() - z0) / bin))] = 1;
+  }
+  auto coverage = [&](int ix) {
+    // a column's front/back walls cover every height; a vertebra's own surface may miss a bin or two
+    int c = 0;
+    for (int k = 0; k < nz; ++k) c += hit[std::size_t(ix)][std::size_t(k)] || (k > 0 && hit[std::size_t(ix)][std::size_t(k - 1)]) ||
+                                      (k + 1 < nz && hit[std::size_t(ix)][std::size_t(k + 1)]);
+    return double(c) / nz;
+  };
+  if (coverage(0) < 0.85) return 0;
+  int ix = 0;
+  while (ix + 1 < nx && coverage(ix + 1) >= 0.85) ++ix;
+  return (ix + 1) * bin + 1.0;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// 8. landmarks
+struct Anatomy {
+  std::map<int, std::vector<Vec3>> rib;  // part -> bone vertices
+  std::vector<Vec3> sternum, cartilage, junction;  // junction: vertices shared by sternum and cartilage faces
+  std::vector<Vec3> spine;               // vertebral column points (from vertebra layers or the cut)
+};
+
+Anatomy anatomyOf(const CMeshO& cage) {
+  Anatomy an;
+  const auto lab = readFaceLabels(cage);
+  std::vector<int> tissueOfVertex(cage.vert.size(), 0);  // bit set of tissues touching the vertex
+  for (std::size_t f = 0; f < cage.face.size(); ++f) {
+    if (cage.face[f].IsD()) continue;
+    for (int k = 0; k < 3; ++k) tissueOfVertex[std::size_t(vcg::tri::Index(cage, cage.face[f].cV(k)))] |= 1 << lab->tissue[f];
+  }
+  std::vector<char> seen(cage.vert.size(), 0);
+  for (std::size_t f = 0; f < cage.face.size(); ++f) {
+    if (cage.face[f].IsD()) continue;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t v = std::size_t(vcg::tri::Index(cage, cage.face[f].cV(k)));
+      const Vec3 p = toEigen(cage.vert[v].cP());
+      if (lab->tissue[f] == int(Tissue::Bone)) an.rib[lab->part[f]].push_back(p);
+      if (seen[v]) continue;
+      seen[v] = 1;
+      if (lab->tissue[f] == int(Tissue::Sternum)) an.sternum.push_back(p);
+      if (lab->tissue[f] == int(Tissue::Cartilage)) an.cartilage.push_back(p);
+      const int both = (1 << int(Tissue::Sternum)) | (1 << int(Tissue::Cartilage));
+      if ((tissueOfVertex[v] & both) == both) an.junction.push_back(p);
+    }
+  }
+  return an;
+}
+
+Vec3 mean(const std::vector<Vec3>& v) {
+  Vec3 c = Vec3::Zero();
+  for (const auto& p : v) c += p;
+  return v.empty() ? c : Vec3(c / double(v.size()));
+}
+
+std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, std::vector<std::string>& log) {
+  std::vector<Landmark> lms;
+  auto fail = [](const std::string& what, const std::string& why) {
+    throw InputError("Cannot place the landmark '" + what + "': " + why + ". Pick it with Edit > PickPoints and give the .pp "
+                     "file (parameter 'Picked points'), named by its code.");
+  };
+  // costovertebral joints: the medial end of each rib's posterior part
+  std::map<int, Vec3> cvj;
+  for (const auto& [part, pts] : an.rib) {
+    if (part < 101 || part > 212) continue;
+    double dmin = 1e300;
+    for (const auto& p : pts)
+      if (p.y() < yMid) dmin = std::min(dmin, std::abs(p.x() - x0));
+    if (dmin > 1e299) fail("costovertebral joint " + std::to_string(part), "the rib has no part behind the cage's middle");
+    std::vector<Vec3> end;
+    for (const auto& p : pts)
+      if (p.y() < yMid && std::abs(p.x() - x0) < dmin + 2.0) end.push_back(p);
+    cvj[part] = mean(end);
+    lms.push_back({part, cvj[part]});
+  }
+  // sternum ends
+  if (an.sternum.empty()) fail("lower end of the sternum", "the joined cage has no sternum faces");
+  double zLo = 1e300, zHi = -1e300;
+  for (const auto& p : an.sternum) zLo = std::min(zLo, p.z()), zHi = std::max(zHi, p.z());
+  std::vector<Vec3> lo, hi;
+  for (const auto& p : an.sternum) {
+    if (p.z() < zLo + 3) lo.push_back(p);
+    if (p.z() > zHi - 3) hi.push_back(p);
+  }
+  const Vec3 lower = mean(lo), upper = mean(hi);
+  lms.push_back({kSternumLowerEnd, lower});
+  lms.push_back({kSternumUpperEnd, upper});
+  // the spine's front at height z: the vertebral column's most anterior midline point, else the joints'
+  auto spineFront = [&](double z, bool& measured) {
+    double y = -1e300;
+    for (const auto& p : an.spine)
+      if (std::abs(p.x() - x0) < 10 && std::abs(p.z() - z) < 5) y = std::max(y, p.y());
+    measured = y > -1e299;
+    if (measured) return y;
+    double best = 1e300, yb = 0;
+    for (const auto& [part, p] : cvj)
+      if (std::abs(p.z() - z) < best) best = std::abs(p.z() - z), yb = p.y();
+    return yb;
+  };
+  // deepest funnel point: the sternum level with the smallest distance between its front and the spine
+  const double L = zHi - zLo;
+  double bestAp = 1e300, zDeep = 0.5 * (zLo + zHi), yDeep = 0;
+  for (double z = zLo + 0.1 * L; z <= zHi - 0.1 * L; z += 2.0) {
+    double yf = -1e300;
+    for (const auto& p : an.sternum)
+      if (std::abs(p.x() - x0) < 8 && std::abs(p.z() - z) < 1.0) yf = std::max(yf, p.y());
+    if (yf < -1e299) continue;
+    bool m = false;
+    const double ap = yf - spineFront(z, m);
+    if (ap < bestAp) bestAp = ap, zDeep = z, yDeep = yf;
+  }
+  if (bestAp > 1e299) fail("deepest point of the funnel", "the sternum has no midline front surface");
+  lms.push_back({kFunnelDeepest, Vec3(x0, yDeep, zDeep)});
+  bool spineMeasured = false;
+  const double ySpine = spineFront(zDeep, spineMeasured);
+  if (spineMeasured) lms.push_back({kVertebraAtDeepest, Vec3(x0, ySpine, zDeep)});
+  else log.push_back("no vertebral column in the input: landmark 503 (vertebra at the deepest level) not placed; the pectus "
+                     "index then measures to the costovertebral joints' line");
+  // bar exits at the mid-axillary line: halfway between the lateral-most points of ribs s and s+1
+  auto lateral = [&](int part, Vec3& out) {
+    const auto it = an.rib.find(part);
+    if (it == an.rib.end()) return false;
+    double dmax = 0;
+    for (const auto& p : it->second) dmax = std::max(dmax, std::abs(p.x() - x0));
+    std::vector<Vec3> side;
+    for (const auto& p : it->second)
+      if (std::abs(p.x() - x0) > dmax - 3) side.push_back(p);
+    out = mean(side);
+    return true;
+  };
+  int exits = 0;
+  for (int side = 1; side <= 2; ++side)
+    for (int s = 1; s < 12; ++s) {
+      Vec3 a, b;
+      if (lateral(100 * side + s, a) && lateral(100 * side + s + 1, b)) lms.push_back({barExitLandmark(side, s), 0.5 * (a + b)}), ++exits;
+    }
+  // diaphragm dome height: the lowest sternocostal junction (the xiphisternal level); lung apex: top of rib 1
+  double zDome = zLo + 0.15 * L;
+  if (!an.junction.empty()) {
+    zDome = 1e300;
+    for (const auto& p : an.junction) zDome = std::min(zDome, p.z());
+  } else {
+    log.push_back("the cartilages do not meet the sternum: the diaphragm dome height is taken 15 % of the sternum's "
+                  "length above its lower end");
+  }
+  double zApex = -1e300;
+  for (int side = 1; side <= 2; ++side)
+    if (const auto it = an.rib.find(100 * side + 1); it != an.rib.end())
+      for (const auto& p : it->second) zApex = std::max(zApex, p.z());
+  if (zApex < -1e299) fail("lung apex", "there is no first rib");
+  bool m = false;
+  lms.push_back({kDiaphragmDome, Vec3(x0, 0.5 * (lower.y() + spineFront(zDome, m)), zDome)});
+  lms.push_back({kLungApex, Vec3(x0, 0.5 * (upper.y() + spineFront(zApex, m)), zApex)});
+  log.push_back("landmarks: " + std::to_string(cvj.size()) + " costovertebral joints, sternum ends at " + at(lower) + " and " +
+                at(upper) + ", deepest point at " + at(Vec3(x0, yDeep, zDeep)) + ", " + std::to_string(exits) +
+                " bar exits, diaphragm dome z " + mm(zDome) + ", lung apex z " + mm(zApex) + " (before centring)");
+  return lms;
+}
+
+// relabels the faces of `m` from the nearest face of the labelled surface (pts, tris, labels)
+void relabel(CMeshO& m, const CMeshO& from) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Tri = K::Triangle_3;
+  using Prim = CGAL::AABB_triangle_primitive<K, std::vector<Tri>::const_iterator>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Prim>>;
+  const auto lab = readFaceLabels(from);
+  std::vector<Tri> tris;
+  std::vector<std::size_t> faceOf;
+  auto P = [](const Point3m& p) { return K::Point_3(p[0], p[1], p[2]); };
+  for (std::size_t f = 0; f < from.face.size(); ++f)
+    if (!from.face[f].IsD()) tris.emplace_back(P(from.face[f].cP(0)), P(from.face[f].cP(1)), P(from.face[f].cP(2))), faceOf.push_back(f);
+  Tree tree(tris.begin(), tris.end());
+  tree.accelerate_distance_queries();
+  std::vector<int> tissue(m.face.size()), part(m.face.size());
+  for (std::size_t f = 0; f < m.face.size(); ++f) {
+    if (m.face[f].IsD()) continue;
+    const Point3m c = (m.face[f].cP(0) + m.face[f].cP(1) + m.face[f].cP(2)) / 3.0f;
+    const auto hit = tree.closest_point_and_primitive(P(c));
+    const std::size_t src = faceOf[std::size_t(hit.second - tris.begin())];
+    tissue[f] = lab->tissue[src], part[f] = lab->part[src];
+  }
+  writeFaceLabels(m, tissue, part);
+}
+
+}  // namespace
+
+NameClass classifyName(const std::string& name) {
+  const auto w = words(name);
+  auto has = [&](const char* prefix) {
+    return std::any_of(w.begin(), w.end(), [&](const std::string& x) { return x.rfind(prefix, 0) == 0; });
+  };
+  NameClass c;
+  for (const auto& x : w) {
+    if (x == "left" || x == "l" || x == "lt" || x == "sinister") c.side = 2;
+    if (x == "right" || x == "r" || x == "rt" || x == "dexter") c.side = 1;
+  }
+  for (const auto& x : w)
+    if (std::isdigit(static_cast<unsigned char>(x[0])) && x.size() <= 2) c.number = std::stoi(x);
+  static const char* notCage[] = {"scapul", "clavic", "humer", "femur", "hip", "skull", "lung", "heart", "liver",
+                                  "aorta", "trachea", "esophag", "kidney", "spleen", "stomach", "sacrum", "pelvi",
+                                  "skin", "body", "muscle", "fat", "vein", "arter", "atrial", "ventric", "thyroid"};
+  for (const char* n : notCage)
+    if (has(n)) return {Kind::NotCage, c.side, c.number};
+  if (has("cartilag") || has("chondr")) return {Kind::Cartilage, c.side, c.number};
+  if (has("stern") || has("manubr") || has("xiph")) return {Kind::Sternum, 0, 0};
+  if (has("vertebr") || has("spine") || has("spinal") || has("column")) return {Kind::Vertebra, 0, 0};
+  const bool rib = has("rib") || has("costa");
+  if (rib && c.number >= 1 && c.number <= 12) return {Kind::Rib, c.side, c.number};
+  if (rib || has("bone") || has("skelet") || has("thorax") || has("cage")) return {Kind::Bone, c.side, 0};
+  return {Kind::Unknown, c.side, c.number};
+}
+
+std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped) {
+  std::ifstream in(path);
+  if (!in) throw InputError("Cannot read the picked points file '" + path + "': check the path.");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  std::vector<Landmark> out;
+  int skip = 0;
+  const std::regex point("<point\\b([^>]*)/?>");
+  auto attr = [](const std::string& tag, const std::string& key, std::string& val) {
+    const std::regex r("\\b" + key + "\\s*=\\s*\"([^\"]*)\"");
+    std::smatch m;
+    if (!std::regex_search(tag, m, r)) return false;
+    val = m[1];
+    return true;
+  };
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), point); it != std::sregex_iterator(); ++it) {
+    const std::string tag = (*it)[1];
+    std::string x, y, z, name, active = "1";
+    attr(tag, "active", active);
+    if (!attr(tag, "x", x) || !attr(tag, "y", y) || !attr(tag, "z", z) || !attr(tag, "name", name) || active == "0") {
+      ++skip;
+      continue;
+    }
+    std::size_t k = 0;
+    while (k < name.size() && std::isspace(static_cast<unsigned char>(name[k]))) ++k;
+    std::size_t e = k;
+    while (e < name.size() && std::isdigit(static_cast<unsigned char>(name[e]))) ++e;
+    if (e == k) {
+      ++skip;
+      continue;
+    }
+    out.push_back({std::stoi(name.substr(k, e - k)), Vec3(std::stod(x), std::stod(y), std::stod(z))});
+  }
+  if (out.empty() && text.find("<PickedPoints") == std::string::npos)
+    throw InputError("'" + path + "' is not a PickPoints file (.pp): no <PickedPoints> element.");
+  if (skipped) *skipped = skip;
+  return out;
+}
+
+PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
+                                 const std::function<void(int, const char*)>& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  auto prog = [&](int pc, const char* w) { if (progress) progress(pc, w); };
+  PrepareResult res;
+  auto& log = res.log;
+  if (!(opt.minVolume >= 0) || !(opt.alpha > 0) || !(opt.offset > 0) || !(opt.edgeLength >= 0))
+    throw InputError("parameters: the minimum volume and edge length must be >= 0, alpha and offset > 0");
+
+  // 1. classify
+  prog(2, "classifying the layers");
+  std::vector<Structure> all;
+  std::vector<std::string> unknown;
+  for (const auto& l : layers) {
+    Structure s{l.name, classifyName(l.name), soupOf(*l.mesh)};
+    if (s.soup.empty()) {
+      log.push_back("'" + l.name + "': no faces, left out");
+      continue;
+    }
+    if (s.cls.kind == Kind::NotCage) {
+      log.push_back("'" + l.name + "': not part of the rib cage, left out");
+      ++res.dropped;
+      continue;
+    }
+    if (s.cls.kind == Kind::Unknown) {
+      unknown.push_back(l.name);
+      continue;
+    }
+    weld(s.soup);
+    all.push_back(std::move(s));
+  }
+  for (const auto& n : unknown) log.push_back("'" + n + "': the name says no rib cage structure, left out (rename it to include it)");
+  auto count = [&](Kind k) { return std::count_if(all.begin(), all.end(), [&](const Structure& s) { return s.cls.kind == k; }); };
+  if (all.empty())
+    throw InputError("None of the " + std::to_string(layers.size()) + " layers is named like a rib cage structure: name them "
+                     "as TotalSegmentator does ('rib_left_1' ... 'rib_right_12', 'costal_cartilages', 'sternum', "
+                     "'vertebrae_T1' ...) or 'bone', 'cartilage', 'sternum'.");
+  if (!count(Kind::Sternum))
+    throw InputError("No sternum: none of the layers is named 'sternum' (or 'manubrium', 'xiphoid'). Import the sternum's "
+                     "segmentation, or rename its layer.");
+  if (!count(Kind::Cartilage))
+    throw InputError("No costal cartilage: none of the layers is named like 'costal_cartilages' or 'cartilage'. The "
+                     "cartilages join the ribs to the sternum; segment them (TotalSegmentator's 'costal_cartilages').");
+  if (!count(Kind::Rib) && !count(Kind::Bone))
+    throw InputError("No ribs: none of the layers is named like 'rib_left_1', 'ribs' or 'bone'.");
+  for (const auto& s : all)
+    log.push_back("'" + s.name + "': " +
+                  (s.cls.kind == Kind::Rib ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number)
+                   : s.cls.kind == Kind::Cartilage ? std::string("costal cartilage")
+                   : s.cls.kind == Kind::Sternum ? std::string("sternum")
+                   : s.cls.kind == Kind::Vertebra ? std::string("vertebral column (support, not in the model)")
+                                                  : std::string("bone (ribs, maybe fused to the spine)")) +
+                  ", " + std::to_string(s.soup.F.size()) + " faces");
+  prog(5, "units and frame");
+
+  // 2. units
+  Eigen::AlignedBox3d box;
+  for (const auto& s : all)
+    for (const auto& p : s.soup.V) box.extend(p);
+  const double diag = box.diagonal().norm();
+  double scale = 1;
+  if (opt.units == Units::Metres || (opt.units == Units::Auto && diag < 3)) scale = 1000;
+  else if (opt.units == Units::Centimetres || (opt.units == Units::Auto && diag < 60)) scale = 10;
+  log.push_back("units: " + std::string(scale == 1000 ? "metres" : scale == 10 ? "centimetres" : "millimetres") +
+                (opt.units == Units::Auto ? " (the structures span " + mm(diag, 3) + " units)" : std::string(" (stated)")) +
+                (scale != 1 ? ", scaled to mm" : ""));
+  if (scale * diag < 100 || scale * diag > 1500)
+    throw InputError("The structures span " + mm(scale * diag) + " mm, not a rib cage (150-700 mm): state the units "
+                     "(parameter 'Units').");
+  for (auto& s : all)
+    for (auto& p : s.soup.V) p *= scale;
+
+  // 3. frame
+  Frame fr = findFrame(all, opt, scale * diag);
+  for (auto& s : all) transform(s.soup, fr.R, Vec3::Zero());
+  log.push_back("frame " + fr.how);
+  Soup sternumAll;
+  for (const auto& s : all)
+    if (s.cls.kind == Kind::Sternum) append(sternumAll, s.soup);
+  double x0 = centroid(sternumAll).x();
+  Eigen::AlignedBox3d cageBox;
+  for (const auto& s : all)
+    for (const auto& p : s.soup.V) cageBox.extend(p);
+  const double yMid = 0.5 * (cageBox.min().y() + centroid(sternumAll).y());
+
+  // 4. fragments, the vertebral column, what is not cage
+  prog(10, "fragments and the spine");
+  std::vector<Vec3> spine;
+  std::vector<Structure> kept;
+  for (auto& s : all) {
+    if (s.cls.kind == Kind::Vertebra) {
+      spine.insert(spine.end(), s.soup.V.begin(), s.soup.V.end());
+      continue;
+    }
+    double rCut = 0;
+    if (s.cls.kind == Kind::Bone) {
+      rCut = spineHalfWidth(s.soup, x0, yMid);
+      if (rCut > 0) {
+        Soup cut;
+        int removed = 0;
+        for (const auto& f : s.soup.F) {
+          const Vec3 c = (s.soup.V[std::size_t(f[0])] + s.soup.V[std::size_t(f[1])] + s.soup.V[std::size_t(f[2])]) / 3.0;
+          if (c.y() < yMid && std::abs(c.x() - x0) < rCut) {
+            for (int k = 0; k < 3; ++k) spine.push_back(s.soup.V[std::size_t(f[std::size_t(k)])]);
+            ++removed;
+          } else {
+            cut.F.push_back(f);
+          }
+        }
+        cut.V = s.soup.V;
+        weld(cut);
+        log.push_back("'" + s.name + "': vertebral column found (posterior midline, " + mm(2 * rCut) + " mm wide): cut at the "
+                      "costovertebral joints, " + std::to_string(removed) + " faces removed");
+        s.soup = std::move(cut);
+      }
+    }
+    auto pieces = components(s.soup);
+    int fragments = 0, loose = 0;
+    double fragmentVolume = 0;
+    Soup keep;
+    for (auto& p : pieces) {
+      const double v = volume(p);
+      if (v < opt.minVolume) {
+        ++fragments, fragmentVolume += v;
+        continue;
+      }
+      if (rCut > 0) {  // a piece of a fused bone layer is a rib only if it reached the column
+        bool reaches = false;
+        for (const auto& q : p.V) reaches = reaches || (q.y() < yMid && std::abs(q.x() - x0) < rCut + 3.0);
+        if (!reaches) {
+          ++loose;
+          log.push_back("'" + s.name + "': left out a piece of " + std::to_string(p.F.size()) + " faces, " + mm(v / 1000, 2) +
+                        " cm3 at " + at(centroid(p)) + " that does not reach the spine (scapula or loose bone)");
+          continue;
+        }
+      }
+      if (s.cls.kind == Kind::Bone) {
+        kept.push_back({s.name + " piece " + std::to_string(kept.size() + 1), {Kind::Rib, 0, 0}, std::move(p)});
+        continue;
+      }
+      append(keep, p);
+    }
+    if (fragments) log.push_back("'" + s.name + "': dropped " + std::to_string(fragments) + " fragments under " + mm(opt.minVolume, 0) +
+                                 " mm3 (" + mm(fragmentVolume, 0) + " mm3 in all)");
+    res.dropped += fragments + loose;
+    if (s.cls.kind != Kind::Bone && !keep.empty()) kept.push_back({s.name, s.cls, std::move(keep)});
+    else if (s.cls.kind != Kind::Bone) log.push_back("'" + s.name + "': nothing left after dropping fragments");
+  }
+
+  auto vertebralEnd = [&](const Soup& r) {
+    Vec3 best(0, 0, 0);
+    double d = 1e300;
+    for (const auto& p : r.V)
+      if (p.y() < yMid && std::abs(p.x() - x0) < d) d = std::abs(p.x() - x0), best = p;
+    if (d > 1e299)
+      for (const auto& p : r.V)
+        if (std::abs(p.x() - x0) < d) d = std::abs(p.x() - x0), best = p;
+    return best;
+  };
+  if (fr.superiorOpen) {  // superior: where the ribs' vertebral ends are (each rib runs down to the front)
+    std::vector<std::pair<Vec3, Vec3>> ends;
+    for (const auto& st : kept) {
+      if (st.cls.kind != Kind::Rib) continue;
+      Vec3 front = st.soup.V.front();
+      for (const auto& p : st.soup.V)
+        if (p.y() > front.y()) front = p;
+      ends.push_back({vertebralEnd(st.soup), front});
+    }
+    if (!ribsRunDown(ends)) {  // upside down: turn about the anterior axis (keeps the handedness)
+      const Mat3 turn = Eigen::Vector3d(-1, 1, -1).asDiagonal();
+      for (auto& st : kept) transform(st.soup, turn, Vec3::Zero());
+      for (auto& p : spine) p = turn * p;
+      fr.R = turn * fr.R;
+      x0 = -x0;
+    }
+    log.push_back("superior from the ribs' slope (" + std::to_string(ends.size()) + " ribs: each runs down from its vertebral end)");
+  }
+
+  // 5. number the ribs: per side from the top by the height of their vertebral end
+  prog(20, "numbering the ribs");
+  std::map<int, std::vector<std::pair<double, Structure*>>> unnamed;  // side -> (end z, rib)
+  std::map<int, std::set<int>> named;
+  for (auto& s : kept) {
+    if (s.cls.kind != Kind::Rib) continue;
+    const Vec3 c = centroid(s.soup);
+    const int geomSide = c.x() > x0 ? 2 : 1;
+    if (s.cls.side && s.cls.side != geomSide)
+      log.push_back("'" + s.name + "': named " + sideName(s.cls.side) + " but lies on the " + sideName(geomSide) + " side; the name is kept");
+    if (!s.cls.side) s.cls.side = geomSide;
+    if (s.cls.number) named[s.cls.side].insert(s.cls.number);
+    else unnamed[s.cls.side].push_back({vertebralEnd(s.soup).z(), &s});
+  }
+  for (auto& [side, list] : unnamed) {
+    std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (!named[side].empty()) {
+      log.push_back(std::to_string(list.size()) + " unnamed " + sideName(side) + " bone pieces left out: that side's ribs are named");
+      for (auto& [z, s] : list) s->cls.kind = Kind::NotCage;
+      continue;
+    }
+    int k = 0;
+    for (auto& [z, s] : list) s->cls.number = ++k, named[side].insert(k);
+    log.push_back(sideName(side) + " ribs numbered 1-" + std::to_string(k) + " from the top by the height of their vertebral end");
+  }
+  for (int side = 1; side <= 2; ++side) {
+    const auto& n = named[side];
+    if (n.empty())
+      throw InputError("Ribs on the " + sideName(3 - side) + " side only: the " + sideName(side) + " ribs are missing. Import "
+                       "both sides (the analysis needs the whole cage).");
+    std::string missing;
+    for (int r = 1; r <= std::max(7, *n.rbegin()); ++r)
+      if (!n.count(r)) missing += (missing.empty() ? "" : ", ") + std::to_string(r);
+    if (!missing.empty())
+      throw InputError("Ribs missing on the " + sideName(side) + " side: " + missing + " (found " + std::to_string(n.size()) +
+                       "). The analysis needs ribs 1-7 on each side and no gaps; import the missing ribs' segmentations.");
+  }
+  res.ribsRight = int(named[1].size()), res.ribsLeft = int(named[2].size());
+
+  // 6. repair: wrap what is not a closed, manifold, self-intersection-free surface
+  prog(25, "repairing the structures");
+  Soup bone, cartilage, sternum;
+  std::vector<int> bonePart;
+  int done = 0;
+  for (auto& s : kept) {
+    prog(25 + 35 * done++ / int(kept.size()), "repairing the structures");
+    if (s.cls.kind == Kind::NotCage) continue;
+    const std::string why = opt.wrapAll ? std::string("every structure wrapped") : defects(s.soup);
+    const std::string label = s.cls.kind == Kind::Rib ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number) : s.name;
+    if (!why.empty()) {
+      const double v0 = volume(s.soup);
+      Soup w = alphaWrap(s.soup, opt.alpha, opt.offset);
+      const std::string still = defects(w);
+      if (!still.empty())
+        throw InputError("Alpha wrapping cannot close '" + s.name + "' at detail " + mm(opt.alpha, 2) + " mm (the result is " +
+                         still + "): raise 'Wrap detail (alpha)' or check the structure.");
+      const double v1 = volume(w);
+      log.push_back(label + ": " + why + ": wrapped, " + mm(v0 / 1000, 2) + " -> " + mm(v1 / 1000, 2) + " cm3 (" +
+                    (v1 >= v0 ? "+" : "") + mm(100 * (v1 - v0) / std::max(v0, 1e-9), 1) + " %)");
+      s.soup = std::move(w);
+      ++res.wrapped;
+    }
+    if (s.cls.kind == Kind::Rib) {
+      append(bone, s.soup);
+      bonePart.insert(bonePart.end(), s.soup.F.size(), ribPart(s.cls.side, s.cls.number));
+    } else if (s.cls.kind == Kind::Cartilage) {
+      append(cartilage, s.soup);
+    } else if (s.cls.kind == Kind::Sternum) {
+      append(sternum, s.soup);
+    }
+  }
+
+  // 7. join into one labelled surface, decimate, relabel
+  prog(60, "joining the tissues");
+  OwnedMesh boneM, cartM, sternM, joined;
+  toMesh(bone, boneM);
+  writeFaceLabels(boneM, std::vector<int>(bone.F.size(), int(Tissue::Bone)), bonePart);
+  toMesh(cartilage, cartM);
+  toMesh(sternum, sternM);
+  nuss::JoinStats js;
+  nuss::joinTissueLayers({{"ribs", &boneM, Tissue::Bone}, {"costal cartilage", &cartM, Tissue::Cartilage},
+                          {"sternum", &sternM, Tissue::Sternum}},
+                         {}, joined, &js);
+  log.push_back("joined: " + std::to_string(js.components) + " connected pieces, " + mm(js.unionVolume / 1000, 1) + " cm3 (the " +
+                "structures add up to " + mm(js.sumVolume / 1000, 1) + " cm3), " + std::to_string(joined.fn) + " faces");
+  prog(75, "decimating");
+  cage.Clear();
+  copyLabelledMesh(cage, joined);
+  if (opt.edgeLength > 0) {
+    double ar = 0;
+    for (const auto& f : cage.face) ar += double(vcg::DoubleArea(f)) / 2;
+    const int target = int(ar / (0.433 * opt.edgeLength * opt.edgeLength));
+    if (target < cage.fn) {
+      ribcage::decimateEmbedded(cage, target, opt.edgeLength);
+      vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
+      relabel(cage, joined);
+      log.push_back("decimated to edge length " + mm(opt.edgeLength, 2) + " mm: " + std::to_string(cage.fn) + " faces");
+    }
+  }
+
+  // 8. landmarks, then the origin
+  prog(90, "landmarks");
+  Anatomy an = anatomyOf(cage);
+  an.spine = spine;
+  auto lms = placeLandmarks(an, x0, yMid, log);
+  double ySpine = 0, zLow = 1e300;
+  std::map<int, double> zBySide[3];
+  {
+    bool spineAt = false;
+    for (const auto& l : lms)
+      if (l.code == kVertebraAtDeepest) ySpine = l.p.y(), spineAt = true;
+    double yc = 0;
+    int n = 0;
+    for (const auto& l : lms)
+      if (l.code > 100 && l.code < 213) yc += l.p.y(), ++n, zLow = std::min(zLow, l.p.z()), zBySide[l.code / 100][l.code % 100] = l.p.z();
+    if (!spineAt) ySpine = n ? yc / n : 0;
+  }
+  double spacing = 0;
+  int ns = 0;
+  for (int side = 1; side <= 2; ++side)
+    for (const auto& [rib, z] : zBySide[side])
+      if (auto it = zBySide[side].find(rib + 1); it != zBySide[side].end()) spacing += z - it->second, ++ns;
+  spacing = ns ? spacing / ns : 0;
+  const Vec3 shift(-x0, -ySpine, -(zLow - 0.5 * spacing));
+  for (auto& v : cage.vert) v.P() += toPoint(shift);
+  for (auto& l : lms) l.p += shift;
+  vcg::tri::UpdateBounding<CMeshO>::Box(cage);
+  res.inputToModel.setIdentity();
+  res.inputToModel.topLeftCorner<3, 3>() = scale * fr.R;
+  res.inputToModel.topRightCorner<3, 1>() = shift;
+  // user points override
+  for (const auto& u : opt.userLandmarks) {
+    const Vec3 p = (res.inputToModel * u.p.homogeneous()).head<3>();
+    auto it = std::find_if(lms.begin(), lms.end(), [&](const Landmark& l) { return l.code == u.code; });
+    log.push_back("landmark " + std::to_string(u.code) + ": the user's point " + at(p) +
+                  (it != lms.end() ? " replaces the automatic " + at(it->p) : std::string(" (no automatic one)")));
+    if (it != lms.end()) it->p = p;
+    else lms.push_back({u.code, p});
+  }
+  std::sort(lms.begin(), lms.end(), [](const Landmark& a, const Landmark& b) { return a.code < b.code; });
+  res.landmarks = lms;
+  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  prog(100, "done");
+  return res;
+}
+
+}  // namespace pectus::patient

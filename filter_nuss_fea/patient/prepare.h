@@ -1,0 +1,90 @@
+// A patient's rib cage from a CT segmentation, made ready for the analyses: the structures classified,
+// repaired, put in the project's frame, numbered, joined into one labelled surface, and landmarked.
+// Host-free (vcglib + Eigen + CGAL, no Qt): 'Prepare Patient Rib Cage' maps it to layers.
+//
+// The steps, in order (each one Logged):
+//  1. classify every layer by its name (TotalSegmentator's, 3D Slicer's, or generic names): rib (side
+//     and number), costal cartilage, sternum, vertebra, other bone (may hold ribs fused to the spine),
+//     or not rib cage (scapula, clavicle, humerus, organs: left out);
+//  2. units: metres or centimetres are detected from the size of the whole and scaled to mm;
+//  3. the anatomical frame: anterior from the bone's centre to the sternum, the long axis along the
+//     sternum, snapped to the file's axes when within 30 degrees (CT exports are axis-aligned), superior
+//     where the cage is narrow, the patient's left from the right-handed scanner frame (or from the names);
+//  4. fragments (pieces under the minimum volume) are dropped; bone fused to the vertebral column is cut
+//     at the costovertebral joints (the column is the posterior midline bone running the whole height);
+//     pieces of such a layer that do not reach the cut (scapulae, loose pieces) are left out;
+//  5. ribs are numbered per side from the top by the height of their vertebral end (or from their names);
+//  6. each structure that is not a closed, 2-manifold, self-intersection-free surface is wrapped (CGAL
+//     alpha_wrap_3: detail alpha, offset) and its volume change reported; clean ones are kept;
+//  7. the structures are joined (corefinement union: joinTissueLayers) into one surface with tissue and
+//     part per face, then decimated to the target edge length (kept embedded) and relabelled;
+//  8. landmarks (labels.h codes) are placed from the anatomy; user points override them.
+// The result is in the project frame (labels.h): mm, +x patient's left, +y anterior, +z superior, x = 0 on
+// the sternum's midline, y = 0 at the vertebral bodies' anterior surface (else at the costovertebral
+// joints), z = 0 half a rib level below the lowest costovertebral joint.
+#pragma once
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "pectus/cmesh.h"
+#include "pectus/labels.h"
+
+namespace pectus::patient {
+
+/// What a layer holds, from its name.
+enum class Kind { Rib, Cartilage, Sternum, Vertebra, Bone, NotCage, Unknown };
+struct NameClass {
+  Kind kind = Kind::Unknown;
+  int side = 0;  ///< 1 right, 2 left, 0 unknown
+  int number = 0;  ///< rib (or cartilage) number, 0 unknown
+};
+/// Classifies a structure name (case-insensitive; '_', '-', ' ' and '.' separate words): 'rib_left_3',
+/// 'Rib R 3', 'left rib 3' -> rib; 'costal_cartilages', 'cartilage_left_5' -> cartilage; 'sternum',
+/// 'manubrium', 'xiphoid' -> sternum; 'vertebrae_T5', 'spine' -> vertebra; 'bone', 'ribs', 'skeleton' ->
+/// bone; 'scapula_left', 'clavicula_*', 'humerus_*', organs -> not cage.
+NameClass classifyName(const std::string& name);
+
+struct InputLayer {
+  std::string name;
+  const CMeshO* mesh = nullptr;
+};
+
+enum class Units { Auto, Millimetres, Centimetres, Metres };
+enum class FrameMode { Auto, RAS, LPS, Model };
+
+struct PrepareOptions {
+  Units units = Units::Auto;
+  FrameMode frame = FrameMode::Auto;
+  double minVolume = 200;    ///< mm^3: smaller connected pieces are fragments, dropped
+  double alpha = 1.5;        ///< mm: alpha wrapping's detail (the smallest gap it keeps open)
+  double offset = 0.3;       ///< mm: alpha wrapping's offset from the input
+  double edgeLength = 2.0;   ///< mm: the joined surface is decimated to this edge length (0: kept as is)
+  bool wrapAll = false;      ///< wrap every structure, clean or not
+  /// user landmarks in the INPUT layers' frame and units (picked points); each replaces the automatic
+  /// landmark of its code
+  std::vector<Landmark> userLandmarks;
+};
+
+struct PrepareResult {
+  std::vector<Landmark> landmarks;        ///< in the project frame
+  Eigen::Matrix4d inputToModel = Eigen::Matrix4d::Identity();  ///< input layer coordinates -> result (mm)
+  std::vector<std::string> log;           ///< every decision, one line each
+  int ribsRight = 0, ribsLeft = 0, wrapped = 0, dropped = 0;
+  double seconds = 0;
+};
+
+/// Builds the labelled cage into `cage` (cleared first; face labels by writeFaceLabels). Throws InputError
+/// naming what to fix: no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised,
+/// a frame that cannot be found, a structure alpha wrapping cannot close, a landmark that cannot be placed.
+PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
+                                 const std::function<void(int, const char*)>& progress = {});
+
+/// Points picked with MeshLab's PickPoints tool (a .pp file: <point x=".." y=".." z=".." name=".." active="1"/>)
+/// as landmarks: the name is the code ("500") or starts with it ("500 lower sternum end"); inactive points
+/// and names without a code are skipped (counted in `skipped`). Throws InputError if the file is unreadable.
+std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped = nullptr);
+
+}  // namespace pectus::patient

@@ -1,0 +1,238 @@
+#include "soup.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+#include <tuple>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/alpha_wrap_3.h>
+#include <vcg/complex/allocate.h>
+
+#include "pectus/self_intersections.h"
+
+namespace pectus::patient {
+
+namespace {
+using Vec3 = Eigen::Vector3d;
+
+int findRoot(std::vector<int>& p, int i) {
+  while (p[std::size_t(i)] != i) i = p[std::size_t(i)] = p[std::size_t(p[std::size_t(i)])];
+  return i;
+}
+}  // namespace
+
+Soup soupOf(const CMeshO& m) {
+  Soup s;
+  std::vector<int> id(m.vert.size(), -1);
+  for (const auto& f : m.face) {
+    if (f.IsD()) continue;
+    std::array<int, 3> t{};
+    bool finite = true;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t v = std::size_t(vcg::tri::Index(m, f.cV(k)));
+      const Vec3 p = toEigen(m.vert[v].cP());
+      if (!p.allFinite()) finite = false;
+      t[std::size_t(k)] = int(v);
+    }
+    if (!finite) continue;
+    for (int& v : t) {
+      if (id[std::size_t(v)] < 0) id[std::size_t(v)] = int(s.V.size()), s.V.push_back(toEigen(m.vert[std::size_t(v)].cP()));
+      v = id[std::size_t(v)];
+    }
+    s.F.push_back(t);
+  }
+  return s;
+}
+
+void weld(Soup& s) {
+  std::map<std::tuple<double, double, double>, int> at;
+  std::vector<int> to(s.V.size());
+  std::vector<Vec3> V;
+  for (std::size_t i = 0; i < s.V.size(); ++i) {
+    const auto key = std::make_tuple(s.V[i].x(), s.V[i].y(), s.V[i].z());
+    const auto [it, fresh] = at.emplace(key, int(V.size()));
+    if (fresh) V.push_back(s.V[i]);
+    to[i] = it->second;
+  }
+  std::vector<std::array<int, 3>> F;
+  for (auto f : s.F) {
+    for (int& v : f) v = to[std::size_t(v)];
+    if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2]) F.push_back(f);
+  }
+  // drop unused vertices
+  std::vector<int> used(V.size(), -1);
+  Soup out;
+  for (auto f : F) {
+    for (int& v : f) {
+      if (used[std::size_t(v)] < 0) used[std::size_t(v)] = int(out.V.size()), out.V.push_back(V[std::size_t(v)]);
+      v = used[std::size_t(v)];
+    }
+    out.F.push_back(f);
+  }
+  s = std::move(out);
+}
+
+void append(Soup& to, const Soup& s) {
+  const int o = int(to.V.size());
+  to.V.insert(to.V.end(), s.V.begin(), s.V.end());
+  for (auto f : s.F) to.F.push_back({f[0] + o, f[1] + o, f[2] + o});
+}
+
+std::vector<Soup> components(const Soup& s) {
+  std::vector<int> p(s.V.size());
+  std::iota(p.begin(), p.end(), 0);
+  for (const auto& f : s.F) {
+    const int a = findRoot(p, f[0]);
+    for (int k = 1; k < 3; ++k) {
+      const int b = findRoot(p, f[std::size_t(k)]);
+      if (a != b) p[std::size_t(b)] = a;
+    }
+  }
+  std::map<int, std::size_t> index;
+  std::vector<Soup> out;
+  std::vector<std::map<int, int>> vmap;
+  for (const auto& f : s.F) {
+    const int r = findRoot(p, f[0]);
+    auto [it, fresh] = index.emplace(r, out.size());
+    if (fresh) out.emplace_back(), vmap.emplace_back();
+    Soup& c = out[it->second];
+    auto& vm = vmap[it->second];
+    std::array<int, 3> g{};
+    for (int k = 0; k < 3; ++k) {
+      const auto [jt, nv] = vm.emplace(f[std::size_t(k)], int(c.V.size()));
+      if (nv) c.V.push_back(s.V[std::size_t(f[std::size_t(k)])]);
+      g[std::size_t(k)] = jt->second;
+    }
+    c.F.push_back(g);
+  }
+  return out;
+}
+
+double area(const Soup& s) {
+  double a = 0;
+  for (const auto& f : s.F)
+    a += 0.5 * (s.V[std::size_t(f[1])] - s.V[std::size_t(f[0])]).cross(s.V[std::size_t(f[2])] - s.V[std::size_t(f[0])]).norm();
+  return a;
+}
+
+Vec3 centroid(const Soup& s) {
+  Vec3 c = Vec3::Zero();
+  double w = 0;
+  for (const auto& f : s.F) {
+    const Vec3 &a = s.V[std::size_t(f[0])], &b = s.V[std::size_t(f[1])], &d = s.V[std::size_t(f[2])];
+    const double ar = 0.5 * (b - a).cross(d - a).norm();
+    c += ar * (a + b + d) / 3.0, w += ar;
+  }
+  return w > 0 ? Vec3(c / w) : (s.V.empty() ? Vec3::Zero() : s.V.front());
+}
+
+double volume(const Soup& s) {
+  const Vec3 o = centroid(s);
+  double v = 0;
+  for (const auto& f : s.F)
+    v += (s.V[std::size_t(f[0])] - o).dot((s.V[std::size_t(f[1])] - o).cross(s.V[std::size_t(f[2])] - o)) / 6.0;
+  return std::abs(v);
+}
+
+void transform(Soup& s, const Eigen::Matrix3d& R, const Vec3& t) {
+  for (auto& p : s.V) p = R * p + t;
+  if (R.determinant() < 0)
+    for (auto& f : s.F) std::swap(f[1], f[2]);
+}
+
+std::string defects(const Soup& s) {
+  if (s.F.empty()) return "no faces";
+  std::set<std::array<int, 3>> seen;
+  std::size_t dup = 0;
+  std::map<std::pair<int, int>, int> edgeUse;
+  for (const auto& f : s.F) {
+    auto k = f;
+    std::sort(k.begin(), k.end());
+    if (!seen.insert(k).second) ++dup;
+    for (int e = 0; e < 3; ++e) {
+      const int a = f[std::size_t(e)], b = f[std::size_t((e + 1) % 3)];
+      ++edgeUse[{std::min(a, b), std::max(a, b)}];
+    }
+  }
+  if (dup) return std::to_string(dup) + " duplicate faces";
+  std::size_t border = 0, nonManifold = 0;
+  for (const auto& [e, n] : edgeUse) border += n == 1, nonManifold += n > 2;
+  if (nonManifold) return std::to_string(nonManifold) + " non-manifold edges";
+  if (border) return "open (" + std::to_string(border) + " border edges)";
+  // a vertex whose faces form more than one fan (two sheets touching at a point)
+  {
+    std::vector<std::vector<int>> vf(s.V.size());
+    for (std::size_t i = 0; i < s.F.size(); ++i)
+      for (int v : s.F[i]) vf[std::size_t(v)].push_back(int(i));
+    std::size_t pinched = 0;
+    for (std::size_t v = 0; v < vf.size(); ++v) {
+      if (vf[v].empty()) continue;
+      // walk the fan from one face across edges at v
+      std::vector<char> done(vf[v].size(), 0);
+      std::vector<int> stack{0};
+      done[0] = 1;
+      std::size_t reached = 1;
+      while (!stack.empty()) {
+        const auto& f = s.F[std::size_t(vf[v][std::size_t(stack.back())])];
+        stack.pop_back();
+        for (std::size_t j = 0; j < vf[v].size(); ++j) {
+          if (done[j]) continue;
+          const auto& g = s.F[std::size_t(vf[v][j])];
+          int shared = 0;
+          for (int a : f)
+            for (int b : g) shared += (a == b && a != int(v));
+          if (shared) done[j] = 1, ++reached, stack.push_back(int(j));
+        }
+      }
+      pinched += reached != vf[v].size();
+    }
+    if (pinched) return std::to_string(pinched) + " non-manifold vertices";
+  }
+  if (const auto pairs = selfIntersections(s.V, s.F); !pairs.empty())
+    return "intersects itself (" + std::to_string(pairs.size()) + " face pairs)";
+  return "";
+}
+
+Soup alphaWrap(const Soup& s, double alpha, double offset) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Point = K::Point_3;
+  std::vector<Point> pts;
+  pts.reserve(s.V.size());
+  for (const auto& p : s.V) pts.emplace_back(p.x(), p.y(), p.z());
+  std::vector<std::array<std::size_t, 3>> tris;
+  tris.reserve(s.F.size());
+  for (const auto& f : s.F) tris.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  CGAL::Surface_mesh<Point> w;
+  CGAL::alpha_wrap_3(pts, tris, alpha, offset, w);
+  Soup out;
+  std::vector<int> id(w.number_of_vertices() + w.number_of_removed_vertices(), -1);
+  for (auto v : w.vertices()) {
+    id[v.idx()] = int(out.V.size());
+    const auto& p = w.point(v);
+    out.V.emplace_back(p.x(), p.y(), p.z());
+  }
+  for (auto f : w.faces()) {
+    std::array<int, 3> t{};
+    int k = 0;
+    for (auto v : w.vertices_around_face(w.halfedge(f))) t[std::size_t(k++)] = id[v.idx()];
+    out.F.push_back(t);
+  }
+  return out;
+}
+
+void toMesh(const Soup& s, CMeshO& m) {
+  m.Clear();
+  auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, s.V.size());
+  for (const auto& p : s.V) vi->P() = toPoint(p), ++vi;
+  auto fi = vcg::tri::Allocator<CMeshO>::AddFaces(m, s.F.size());
+  for (const auto& f : s.F) {
+    for (int k = 0; k < 3; ++k) fi->V(k) = &m.vert[std::size_t(f[std::size_t(k)])];
+    ++fi;
+  }
+}
+
+}  // namespace pectus::patient

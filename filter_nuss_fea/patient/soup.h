@@ -1,0 +1,41 @@
+// Internal to the patient core: a triangle soup (points + index triples) and the operations the
+// preparation steps apply to it. CGAL stays inside soup.cpp.
+#pragma once
+#include <array>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "pectus/cmesh.h"
+
+namespace pectus::patient {
+
+struct Soup {
+  std::vector<Eigen::Vector3d> V;
+  std::vector<std::array<int, 3>> F;
+  bool empty() const { return F.empty(); }
+};
+
+/// The live faces of m (faces touching a non-finite vertex are dropped)
+Soup soupOf(const CMeshO& m);
+/// Vertices at exactly the same position merged, faces repeating a vertex and unused vertices dropped
+void weld(Soup& s);
+void append(Soup& to, const Soup& s);
+/// connected pieces (faces sharing a vertex)
+std::vector<Soup> components(const Soup& s);
+double area(const Soup& s);
+/// |enclosed volume| (mm^3); for an open piece, the volume of the cone from its centroid
+double volume(const Soup& s);
+Eigen::Vector3d centroid(const Soup& s);  ///< area-weighted
+/// p -> scale * R p + t, the faces flipped when the map mirrors (det R < 0)
+void transform(Soup& s, const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
+
+/// Why the soup is not a closed, 2-manifold, self-intersection-free surface ("" when it is)
+std::string defects(const Soup& s);
+/// CGAL's alpha wrap (detail alpha, offset; mm): a closed, 2-manifold, outward-oriented surface
+Soup alphaWrap(const Soup& s, double alpha, double offset);
+
+void toMesh(const Soup& s, CMeshO& m);
+
+}  // namespace pectus::patient
