@@ -89,12 +89,15 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
       "option. Volumes: slice method from landmark 700 to 701, envelope from 500 to 701 (as those filters' defaults); "
       "pectus index at the level of landmark 501.";
   addFilter(this, n);
+
+  addPrepareFilter();
 }
 
 void FilterNussFeaPlugin::initParameters(int id, MeshDocument& md, RichParameterList& par) {
   if (id == FP_CREATE_RIBCAGE) initCreateRibCage(par);
   if (id == FP_NUSS_FEA) initNussFea(md, par);
   if (id == FP_BAR_PLANNER) initBarPlanner(md, par);
+  if (id == FP_PREPARE_PATIENT) initPreparePatient(par);
 }
 
 void FilterNussFeaPlugin::run(int id, FilterContext& ctx) {
@@ -102,6 +105,7 @@ void FilterNussFeaPlugin::run(int id, FilterContext& ctx) {
     case FP_CREATE_RIBCAGE: runCreateRibCage(ctx); break;
     case FP_NUSS_FEA: runNussFea(ctx); break;
     case FP_BAR_PLANNER: runBarPlanner(ctx); break;
+    case FP_PREPARE_PATIENT: runPreparePatient(ctx); break;
     default: throw std::logic_error("unknown filter id");
   }
 }

@@ -9,7 +9,7 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   Q_INTERFACES(MeshFilterInterface)
 
  public:
-  enum { FP_CREATE_RIBCAGE, FP_NUSS_FEA, FP_BAR_PLANNER };
+  enum { FP_CREATE_RIBCAGE, FP_NUSS_FEA, FP_BAR_PLANNER, FP_PREPARE_PATIENT };
   FilterNussFeaPlugin();
   QString pluginName() const override { return "FilterPectusNussFea"; }
 
@@ -24,4 +24,8 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   void runNussFea(pectus::ml::FilterContext& ctx);
   void initBarPlanner(MeshDocument& md, RichParameterList& par);
   void runBarPlanner(pectus::ml::FilterContext& ctx);
+  // a patient's CT segmentation (filter_patient.cpp)
+  void addPrepareFilter();
+  void initPreparePatient(RichParameterList& par);
+  void runPreparePatient(pectus::ml::FilterContext& ctx);
 };

@@ -1,0 +1,135 @@
+// MeshLab adapter of the patient-data core (patient/): 'Prepare Patient Rib Cage'. Maps parameters, the
+// visible layers, progress and errors; every decision is in patient/prepare.cpp.
+#include "filter_nuss_fea.h"
+
+#include <vcg/complex/algorithms/update/normal.h>
+
+#include "pectus/errors.h"
+#include "pectus/labels.h"
+#include "prepare.h"
+
+using pectus::ml::FilterContext;
+using pectus::ml::fmt;
+
+void FilterNussFeaPlugin::addPrepareFilter() {
+  pectus::ml::FilterSpec s;
+  s.id = FP_PREPARE_PATIENT;
+  s.name = "Prepare Patient Rib Cage";
+  s.info =
+      "Makes a patient's CT segmentation (the visible layers, e.g. from 'Import CT Segmentation') into the labelled "
+      "rib cage and landmarks that 'Nuss Procedure FE Analysis', the thoracic volume filters, the pectus index and the bar "
+      "planner take. Every decision goes to the Log.<br>"
+      "<b>Layers by name</b> (TotalSegmentator's, 3D Slicer's or generic): 'rib_left_3' / 'Rib R 3' ribs, "
+      "'costal_cartilages' / 'cartilage', 'sternum', 'vertebrae_T5' (the spine: used for the frame and landmarks, not "
+      "in the model), 'bone' / 'ribs' (ribs, possibly fused to the spine). Scapulae, clavicles, humeri and organs are "
+      "left out, and so are layers whose name says nothing. Point layers named '... landmarks' are your landmarks "
+      "(vertex quality = code).<br>"
+      "<b>Steps.</b> Units (metres or cm scaled to mm); the anatomical frame (anterior towards the sternum, the long "
+      "axis along it, superior from the rib numbers or the ribs' slope, left from the right-handed scanner frame); "
+      "fragments under the minimum volume dropped; bone fused to the vertebral column cut at the costovertebral "
+      "joints (pieces that do not reach the spine, such as scapulae, left out); ribs numbered per side from the top; "
+      "every structure that is open, non-manifold or self-intersecting wrapped by CGAL's alpha wrapping (the Log gives "
+      "each one's volume change); the structures joined into one surface with tissue and part per face; decimated "
+      "to the edge length; landmarks placed (costovertebral joints, sternum ends, deepest funnel point, vertebra at "
+      "that level, bar exits at the mid-axillary line for every intercostal space, diaphragm dome and lung apex "
+      "heights). Picked points override them.<br>"
+      "<b>Output.</b> Two new layers: 'patient rib cage' (current; face colour = tissue, face quality = tissue*1000 + "
+      "part, in the project frame: mm, +x patient's left, +y anterior, +z superior) and 'patient landmarks' (vertex "
+      "quality = code). The Log gives the transform from the input layers to the result.";
+  s.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Remeshing | MeshFilterInterface::Cleaning);
+  s.arity = MeshFilterInterface::VARIABLE;
+  s.needsCurrentMesh = false;
+  s.postCondition = MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY;
+  addFilter(this, s);
+}
+
+void FilterNussFeaPlugin::initPreparePatient(RichParameterList& par) {
+  const pectus::patient::PrepareOptions d;
+  par.addParam(RichEnum("units", 0, QStringList() << "Automatic" << "Millimetres" << "Centimetres" << "Metres", "Units",
+                        "Units of the input layers. Automatic: from the size of the whole (a rib cage spans 150-700 mm): "
+                        "under 3 units metres, under 60 centimetres, else millimetres."));
+  par.addParam(RichEnum("frame", 0,
+                        QStringList() << "Automatic (from the anatomy)" << "RAS (x right, y anterior, z superior)"
+                                      << "LPS (x left, y posterior, z superior)" << "Project frame (x left, y anterior, z superior)",
+                        "Frame",
+                        "Axes of the input layers. Automatic: anterior from the bone's centre to the sternum, the long axis "
+                        "along the sternum (snapped to the file's axes within 30 degrees), superior from the rib numbers or "
+                        "the ribs' slope, the patient's left from the right-handed scanner frame (or from the names)."));
+  par.addParam(RichFloat("minVolume", float(d.minVolume), "Fragment volume (mm^3)",
+                         "Connected pieces smaller than this are fragments and are dropped, 0-100000 mm^3 (a child's rib "
+                         "holds 2000-10000 mm^3)."));
+  par.addParam(RichFloat("alpha", float(d.alpha), "Wrap detail, alpha (mm)",
+                         "Alpha wrapping of structures that are open, non-manifold or self-intersecting: the smallest "
+                         "feature kept, 0.2-20 mm (smaller: closer to the input, slower)."));
+  par.addParam(RichFloat("offset", float(d.offset), "Wrap offset (mm)",
+                         "Distance of the wrap from the input, 0.05-5 mm (it adds about offset x area to the volume)."));
+  par.addParam(RichFloat("edgeLength", float(d.edgeLength), "Target edge length (mm)",
+                         "The joined surface is decimated to this edge length, 0.5-10 mm; 0 keeps every face."));
+  par.addParam(RichBool("wrapAll", d.wrapAll, "Wrap every structure",
+                        "Wrap the clean structures too (by default only the ones that need it are wrapped)."));
+  par.addParam(RichString("pickedPoints", "", "Picked points (.pp)",
+                          "Optional: a MeshLab PickPoints file (Edit > PickPoints, Save) with points picked on the input "
+                          "layers, each named by its landmark code ('500', '501 deepest point', ...). Each replaces the "
+                          "automatic landmark of its code."));
+}
+
+void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
+  pectus::patient::PrepareOptions o;
+  o.units = pectus::patient::Units(ctx.enumIn("units", 4));
+  o.frame = pectus::patient::FrameMode(ctx.enumIn("frame", 4));
+  o.minVolume = ctx.floatIn("minVolume", 0, 100000);
+  o.alpha = ctx.floatIn("alpha", 0.2, 20);
+  o.offset = ctx.floatIn("offset", 0.05, 5);
+  o.edgeLength = ctx.floatIn("edgeLength", 0, 10);
+  if (o.edgeLength > 0 && o.edgeLength < 0.5)
+    throw pectus::InputError("parameter 'edgeLength' (Target edge length) must be 0 or 0.5-10 mm, got " + fmt(o.edgeLength));
+  o.wrapAll = ctx.boolean("wrapAll");
+  const std::string pp = ctx.string("pickedPoints").trimmed().toStdString();
+  if (!pp.empty()) {
+    int skipped = 0;
+    o.userLandmarks = pectus::patient::readPickedPoints(pp, &skipped);
+    ctx.log("picked points: " + std::to_string(o.userLandmarks.size()) + " landmarks from " + pp +
+            (skipped ? " (" + std::to_string(skipped) + " points without a code or inactive, skipped)" : std::string()));
+  }
+  std::vector<pectus::patient::InputLayer> layers;
+  for (MeshModel* m : ctx.doc().meshList) {
+    if (!m->isVisible()) continue;
+    const std::string name = m->label().toStdString();
+    if (m->cm.fn == 0) {
+      if (m->cm.vn > 0 && QString::fromStdString(name).endsWith("landmarks", Qt::CaseInsensitive)) {
+        const auto user = pectus::readLandmarks(m->cm);
+        o.userLandmarks.insert(o.userLandmarks.end(), user.begin(), user.end());
+        ctx.log("'" + name + "': " + std::to_string(user.size()) + " user landmarks (vertex quality = code)");
+      }
+      continue;
+    }
+    layers.push_back({name, &m->cm});
+  }
+  if (layers.empty())
+    throw pectus::InputError("No visible layer with faces: import the segmentation first (File > Import Mesh, or 'Import CT "
+                             "Segmentation').");
+
+  pectus::OwnedMesh cage;
+  const auto r = pectus::patient::preparePatientCage(layers, o, cage, [&](int pc, const char* w) { ctx.progress(pc, w); });
+
+  MeshModel& mm = ctx.addLayer("patient rib cage");
+  mm.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY);
+  pectus::copyLabelledMesh(mm.cm, cage);
+  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(mm.cm);
+  vcg::tri::UpdateBounding<CMeshO>::Box(mm.cm);
+  MeshModel& lm = ctx.addLayer("patient landmarks", false);
+  lm.updateDataMask(MeshModel::MM_VERTQUALITY);
+  pectus::writeLandmarks(lm.cm, r.landmarks);
+  vcg::tri::UpdateBounding<CMeshO>::Box(lm.cm);
+
+  for (const auto& line : r.log) ctx.log(line);
+  const Eigen::Matrix4d& T = r.inputToModel;
+  std::string t;
+  for (int i = 0; i < 3; ++i)
+    t += (i ? "; " : "") + fmt(T(i, 0), 4) + " " + fmt(T(i, 1), 4) + " " + fmt(T(i, 2), 4) + " " + fmt(T(i, 3), 2);
+  ctx.log("input -> result transform (rows x y z: 3x3 | shift mm): " + t);
+  ctx.log("Patient rib cage: " + std::to_string(mm.cm.fn) + " faces, " + std::to_string(r.ribsRight) + " right and " +
+          std::to_string(r.ribsLeft) + " left ribs, " + std::to_string(r.wrapped) + " structures wrapped, " +
+          std::to_string(r.dropped) + " pieces left out, " + std::to_string(r.landmarks.size()) + " landmarks; " +
+          fmt(r.seconds, 3) + " s");
+}
