@@ -1,5 +1,6 @@
 // MeshLab adapter of the Nuss FE analysis plugin: maps parameters, layers, progress and errors to the
-// host-free cores (core/: the parametric rib cage; fe/: the finite element analysis). No algorithm here.
+// host-free cores (core/: the parametric rib cage; fe/: the finite element analysis; patient/: CT segmentation
+// import). No algorithm here.
 #pragma once
 #include "filter_plugin.h"
 
@@ -9,7 +10,7 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   Q_INTERFACES(MeshFilterInterface)
 
  public:
-  enum { FP_CREATE_RIBCAGE, FP_NUSS_FEA, FP_BAR_PLANNER, FP_PREPARE_PATIENT };
+  enum { FP_CREATE_RIBCAGE, FP_NUSS_FEA, FP_BAR_PLANNER, FP_IMPORT_CT, FP_PREPARE_PATIENT };
   FilterNussFeaPlugin();
   QString pluginName() const override { return "FilterPectusNussFea"; }
 
@@ -24,6 +25,8 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   void runNussFea(pectus::ml::FilterContext& ctx);
   void initBarPlanner(MeshDocument& md, RichParameterList& par);
   void runBarPlanner(pectus::ml::FilterContext& ctx);
+  void initImportCt(RichParameterList& par);
+  void runImportCt(pectus::ml::FilterContext& ctx);
   // a patient's CT segmentation (filter_patient.cpp)
   void addPrepareFilter();
   void initPreparePatient(RichParameterList& par);

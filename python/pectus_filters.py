@@ -40,6 +40,11 @@ def create_ribcage(**kw) -> Filter:
         "output": (Enum, 0, RIBCAGE_OUTPUT)}, dict(kw))
 
 
+def import_ct_segmentation(**kw) -> Filter:
+    return _build("Import CT Segmentation", {
+        "path": (String, ""), "labelTable": (String, ""), "minVoxels": (Int, 1)}, dict(kw))
+
+
 NUSS_INPUT = ["Current layer (one labelled surface)", "One layer per tissue (visible layers)"]
 NUSS_MODE = ["Calibrate Fe to the target elevation", "Given elevating force"]
 NUSS_ANALYSIS = ["Large displacement (nonlinear)", "Small strain (linear)"]

@@ -3,6 +3,7 @@
 // them), from one file or a folder. Host-free (no Qt): 'Import CT Segmentation' maps it to layers.
 #pragma once
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
@@ -34,6 +35,36 @@ struct ImportReport {
 /// Reads one mesh file into `out` (cleared first). Throws InputError naming the file and the problem
 /// (missing, unknown extension, unreadable, no faces).
 void readMeshFile(const std::string& path, CMeshO& out);
+
+/// What readMeshFile did besides reading. Vertices at the same position are merged (STL stores none
+/// shared) and vertices no face uses are removed; faces with a NaN or infinite coordinate are dropped.
+/// Everything else (duplicate or degenerate faces, holes, orientation) is kept as in the file.
+struct MeshFileStats {
+  std::string format;            ///< "binary STL", "ASCII STL", "OBJ", "PLY", "OFF"
+  int trianglesRead = 0;         ///< triangles in the file (polygons fan-triangulated)
+  int nonFiniteFaces = 0;        ///< dropped: a corner with a NaN or infinite coordinate
+  int mergedVertices = 0;        ///< removed by merging with a vertex at the same position
+  int unreferencedVertices = 0;  ///< removed: no face uses them
+};
+void readMeshFile(const std::string& path, CMeshO& out, MeshFileStats& stats);
+
+/// The structure name of a file: its name without folder and without .nii.gz, .nii, .stl, .obj, .ply,
+/// .off (any case): "/data/rib_left_3.nii.gz" -> "rib_left_3".
+std::string structureName(const std::string& path);
+
+/// A label table (value -> name) from text or from the file the text names. Entries are lines (or, in
+/// text, ';'-separated): "1 rib_left_1", "1,rib_left_1", "1=rib_left_1", 3D Slicer colour-table lines
+/// "1 rib_left_1 R G B A", ITK-SNAP lines with a quoted name, or one JSON object {"1": "rib_left_1"}
+/// (also {"rib_left_1": 1}). '#' starts a comment line; a first line without a number is a header;
+/// value 0 (background) is ignored. Throws InputError naming the line that cannot be read.
+std::map<int, std::string> parseLabelTable(const std::string& textOrPath);
+
+/// Connected components of a mesh's faces (faces sharing a vertex are connected).
+int countComponents(const CMeshO& m);
+
+/// "rib_left_3: 2,314 faces, 1,159 vertices, 1 component, from rib_left_3.stl" (a label map adds
+/// " label 3").
+std::string describe(const Structure& s);
 
 /// A file (mesh or NIfTI) or a folder (every mesh and NIfTI file in it, sorted by name; other files are
 /// skipped and listed). Structures come in file order, labels ascending. Throws InputError when nothing
