@@ -123,6 +123,11 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
   vcg::tri::UpdateBounding<CMeshO>::Box(lm.cm);
 
   for (const auto& line : r.log) ctx.log(line);
+  std::string placed;
+  for (const auto& l : r.landmarks)
+    placed += (placed.empty() ? "" : ", ") + std::to_string(l.code) + " (" + fmt(l.p.x(), 1) + " " + fmt(l.p.y(), 1) + " " +
+              fmt(l.p.z(), 1) + ")";
+  ctx.log("landmarks (code (x y z) mm, result frame): " + placed);
   const Eigen::Matrix4d& T = r.inputToModel;
   std::string t;
   for (int i = 0; i < 3; ++i)

@@ -45,6 +45,18 @@ def import_ct_segmentation(**kw) -> Filter:
         "path": (String, ""), "labelTable": (String, ""), "minVoxels": (Int, 1)}, dict(kw))
 
 
+PREPARE_UNITS = ["Automatic", "Millimetres", "Centimetres", "Metres"]
+PREPARE_FRAME = ["Automatic (from the anatomy)", "RAS (x right, y anterior, z superior)",
+                 "LPS (x left, y posterior, z superior)", "Project frame (x left, y anterior, z superior)"]
+
+
+def prepare_patient_rib_cage(**kw) -> Filter:
+    return _build("Prepare Patient Rib Cage", {
+        "units": (Enum, 0, PREPARE_UNITS), "frame": (Enum, 0, PREPARE_FRAME), "minVolume": (Float, 200.0),
+        "alpha": (Float, 1.5), "offset": (Float, 0.3), "edgeLength": (Float, 2.0), "wrapAll": (Bool, False),
+        "pickedPoints": (String, "")}, dict(kw))
+
+
 NUSS_INPUT = ["Current layer (one labelled surface)", "One layer per tissue (visible layers)"]
 NUSS_MODE = ["Calibrate Fe to the target elevation", "Given elevating force"]
 NUSS_ANALYSIS = ["Large displacement (nonlinear)", "Small strain (linear)"]
