@@ -370,4 +370,15 @@ std::vector<Landmark> generateTissueLayers(const RibCageParams& p, std::array<Ow
   return lms;
 }
 
+CageModel buildCalibratedModel(const RibCageParams& p, RibCageStats* stats, std::vector<Landmark>* lms) {
+  RibCageStats st;
+  CageModel model = calibratedModel(p, st, [](int, const char*) {});
+  if (lms) {
+    const CageField field(model);
+    *lms = landmarks(model, field, st);
+  }
+  if (stats) *stats = st;
+  return model;
+}
+
 }  // namespace pectus::ribcage

@@ -39,6 +39,11 @@ double autoBlend(const Dimensions& d);
 
 CageModel buildModel(const Dimensions& d, const RibCageParams& p, double funnelDepth, double spacing);
 
+/// The anatomy generateRibCage builds for p (validated; funnel depth calibrated to p.hallerIndex on the
+/// implicit surface), without extracting a surface: for tools that sample the model themselves. `stats`
+/// receives the calibration figures (no surface figures), `landmarks` what generateRibCage returns.
+CageModel buildCalibratedModel(const RibCageParams& p, RibCageStats* stats = nullptr, std::vector<Landmark>* landmarks = nullptr);
+
 /// Spatial hash of the curves' segments and the smooth-union field (negative inside).
 class CageField {
  public:

@@ -233,6 +233,13 @@ struct NimDeleter {
 };
 using NimPtr = std::unique_ptr<nifti_image, NimDeleter>;
 
+// libnifti's messages go to stderr; ours are the InputErrors. Set once (thread-safe static init), since
+// masks may be written from several threads.
+void quietNifti() {
+  static const bool quiet = (nifti_set_debug_level(0), true);
+  (void)quiet;
+}
+
 const char* datatypeName(int dt) {
   switch (dt) {
     case DT_UINT8: return "uint8";
@@ -297,7 +304,7 @@ LabelVolume readNifti(const std::string& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError("NIfTI file '" + path + "' not found: check the path");
   if (fs::is_directory(path, ec)) throw InputError("'" + path + "' is a folder, not a NIfTI file");
-  nifti_set_debug_level(0);
+  quietNifti();
   NimPtr nim(nifti_image_read(path.c_str(), 1));
   if (!nim || !nim->data)
     throw InputError("'" + path + "' cannot be read as NIfTI (not a .nii/.nii.gz file, truncated or damaged); export the label map as NIfTI-1 or NIfTI-2");
@@ -391,7 +398,7 @@ void writeNifti(const LabelVolume& v, const std::string& path) {
   for (std::int32_t x : v.labels) { lo = std::min(lo, x); hi = std::max(hi, x); }
   const bool small = lo >= std::numeric_limits<std::int16_t>::min() && hi <= std::numeric_limits<std::int16_t>::max();
   const int64_t dims[8] = {3, v.dims[0], v.dims[1], v.dims[2], 1, 1, 1, 1};
-  nifti_set_debug_level(0);
+  quietNifti();
   NimPtr nim(nifti_make_new_nim(dims, small ? DT_INT16 : DT_INT32, 1));
   if (!nim || !nim->data) throw InputError("cannot write '" + path + "': out of memory");
   if (small) {
