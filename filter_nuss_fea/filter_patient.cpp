@@ -28,8 +28,10 @@ void FilterNussFeaPlugin::addPrepareFilter() {
       "axis along it, superior from the rib numbers or the ribs' slope, left from the right-handed scanner frame); "
       "fragments under the minimum volume dropped; bone fused to the vertebral column cut at the costovertebral "
       "joints (pieces that do not reach the spine, such as scapulae, left out); ribs numbered per side from the top; "
-      "every structure that is open, non-manifold or self-intersecting wrapped by CGAL's alpha wrapping (the Log gives "
-      "each one's volume change); the structures joined into one surface with tissue and part per face; decimated "
+      "each structure made a closed, manifold, self-intersection-free surface by the least repair that does it "
+      "(duplicate faces removed, holes closed, else CGAL's alpha wrapping; the costal cartilages are always wrapped, "
+      "so that they overlap the ribs and sternum they join; the Log gives each repair and volume change); the "
+      "structures joined into one surface with tissue and part per face; decimated "
       "to the edge length; landmarks placed (costovertebral joints, sternum ends, deepest funnel point, vertebra at "
       "that level, bar exits at the mid-axillary line for every intercostal space, diaphragm dome and lung apex "
       "heights). Picked points override them.<br>"
@@ -59,10 +61,12 @@ void FilterNussFeaPlugin::initPreparePatient(RichParameterList& par) {
                          "Connected pieces smaller than this are fragments and are dropped, 0-100000 mm^3 (a child's rib "
                          "holds 2000-10000 mm^3)."));
   par.addParam(RichFloat("alpha", float(d.alpha), "Wrap detail, alpha (mm)",
-                         "Alpha wrapping of structures that are open, non-manifold or self-intersecting: the smallest "
-                         "feature kept, 0.2-20 mm (smaller: closer to the input, slower)."));
+                         "Alpha wrapping (of the costal cartilages, and of structures that stay open, non-manifold or "
+                         "self-intersecting after removing duplicate faces and closing holes): the smallest gap kept "
+                         "open, 0.2-20 mm (smaller: closer to the input, slower)."));
   par.addParam(RichFloat("offset", float(d.offset), "Wrap offset (mm)",
-                         "Distance of the wrap from the input, 0.05-5 mm (it adds about offset x area to the volume)."));
+                         "Distance of the wrap from the input, 0.01-5 mm (it adds about offset x area to the volume; the "
+                         "wrapped cartilages overlap the ribs and sternum they join by this much)."));
   par.addParam(RichFloat("edgeLength", float(d.edgeLength), "Target edge length (mm)",
                          "The joined surface is decimated to this edge length, 0.5-10 mm; 0 keeps every face."));
   par.addParam(RichBool("wrapAll", d.wrapAll, "Wrap every structure",
@@ -79,7 +83,7 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
   o.frame = pectus::patient::FrameMode(ctx.enumIn("frame", 4));
   o.minVolume = ctx.floatIn("minVolume", 0, 100000);
   o.alpha = ctx.floatIn("alpha", 0.2, 20);
-  o.offset = ctx.floatIn("offset", 0.05, 5);
+  o.offset = ctx.floatIn("offset", 0.01, 5);
   o.edgeLength = ctx.floatIn("edgeLength", 0, 10);
   if (o.edgeLength > 0 && o.edgeLength < 0.5)
     throw pectus::InputError("parameter 'edgeLength' (Target edge length) must be 0 or 0.5-10 mm, got " + fmt(o.edgeLength));

@@ -9,6 +9,7 @@
 #include <regex>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include <CGAL/AABB_traits.h>
 #include <CGAL/AABB_tree.h>
@@ -43,6 +44,7 @@ struct Structure {
   std::string name;  // layer name, or "<layer> piece k"
   NameClass cls;
   Soup soup;
+  bool wrapped = false;  // already wrapped (closed, manifold, embedded by construction)
 };
 
 std::vector<std::string> words(const std::string& name) {
@@ -149,18 +151,9 @@ Frame findFrame(const std::vector<Structure>& all, const PrepareOptions& opt, do
   } else {
     fr.superiorOpen = true;  // decided from the ribs' slope once the ribs are separated (superiorFromSlope)
   }
-  // the patient's left: scanner frames are right-handed (RAS, LPS): left = superior x anterior;
-  // names with sides decide when they disagree (a mirrored file)
-  Vec3 l = s.cross(a);
-  double leftMinusRight = 0;
-  int sided = 0;
-  for (const auto& st : all)
-    if ((st.cls.kind == Kind::Rib || st.cls.kind == Kind::Cartilage) && st.cls.side)
-      leftMinusRight += (st.cls.side == 2 ? 1 : -1) * (centroid(st.soup) - cS).dot(l), ++sided;
-  if (sided && leftMinusRight < 0) {
-    l = -l;
-    fr.how += "; left from the names (the file is mirrored)";
-  }
+  // the patient's left: scanner frames are right-handed (RAS, LPS): left = superior x anterior (names
+  // with sides are checked once the superior direction is final: leftFromNames)
+  const Vec3 l = s.cross(a);
   fr.R.row(0) = l.transpose();
   fr.R.row(1) = a.transpose();
   fr.R.row(2) = s.transpose();
@@ -313,7 +306,7 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
   };
   int exits = 0;
   for (int side = 1; side <= 2; ++side)
-    for (int s = 1; s < 12; ++s) {
+    for (int s = 1; s <= 9; ++s) {  // codes 600 + 10*side + s hold one digit of space
       Vec3 a, b;
       if (lateral(100 * side + s, a) && lateral(100 * side + s + 1, b)) lms.push_back({barExitLandmark(side, s), 0.5 * (a + b)}), ++exits;
     }
@@ -522,6 +515,11 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
   prog(10, "fragments and the spine");
   std::vector<Vec3> spine;
   std::vector<Structure> kept;
+  // positions of the bone and sternum vertices: a cartilage sharing any of them touches its neighbours
+  std::set<std::tuple<double, double, double>> bonePoints;
+  for (const auto& s : all)
+    if (s.cls.kind == Kind::Rib || s.cls.kind == Kind::Bone || s.cls.kind == Kind::Sternum)
+      for (const auto& p : s.soup.V) bonePoints.emplace(p.x(), p.y(), p.z());
   for (auto& s : all) {
     if (s.cls.kind == Kind::Vertebra) {
       spine.insert(spine.end(), s.soup.V.begin(), s.soup.V.end());
@@ -548,6 +546,24 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
                       "costovertebral joints, " + std::to_string(removed) + " faces removed");
         s.soup = std::move(cut);
       }
+    }
+    // The cartilages join the ribs to the sternum. Where a segmentation's labels only touch, their surfaces
+    // coincide face to face, which a union cannot join into a manifold: wrapped with the offset, the
+    // cartilage overlaps the bone it joins. The wrap also reconnects the thin strips that a voxel surface
+    // splits where voxels meet at an edge or corner only (so it comes before the fragments are counted).
+    const auto touches = [&](const Soup& c) {
+      return std::any_of(c.V.begin(), c.V.end(), [&](const Vec3& p) { return bonePoints.count({p.x(), p.y(), p.z()}) > 0; });
+    };
+    if (s.cls.kind == Kind::Cartilage && (touches(s.soup) || !defects(s.soup).empty())) {
+      const double v0 = volume(s.soup);
+      const std::size_t pieces0 = components(s.soup).size();
+      s.soup = alphaWrap(s.soup, opt.alpha, opt.offset);
+      const double v1 = volume(s.soup);
+      log.push_back("'" + s.name + "': wrapped so that it overlaps the ribs and the sternum it joins (" + std::to_string(pieces0) +
+                    " -> " + std::to_string(components(s.soup).size()) + " pieces, " + mm(v0 / 1000, 2) + " -> " +
+                    mm(v1 / 1000, 2) + " cm3)");
+      s.wrapped = true;
+      ++res.wrapped;
     }
     auto pieces = components(s.soup);
     int fragments = 0, loose = 0;
@@ -578,7 +594,7 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
     if (fragments) log.push_back("'" + s.name + "': dropped " + std::to_string(fragments) + " fragments under " + mm(opt.minVolume, 0) +
                                  " mm3 (" + mm(fragmentVolume, 0) + " mm3 in all)");
     res.dropped += fragments + loose;
-    if (s.cls.kind != Kind::Bone && !keep.empty()) kept.push_back({s.name, s.cls, std::move(keep)});
+    if (s.cls.kind != Kind::Bone && !keep.empty()) kept.push_back({s.name, s.cls, std::move(keep), s.wrapped});
     else if (s.cls.kind != Kind::Bone) log.push_back("'" + s.name + "': nothing left after dropping fragments");
   }
 
@@ -609,6 +625,22 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
       x0 = -x0;
     }
     log.push_back("superior from the ribs' slope (" + std::to_string(ends.size()) + " ribs: each runs down from its vertebral end)");
+  }
+
+  if (opt.frame == FrameMode::Auto) {  // names with sides decide when they disagree with the handedness
+    double leftMinusRight = 0;
+    for (const auto& st : kept)
+      if ((st.cls.kind == Kind::Rib || st.cls.kind == Kind::Cartilage) && st.cls.side)
+        leftMinusRight += (st.cls.side == 2 ? 1 : -1) * (centroid(st.soup).x() - x0);
+    if (leftMinusRight < 0) {
+      const Mat3 mirror = Eigen::Vector3d(-1, 1, 1).asDiagonal();
+      for (auto& st : kept) transform(st.soup, mirror, Vec3::Zero());
+      for (auto& p : spine) p = mirror * p;
+      fr.R = mirror * fr.R;
+      x0 = -x0;
+      log.push_back("the names put the left ribs on the right of a right-handed scanner frame: the file is mirrored, and "
+                    "the names are followed");
+    }
   }
 
   // 5. number the ribs: per side from the top by the height of their vertebral end
@@ -658,8 +690,30 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
   for (auto& s : kept) {
     prog(25 + 35 * done++ / int(kept.size()), "repairing the structures");
     if (s.cls.kind == Kind::NotCage) continue;
-    const std::string why = opt.wrapAll ? std::string("every structure wrapped") : defects(s.soup);
+    if (s.wrapped) {
+      append(cartilage, s.soup);
+      continue;
+    }
     const std::string label = s.cls.kind == Kind::Rib ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number) : s.name;
+    // the least repair that makes it a closed, manifold, embedded surface: duplicate faces removed, holes
+    // closed, else alpha wrapping (which moves the whole surface out by the offset)
+    std::string why = opt.wrapAll ? std::string("every structure wrapped") : defects(s.soup);
+    std::string repaired;
+    if (!opt.wrapAll && !why.empty()) {
+      Soup fixed = s.soup;
+      const int dup = removeDuplicateFaces(fixed);
+      const int holes = defects(fixed).rfind("open", 0) == 0 ? closeHoles(fixed) : 0;
+      if (dup > 0 || holes > 0) {
+        const std::string still = defects(fixed);
+        if (still.empty()) {
+          repaired = (dup ? std::to_string(dup) + " duplicate faces removed" : std::string()) + (dup && holes > 0 ? ", " : "") +
+                     (holes > 0 ? std::to_string(holes) + " holes closed" : std::string());
+          s.soup = std::move(fixed);
+          why.clear();
+        }
+      }
+    }
+    if (!repaired.empty()) log.push_back(label + ": " + repaired + ", " + mm(volume(s.soup) / 1000, 2) + " cm3");
     if (!why.empty()) {
       const double v0 = volume(s.soup);
       Soup w = alphaWrap(s.soup, opt.alpha, opt.offset);

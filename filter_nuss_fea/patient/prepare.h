@@ -14,8 +14,12 @@
 //     at the costovertebral joints (the column is the posterior midline bone running the whole height);
 //     pieces of such a layer that do not reach the cut (scapulae, loose pieces) are left out;
 //  5. ribs are numbered per side from the top by the height of their vertebral end (or from their names);
-//  6. each structure that is not a closed, 2-manifold, self-intersection-free surface is wrapped (CGAL
-//     alpha_wrap_3: detail alpha, offset) and its volume change reported; clean ones are kept;
+//  6. each structure that is not a closed, 2-manifold, self-intersection-free surface gets the least repair
+//     that makes it one: duplicate faces removed, holes closed, else wrapped (CGAL alpha_wrap_3: detail
+//     alpha, offset), with its volume change reported; clean ones are kept. The costal cartilages are always
+//     wrapped (before the fragments are counted): a segmentation's labels only touch, and the small offset
+//     makes each cartilage overlap the bone it joins, which the union needs; the wrap also reconnects the
+//     strips a voxel surface splits where voxels meet at an edge or a corner;
 //  7. the structures are joined (corefinement union: joinTissueLayers) into one surface with tissue and
 //     part per face, then decimated to the target edge length (kept embedded) and relabelled;
 //  8. landmarks (labels.h codes) are placed from the anatomy; user points override them.
@@ -59,8 +63,11 @@ struct PrepareOptions {
   Units units = Units::Auto;
   FrameMode frame = FrameMode::Auto;
   double minVolume = 200;    ///< mm^3: smaller connected pieces are fragments, dropped
-  double alpha = 1.5;        ///< mm: alpha wrapping's detail (the smallest gap it keeps open)
-  double offset = 0.3;       ///< mm: alpha wrapping's offset from the input
+  /// alpha wrapping (costal cartilages always, other structures when they need it): the detail (mm, the
+  /// smallest gap kept open) and the offset from the input (mm). Small, so that the wrap adds little volume:
+  /// the cartilages carry most of the cage's compliance (1 mm voxel export: +4 % cartilage volume)
+  double alpha = 0.5;
+  double offset = 0.03;
   double edgeLength = 2.0;   ///< mm: the joined surface is decimated to this edge length (0: kept as is)
   bool wrapAll = false;      ///< wrap every structure, clean or not
   /// user landmarks in the INPUT layers' frame and units (picked points); each replaces the automatic

@@ -8,6 +8,9 @@
 #include <tuple>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/alpha_wrap_3.h>
 #include <vcg/complex/allocate.h>
@@ -18,6 +21,24 @@ namespace pectus::patient {
 
 namespace {
 using Vec3 = Eigen::Vector3d;
+
+// the faces of a CGAL surface mesh (polygons fanned into triangles)
+template <class Mesh>
+Soup soupOfSurfaceMesh(const Mesh& m) {
+  Soup out;
+  std::vector<int> id(m.number_of_vertices() + m.number_of_removed_vertices(), -1);
+  for (auto v : m.vertices()) {
+    id[v.idx()] = int(out.V.size());
+    const auto& p = m.point(v);
+    out.V.emplace_back(p.x(), p.y(), p.z());
+  }
+  for (auto f : m.faces()) {
+    std::vector<int> t;
+    for (auto v : m.vertices_around_face(m.halfedge(f))) t.push_back(id[v.idx()]);
+    for (std::size_t k = 1; k + 1 < t.size(); ++k) out.F.push_back({t[0], t[k], t[k + 1]});
+  }
+  return out;
+}
 
 int findRoot(std::vector<int>& p, int i) {
   while (p[std::size_t(i)] != i) i = p[std::size_t(i)] = p[std::size_t(p[std::size_t(i)])];
@@ -144,6 +165,45 @@ void transform(Soup& s, const Eigen::Matrix3d& R, const Vec3& t) {
     for (auto& f : s.F) std::swap(f[1], f[2]);
 }
 
+int removeDuplicateFaces(Soup& s) {
+  std::set<std::array<int, 3>> seen;
+  std::vector<std::array<int, 3>> F;
+  for (const auto& f : s.F) {
+    auto k = f;
+    std::sort(k.begin(), k.end());
+    if (seen.insert(k).second) F.push_back(f);
+  }
+  const int removed = int(s.F.size() - F.size());
+  s.F = std::move(F);
+  return removed;
+}
+
+int closeHoles(Soup& s) {
+  namespace PMP = CGAL::Polygon_mesh_processing;
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Mesh = CGAL::Surface_mesh<K::Point_3>;
+  std::vector<K::Point_3> pts;
+  for (const auto& p : s.V) pts.emplace_back(p.x(), p.y(), p.z());
+  std::vector<std::vector<std::size_t>> polys;
+  for (const auto& f : s.F) polys.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  if (!PMP::orient_polygon_soup(pts, polys) || !PMP::is_polygon_soup_a_polygon_mesh(polys)) return -1;
+  Mesh m;
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
+  std::vector<Mesh::Halfedge_index> borders;
+  std::set<Mesh::Halfedge_index> visited;
+  for (auto h : m.halfedges()) {
+    if (!m.is_border(h) || visited.count(h)) continue;
+    borders.push_back(h);
+    for (auto g : CGAL::halfedges_around_face(h, m)) visited.insert(g);
+  }
+  for (auto h : borders) {
+    std::vector<Mesh::Face_index> added;
+    PMP::triangulate_hole(m, h, std::back_inserter(added));
+  }
+  s = soupOfSurfaceMesh(m);
+  return int(borders.size());
+}
+
 std::string defects(const Soup& s) {
   if (s.F.empty()) return "no faces";
   std::set<std::array<int, 3>> seen;
@@ -208,20 +268,7 @@ Soup alphaWrap(const Soup& s, double alpha, double offset) {
   for (const auto& f : s.F) tris.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
   CGAL::Surface_mesh<Point> w;
   CGAL::alpha_wrap_3(pts, tris, alpha, offset, w);
-  Soup out;
-  std::vector<int> id(w.number_of_vertices() + w.number_of_removed_vertices(), -1);
-  for (auto v : w.vertices()) {
-    id[v.idx()] = int(out.V.size());
-    const auto& p = w.point(v);
-    out.V.emplace_back(p.x(), p.y(), p.z());
-  }
-  for (auto f : w.faces()) {
-    std::array<int, 3> t{};
-    int k = 0;
-    for (auto v : w.vertices_around_face(w.halfedge(f))) t[std::size_t(k++)] = id[v.idx()];
-    out.F.push_back(t);
-  }
-  return out;
+  return soupOfSurfaceMesh(w);
 }
 
 void toMesh(const Soup& s, CMeshO& m) {

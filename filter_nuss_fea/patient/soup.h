@@ -31,6 +31,12 @@ Eigen::Vector3d centroid(const Soup& s);  ///< area-weighted
 /// p -> scale * R p + t, the faces flipped when the map mirrors (det R < 0)
 void transform(Soup& s, const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
 
+/// Removes faces with the same three vertices as an earlier face; returns how many
+int removeDuplicateFaces(Soup& s);
+/// Closes every hole (border loop) of a 2-manifold soup by a minimal-area triangulation (CGAL's
+/// triangulate_hole); returns the number of holes closed, -1 if the soup is not a 2-manifold mesh
+int closeHoles(Soup& s);
+
 /// Why the soup is not a closed, 2-manifold, self-intersection-free surface ("" when it is)
 std::string defects(const Soup& s);
 /// CGAL's alpha wrap (detail alpha, offset; mm): a closed, 2-manifold, outward-oriented surface

@@ -1,0 +1,144 @@
+"""E2E: a patient's CT segmentation, messy as real exports are, through import -> prepare -> calibrated FE ->
+thoracic volumes -> pectus index in one meshlabserver script, with no manual step.
+
+The patient is the project's own default cage rasterised on a 1 mm CT grid by pectus_ct_phantom (each rib,
+the costal cartilages and the sternum as their own labels, vertebrae T1-T12 touching the rib heads, scapulae,
+stray voxels) and exported as STL surfaces with real defects: the ribs fused to the spine in one 'bone' file
+with fragments and duplicate faces, a sternum with a self-intersecting patch, a cartilage with a hole, RAS
+axes and a shifted origin. Checks:
+  - every structure classified, the spine cut, 12 ribs per side numbered, the scapulae left out;
+  - the landmarks where the phantom's truth puts them (mapped by the transform the Log gives);
+  - the calibrated force within 10 % of the generated cage's with the same FE settings;
+  - both volume methods and the pectus index run on the prepared cage and landmarks;
+  - the same export in metres and LPS axes, and TotalSegmentator's per-structure NIfTI masks, give the same cage;
+  - no sternum, one side only, a missing rib: a message naming what to fix and a non-zero exit."""
+import json
+import os
+import re
+import shutil
+import subprocess
+
+import numpy as np
+
+import harness as h
+import pectus_mlx as mlx
+from harness import check, check_refused
+from pectus_filters import create_ribcage, import_ct_segmentation, nuss_fea, prepare_patient_rib_cage
+
+PHANTOM = os.path.join(os.path.dirname(h.PREFIX), "filter_nuss_fea", "pectus_ct_phantom")
+W = h.workdir("patient")
+FE = dict(analysis=1, order=0, targetElevation=44.7, resultBase="")  # small strain TET10: no locking, a minute
+
+
+def phantom(out, *args):
+    r = subprocess.run([PHANTOM, out, *args], capture_output=True, text=True, timeout=600)
+    check(r.returncode == 0, f"pectus_ct_phantom {' '.join(args)}", r.stdout[-500:] + r.stderr[-500:])
+    with open(os.path.join(out, "truth.json")) as f:
+        return json.load(f)
+
+
+def transform(log):
+    """the input -> result transform the Log gives (4x4)"""
+    line = next((l for l in log if "input -> result transform" in l), "")
+    rows = line.split(":", 1)[1].split(";") if ":" in line else []
+    T = np.eye(4)
+    for i, row in enumerate(rows[:3]):
+        T[i, :] = [float(x) for x in row.split()] + ([] if len(row.split()) == 4 else [0])[:0]
+    return T
+
+
+def landmarks(log):
+    line = next((l for l in log if l.startswith("landmarks (code (x y z) mm, result frame):")), "")
+    return {int(c): np.array([float(x), float(y), float(z)])
+            for c, x, y, z in re.findall(r"(\d+) \((\S+) (\S+) (\S+)\)", line)}
+
+
+def check_landmarks(log, truth, what):
+    """the prepared landmarks against the phantom's truth (scanner frame) mapped into the result frame"""
+    T, got = transform(log), landmarks(log)
+    ref = {int(c): (T @ np.append(p, 1.0))[:3] for c, p in truth["landmarks"].items()}
+    for codes, tol, name in (([100 * s + k for s in (1, 2) for k in range(1, 13)], 8.0, "costovertebral joints"),
+                             ([614, 615, 624, 625], 6.0, "bar exits"), ([500], 6.0, "lower sternum end"),
+                             ([501], 12.0, "deepest funnel point")):
+        err = max((np.linalg.norm(got[c] - ref[c]) if c in got and c in ref else 1e9) for c in codes)
+        check(err < tol, f"{what}: {name} within {tol} mm of the truth (worst {err:.1f} mm)")
+
+
+def volumes(cage, landmarks):
+    """both volume methods and the pectus index on the current layer (the FE result) against the prepared
+    cage, as their example scripts set them"""
+    out = []
+    for name in ("thoracic_volume_slice", "thoracic_volume_envelope", "pectus_index"):
+        f = mlx.load_script(os.path.join(h.SOURCE, "filter_thoracic_volume", "examples", name + ".mlx"))[0]
+        out.append(f.set(compare=mlx.Bool(True), beforeLayer=mlx.Mesh(cage), landmarkLayer=mlx.Mesh(landmarks)))
+    return out
+
+
+def prepare_script(path, *more):
+    return mlx.Script([import_ct_segmentation(path=path), prepare_patient_rib_cage(), *more])
+
+
+# --- the messy STL export, in RAS mm with a shifted origin -----------------------------------------------------
+P = os.path.join(W, "patient")
+truth = phantom(P, "--only", "messy,masks")
+messy = os.path.join(P, "stl_messy")
+n_files = len([f for f in os.listdir(messy) if f.endswith(".stl")])
+cage, lmk = (os.path.join(W, n) for n in ("cage.ply", "landmarks.ply"))
+after = os.path.join(W, "after.ply")
+fe = nuss_fea(landmarkLayer=n_files + 1, **FE)
+r = h.run([], prepare_script(messy, fe, *volumes(n_files, n_files + 1)),
+          [(cage, "fc fq", n_files), (lmk, "vq", n_files + 1)], timeout=1800)
+log = r.log
+print("\n".join(l for l in log if not l.startswith("landmark")))
+check(r.rc == 0, "import -> prepare -> FE -> volumes -> index runs as one script", r.stdout[-3000:])
+check(any("vertebral column found" in l and "cut at the costovertebral joints" in l for l in log),
+      "the spine fused to the ribs is found and cut")
+check(any("scapula_left': not part of the rib cage" in l for l in log), "the scapulae are left out")
+check(any("12 right and 12 left ribs" in l for l in log), "12 ribs numbered on each side")
+check_landmarks(log, truth, "messy STL export")
+force = mlx.grab(log, r"Fe = ([0-9.]+) N")
+
+g = h.run([], mlx.Script([create_ribcage(age=truth["generator"]["age"], hallerIndex=truth["generator"]["hallerIndex"]),
+                          nuss_fea(landmarkLayer=1, **FE)]), timeout=1800)
+ref = mlx.grab(g.log, r"Fe = ([0-9.]+) N")
+print(f"calibrated force: prepared export {force} N, generated cage {ref} N")
+check(force is not None and ref is not None and abs(force - ref) <= 0.10 * ref,
+      f"calibrated force on the prepared export within 10 % of the generated cage's ({force} N vs {ref} N)")
+for what, pattern in (("slice method", r"Thoracic volume \(slice method\)"), ("envelope", r"Ferguson envelope"),
+                      ("pectus index", r"[Pp]ectus index")):
+    check(any(re.search(pattern, l) for l in log), f"{what} runs on the prepared cage", "\n".join(log[-20:]))
+
+# --- the same export in metres and LPS axes: units and frame found, the same landmarks --------------------------
+M = os.path.join(W, "metres")
+truth_m = phantom(M, "--only", "messy", "--metres", "--axes", "LPS")
+r = h.run([], prepare_script(os.path.join(M, "stl_messy")))
+check(r.rc == 0, "metres, LPS: prepared", r.stdout[-2000:])
+check(any("units: metres" in l for l in r.log), "metres detected and scaled to mm")
+check_landmarks(r.log, truth_m, "metres, LPS")
+
+# --- TotalSegmentator's output: one NIfTI mask per structure --------------------------------------------------
+masks = os.path.join(P, "masks")
+r = h.run([], prepare_script(masks))
+check(r.rc == 0 and any("12 right and 12 left ribs" in l for l in r.log), "NIfTI masks: prepared, 12 ribs a side",
+      r.stdout[-2000:])
+check_landmarks(r.log, truth, "NIfTI masks")
+
+# --- bad input: a message naming what to fix, non-zero exit ------------------------------------------------------
+def variant(name, drop):
+    d = os.path.join(W, name)
+    shutil.copytree(masks, d)
+    for f in drop:
+        os.remove(os.path.join(d, f))
+    return d
+
+
+r = h.run([], prepare_script(variant("no-sternum", ["sternum.nii.gz"])))
+check_refused(r, "No sternum", "no sternum")
+r = h.run([], prepare_script(variant("one-side", [f"rib_left_{k}.nii.gz" for k in range(1, 13)])))
+check_refused(r, "side only", "ribs on one side only")
+r = h.run([], prepare_script(variant("rib-missing", ["rib_right_4.nii.gz"])))
+check_refused(r, "Ribs missing on the right side: 4", "a missing rib")
+r = h.run([], prepare_script(variant("no-cartilage", ["costal_cartilages.nii.gz"])))
+check_refused(r, "No costal cartilage", "no cartilage")
+
+h.finish()
