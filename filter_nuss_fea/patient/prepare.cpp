@@ -235,17 +235,33 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
     throw InputError("Cannot place the landmark '" + what + "': " + why + ". Pick it with Edit > PickPoints and give the .pp "
                      "file (parameter 'Picked points'), named by its code.");
   };
-  // costovertebral joints: the medial end of each rib's posterior part
+  // costovertebral joints: the rib head, the centre of the rib's vertebral end. The heads line up along the
+  // spine: its axis (x0, yAxis) is where the ribs' medial-most posterior points lie (their median y); each
+  // rib's head is its point nearest that axis in the transverse plane, and the joint the centroid of the
+  // rib's surface within one joint radius (6 mm, as the FE analysis fixes) of it.
+  auto medialMost = [&](const std::vector<Vec3>& pts) {
+    const Vec3* best = nullptr;
+    for (const auto& p : pts)
+      if (p.y() < yMid && (!best || std::abs(p.x() - x0) < std::abs(best->x() - x0))) best = &p;
+    return best;
+  };
+  std::vector<double> medialY;
+  for (const auto& [part, pts] : an.rib)
+    if (part >= 101 && part <= 212)
+      if (const Vec3* m = medialMost(pts)) medialY.push_back(m->y());
+  std::nth_element(medialY.begin(), medialY.begin() + long(medialY.size() / 2), medialY.end());
+  const double yAxis = medialY.empty() ? yMid : medialY[medialY.size() / 2];
   std::map<int, Vec3> cvj;
   for (const auto& [part, pts] : an.rib) {
     if (part < 101 || part > 212) continue;
-    double dmin = 1e300;
+    if (!medialMost(pts)) fail("costovertebral joint " + std::to_string(part), "the rib has no part behind the cage's middle");
+    const Vec3* tip = nullptr;
+    auto toAxis = [&](const Vec3& p) { return std::hypot(p.x() - x0, p.y() - yAxis); };
     for (const auto& p : pts)
-      if (p.y() < yMid) dmin = std::min(dmin, std::abs(p.x() - x0));
-    if (dmin > 1e299) fail("costovertebral joint " + std::to_string(part), "the rib has no part behind the cage's middle");
+      if (p.y() < yMid && (!tip || toAxis(p) < toAxis(*tip))) tip = &p;
     std::vector<Vec3> end;
     for (const auto& p : pts)
-      if (p.y() < yMid && std::abs(p.x() - x0) < dmin + 2.0) end.push_back(p);
+      if ((p - *tip).norm() < 6.0) end.push_back(p);
     cvj[part] = mean(end);
     lms.push_back({part, cvj[part]});
   }

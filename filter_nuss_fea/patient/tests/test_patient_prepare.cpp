@@ -98,7 +98,7 @@ TEST(PatientPrepare, GeneratedCageInRasMetres) {
       const Landmark* a = find(e.truth, cvjLandmark(side, rib));
       const Landmark* b = find(r.landmarks, cvjLandmark(side, rib));
       ASSERT_TRUE(a && b) << "joint " << cvjLandmark(side, rib);
-      EXPECT_LT((b->p - d - a->p).norm(), 8.0) << "joint " << cvjLandmark(side, rib);
+      EXPECT_LT((b->p - d - a->p).norm(), 3.0) << "joint " << cvjLandmark(side, rib);
     }
   const Landmark* deep0 = find(e.truth, kFunnelDeepest);
   const Landmark* deep1 = find(r.landmarks, kFunnelDeepest);
