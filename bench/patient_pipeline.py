@@ -1,0 +1,105 @@
+#!/usr/bin/env python3
+"""Benchmark: a patient's CT export through 'Prepare Patient Rib Cage' and the calibrated FE analysis, next to the
+generator's own cage of the same child. One table.
+
+The export is the default cage (age 7, pectus index 4) rasterised on a 1 mm CT grid by pectus_ct_phantom and
+written as messy STL surfaces (ribs fused to the spine, fragments, duplicate faces, a self-intersecting patch,
+a hole, scapulae) and as TotalSegmentator's per-structure NIfTI masks. Rows:
+  - preparing it (import + prepare, meshlabserver): wall time, peak memory, faces, the prepare step's own time;
+  - the generator making the same cage (the one-surface cage at 2 mm);
+  - the calibrated analysis (44.7 mm) of each, large displacement TET10 by default: force, wall time, peak memory.
+
+    /usr/bin/python3 bench/patient_pipeline.py [--analysis large|small] [--order 2|1] [--out DIR]
+"""
+from __future__ import annotations
+
+import argparse
+import os
+import platform
+import re
+import subprocess
+import sys
+import tempfile
+import time
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+sys.path.insert(0, os.path.join(ROOT, "python"))
+import pectus_mlx as mlx  # noqa: E402
+from pectus_filters import create_ribcage, import_ct_segmentation, nuss_fea, prepare_patient_rib_cage  # noqa: E402
+
+BUILD = os.environ.get("PECTUS_BUILD", os.path.join(ROOT, "build"))
+SERVER = os.path.join(BUILD, "prefix", "bin", "meshlabserver")
+
+
+def timed(inputs, script, outputs=()):
+    """meshlabserver under /usr/bin/time: (log lines, wall s, peak MB, rc)"""
+    fd, path = tempfile.mkstemp(suffix=".mlx")
+    os.close(fd)
+    script.write(path)
+    cmd = ["xvfb-run", "-a", "/usr/bin/time", "-v", SERVER]
+    for i in inputs:
+        cmd += ["-i", i]
+    for p, layer, mask in outputs:
+        cmd += ["-o", p, "-l", str(layer), "-m", *mask.split()]
+    cmd += ["-s", path]
+    t0 = time.time()
+    r = subprocess.run(cmd, capture_output=True, text=True, errors="replace")
+    wall = time.time() - t0
+    os.remove(path)
+    out = r.stdout + r.stderr
+    rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", out)
+    log = [l.split(" ", 2)[2] for l in out.splitlines() if l.startswith("LOG: ") and len(l.split(" ", 2)) > 2]
+    return log, wall, (int(rss.group(1)) / 1024 if rss else float("nan")), r.returncode
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser()
+    ap.add_argument("--analysis", choices=("large", "small"), default="large")
+    ap.add_argument("--order", type=int, choices=(1, 2), default=2)
+    ap.add_argument("--out", default=tempfile.mkdtemp(prefix="pectus-bench-patient-"))
+    a = ap.parse_args()
+    fe = dict(targetElevation=44.7, analysis=0 if a.analysis == "large" else 1, order=0 if a.order == 2 else 1,
+              resultBase="")
+    P = os.path.join(a.out, "patient")
+    t0 = time.time()
+    subprocess.run([os.path.join(BUILD, "filter_nuss_fea", "pectus_ct_phantom"), P, "--only", "messy,masks"],
+                   check=True, capture_output=True)
+    phantom_s = time.time() - t0
+    rows = []
+    cages = {}
+    for name, folder in (("messy STL export", "stl_messy"), ("NIfTI masks", "masks")):
+        src = os.path.join(P, folder)
+        n = mlx.grab(mlx.run([], mlx.Script([import_ct_segmentation(path=src)])).log, r"Imported (\d+) structures", int)
+        cage, lms = os.path.join(a.out, folder + "_cage.ply"), os.path.join(a.out, folder + "_landmarks.ply")
+        log, wall, rss, rc = timed([], mlx.Script([import_ct_segmentation(path=src), prepare_patient_rib_cage()]),
+                                   [(cage, n, "fc fq"), (lms, n + 1, "vq")])
+        step = mlx.grab(log, r"Patient rib cage: .*; ([0-9.]+) s")
+        faces = mlx.grab(log, r"Patient rib cage: (\d+) faces", int)
+        rows.append((f"prepare: {name} ({n} layers)", f"{faces} faces", f"{step:.1f} s step" if step else "failed",
+                     wall, rss))
+        cages[name] = (cage, lms)
+    gen = os.path.join(a.out, "generated.ply"), os.path.join(a.out, "generated_landmarks.ply")
+    log, wall, rss, rc = timed([], mlx.Script([create_ribcage(age=7.0, hallerIndex=4.0)]),
+                               [(gen[0], 0, "fc fq"), (gen[1], 1, "vq")])
+    gen_faces = mlx.grab(log, r"Rib cage: (\d+) faces", int)
+    rows.append(("generator: the same child's cage", f"{gen_faces} faces", "", wall, rss))
+    cages["generated cage"] = gen
+    kind = f"{'large displacement' if a.analysis == 'large' else 'small strain'} TET{10 if a.order == 2 else 4}"
+    for name in ("messy STL export", "NIfTI masks", "generated cage"):
+        cage, lms = cages[name]
+        log, wall, rss, rc = timed([lms, cage], mlx.Script([nuss_fea(landmarkLayer=0, **fe)]))
+        force = mlx.grab(log, r"Fe = ([0-9.]+) N")
+        tets = mlx.grab(log, r"Nuss FE model: (\d+) TET", int)
+        rows.append((f"FE {kind}: {name}", f"{tets} tets", f"Fe {force:.2f} N" if force else "failed", wall, rss))
+
+    print(f"\nPatient pipeline benchmark: {platform.node()}, {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}; "
+          f"phantom 1 mm written in {phantom_s:.1f} s")
+    print(f"| {'step':52s} | {'size':14s} | {'result':14s} | wall (s) | peak (MB) |")
+    print(f"|{'-' * 54}|{'-' * 16}|{'-' * 16}|---------:|----------:|")
+    for step, size, res, wall, rss in rows:
+        print(f"| {step:52s} | {size:14s} | {res:14s} | {wall:8.1f} | {rss:9.0f} |")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
