@@ -11,31 +11,15 @@
 #include <vector>
 
 #include "ct_import.h"
+#include "temp_dir.h"
 #include "pectus/errors.h"
 
 namespace fs = std::filesystem;
 using namespace pectus::patient;
+using pectus::patient::testing::TempDir;
 
 namespace {
 
-struct TempDir {
-  fs::path p;
-  TempDir() {
-    std::random_device rd;
-    p = fs::temp_directory_path() / ("pectus-ct-import-" + std::to_string(rd()) + std::to_string(rd()));
-    fs::create_directories(p);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(p, ec);
-  }
-  std::string file(const std::string& name, const std::string& content) const {
-    const fs::path f = p / name;
-    std::ofstream o(f, std::ios::binary);
-    o << content;
-    return f.string();
-  }
-};
 
 // the unit cube: 8 corners, 12 outward triangles
 const float kCube[8][3] = {{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};

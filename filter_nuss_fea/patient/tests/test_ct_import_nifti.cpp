@@ -8,31 +8,16 @@
 #include <string>
 
 #include "ct_import.h"
+#include "temp_dir.h"
 #include "label_volume.h"
 #include "pectus/errors.h"
 
 namespace fs = std::filesystem;
 using namespace pectus::patient;
+using pectus::patient::testing::TempDir;
 
 namespace {
 
-struct TempDir {
-  fs::path p;
-  TempDir() {
-    std::random_device rd;
-    p = fs::temp_directory_path() / ("pectus-ct-nifti-" + std::to_string(rd()) + std::to_string(rd()));
-    fs::create_directories(p);
-  }
-  ~TempDir() {
-    std::error_code ec;
-    fs::remove_all(p, ec);
-  }
-  std::string path(const std::string& name) const { return (p / name).string(); }
-  std::string file(const std::string& name, const std::string& content) const {
-    std::ofstream(p / name, std::ios::binary) << content;
-    return path(name);
-  }
-};
 
 /// 12 x 8 x 6 voxels of 0.8 x 0.8 x 1.5 mm; boxes of the given labels side by side along i
 LabelVolume boxes(const std::vector<std::pair<int, int>>& labelAndWidth) {
