@@ -9,7 +9,8 @@ a hole, scapulae) and as TotalSegmentator's per-structure NIfTI masks. Rows:
   - the generator making the same cage (the one-surface cage at 2 mm);
   - the calibrated analysis (44.7 mm) of each, large displacement TET10 by default: force, wall time, peak memory.
 
-    /usr/bin/python3 bench/patient_pipeline.py [--analysis large|small] [--order 2|1] [--out DIR]
+    /usr/bin/python3 bench/patient_pipeline.py [--analysis large|small] [--order 2|1] [--fe messy,masks,generated]
+                                               [--out DIR]
 """
 from __future__ import annotations
 
@@ -57,6 +58,8 @@ def main() -> int:
     ap.add_argument("--analysis", choices=("large", "small"), default="large")
     ap.add_argument("--order", type=int, choices=(1, 2), default=2)
     ap.add_argument("--out", default=tempfile.mkdtemp(prefix="pectus-bench-patient-"))
+    ap.add_argument("--fe", default="messy,masks,generated",
+                    help="the cages to analyse, comma-separated: messy, masks, generated (default all)")
     a = ap.parse_args()
     fe = dict(targetElevation=44.7, analysis=0 if a.analysis == "large" else 1, order=0 if a.order == 2 else 1,
               resultBase="")
@@ -85,7 +88,8 @@ def main() -> int:
     rows.append(("generator: the same child's cage", f"{gen_faces} faces", "", wall, rss))
     cages["generated cage"] = gen
     kind = f"{'large displacement' if a.analysis == 'large' else 'small strain'} TET{10 if a.order == 2 else 4}"
-    for name in ("messy STL export", "NIfTI masks", "generated cage"):
+    keys = {"messy": "messy STL export", "masks": "NIfTI masks", "generated": "generated cage"}
+    for name in (keys[k] for k in a.fe.split(",") if k):
         cage, lms = cages[name]
         log, wall, rss, rc = timed([lms, cage], mlx.Script([nuss_fea(landmarkLayer=0, **fe)]))
         force = mlx.grab(log, r"Fe = ([0-9.]+) N")

@@ -22,8 +22,8 @@ void FilterNussFeaPlugin::addPrepareFilter() {
       "<b>Layers by name</b> (TotalSegmentator's, 3D Slicer's or generic): 'rib_left_3' / 'Rib R 3' ribs, "
       "'costal_cartilages' / 'cartilage', 'sternum', 'vertebrae_T5' (the spine: used for the frame and landmarks, not "
       "in the model), 'bone' / 'ribs' (ribs, possibly fused to the spine). Scapulae, clavicles, humeri and organs are "
-      "left out, and so are layers whose name says nothing. Point layers named '... landmarks' are your landmarks "
-      "(vertex quality = code).<br>"
+      "left out, and so are layers whose name says nothing and labelled cages (a previous result). Point layers "
+      "named '... user landmarks' are your landmarks (vertex quality = code, in the input layers' frame).<br>"
       "<b>Steps.</b> Units (metres or cm scaled to mm); the anatomical frame (anterior towards the sternum, the long "
       "axis along it, superior from the rib numbers or the ribs' slope, left from the right-handed scanner frame); "
       "fragments under the minimum volume dropped; bone fused to the vertebral column cut at the costovertebral "
@@ -100,11 +100,15 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
     if (!m->isVisible()) continue;
     const std::string name = m->label().toStdString();
     if (m->cm.fn == 0) {
-      if (m->cm.vn > 0 && QString::fromStdString(name).endsWith("landmarks", Qt::CaseInsensitive)) {
+      if (m->cm.vn > 0 && QString::fromStdString(name).endsWith("user landmarks", Qt::CaseInsensitive)) {
         const auto user = pectus::readLandmarks(m->cm);
         o.userLandmarks.insert(o.userLandmarks.end(), user.begin(), user.end());
         ctx.log("'" + name + "': " + std::to_string(user.size()) + " user landmarks (vertex quality = code)");
       }
+      continue;
+    }
+    if (pectus::readFaceLabels(m->cm)) {  // a cage this filter or the generator made: not a structure
+      ctx.log("'" + name + "': already a labelled rib cage, left out");
       continue;
     }
     layers.push_back({name, &m->cm});

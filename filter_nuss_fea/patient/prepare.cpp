@@ -183,9 +183,12 @@ double spineHalfWidth(const Soup& bone, double x0, double yMid) {
                                       (k + 1 < nz && hit[std::size_t(ix)][std::size_t(k + 1)]);
     return double(c) / nz;
   };
-  if (coverage(0) < 0.85) return 0;
+  // the column's bins are covered all the way (1.0 on a voxel export); beside it the ribs, sloping and close
+  // together near the spine, still leave some heights empty (0.84-0.94 there)
+  constexpr double kColumn = 0.97;
+  if (coverage(0) < kColumn) return 0;
   int ix = 0;
-  while (ix + 1 < nx && coverage(ix + 1) >= 0.85) ++ix;
+  while (ix + 1 < nx && coverage(ix + 1) >= kColumn) ++ix;
   return (ix + 1) * bin + 1.0;
 }
 
