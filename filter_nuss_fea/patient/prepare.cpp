@@ -377,86 +377,44 @@ void relabel(CMeshO& m, const CMeshO& from) {
   writeFaceLabels(m, tissue, part);
 }
 
-}  // namespace
-
-NameClass classifyName(const std::string& name) {
-  const auto w = words(name);
-  auto has = [&](const char* prefix) {
-    return std::any_of(w.begin(), w.end(), [&](const std::string& x) { return x.rfind(prefix, 0) == 0; });
-  };
-  NameClass c;
-  for (const auto& x : w) {
-    if (x == "left" || x == "l" || x == "lt" || x == "sinister") c.side = 2;
-    if (x == "right" || x == "r" || x == "rt" || x == "dexter") c.side = 1;
+// The preparation's state, as each step hands it on to the next: the structures (in the project frame's axes
+// once the frame is found), the vertebral column's points, the frame, and the Log.
+class Preparation {
+ public:
+  Preparation(const PrepareOptions& o, const std::function<void(int, const char*)>& progress) : opt(o), progress_(progress) {
+    if (!(opt.minVolume >= 0) || !(opt.alpha > 0) || !(opt.offset > 0) || !(opt.edgeLength >= 0))
+      throw InputError("parameters: the minimum volume and edge length must be >= 0, alpha and offset > 0");
   }
-  for (const auto& x : w)
-    if (std::isdigit(static_cast<unsigned char>(x[0])) && x.size() <= 2) c.number = std::stoi(x);
-  static const char* notCage[] = {"scapul", "clavic", "humer", "femur", "hip", "skull", "lung", "heart", "liver",
-                                  "aorta", "trachea", "esophag", "kidney", "spleen", "stomach", "sacrum", "pelvi",
-                                  "skin", "body", "muscle", "fat", "vein", "arter", "atrial", "ventric", "thyroid"};
-  for (const char* n : notCage)
-    if (has(n)) return {Kind::NotCage, c.side, c.number};
-  if (has("cartilag") || has("chondr")) return {Kind::Cartilage, c.side, c.number};
-  if (has("stern") || has("manubr") || has("xiph")) return {Kind::Sternum, 0, 0};
-  if (has("vertebr") || has("spine") || has("spinal") || has("column")) return {Kind::Vertebra, 0, 0};
-  const bool rib = has("rib") || has("costa");
-  if (rib && c.number >= 1 && c.number <= 12) return {Kind::Rib, c.side, c.number};
-  if (rib || has("bone") || has("skelet") || has("thorax") || has("cage")) return {Kind::Bone, c.side, 0};
-  return {Kind::Unknown, c.side, c.number};
-}
-
-std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped) {
-  std::ifstream in(path);
-  if (!in) throw InputError("Cannot read the picked points file '" + path + "': check the path.");
-  std::stringstream ss;
-  ss << in.rdbuf();
-  const std::string text = ss.str();
-  std::vector<Landmark> out;
-  int skip = 0;
-  const std::regex point("<point\\b([^>]*)/?>");
-  auto attr = [](const std::string& tag, const std::string& key, std::string& val) {
-    const std::regex r("\\b" + key + "\\s*=\\s*\"([^\"]*)\"");
-    std::smatch m;
-    if (!std::regex_search(tag, m, r)) return false;
-    val = m[1];
-    return true;
-  };
-  for (auto it = std::sregex_iterator(text.begin(), text.end(), point); it != std::sregex_iterator(); ++it) {
-    const std::string tag = (*it)[1];
-    std::string x, y, z, name, active = "1";
-    attr(tag, "active", active);
-    if (!attr(tag, "x", x) || !attr(tag, "y", y) || !attr(tag, "z", z) || !attr(tag, "name", name) || active == "0") {
-      ++skip;
-      continue;
-    }
-    std::size_t k = 0;
-    while (k < name.size() && std::isspace(static_cast<unsigned char>(name[k]))) ++k;
-    std::size_t e = k;
-    while (e < name.size() && std::isdigit(static_cast<unsigned char>(name[e]))) ++e;
-    if (e == k) {
-      ++skip;
-      continue;
-    }
-    out.push_back({std::stoi(name.substr(k, e - k)), Vec3(std::stod(x), std::stod(y), std::stod(z))});
-  }
-  if (out.empty() && text.find("<PickedPoints") == std::string::npos)
-    throw InputError("'" + path + "' is not a PickPoints file (.pp): no <PickedPoints> element.");
-  if (skipped) *skipped = skip;
-  return out;
-}
-
-PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
-                                 const std::function<void(int, const char*)>& progress) {
-  const auto t0 = std::chrono::steady_clock::now();
-  auto prog = [&](int pc, const char* w) { if (progress) progress(pc, w); };
+  void classify(const std::vector<InputLayer>& layers);  ///< 1. each layer's kind from its name
+  void toMillimetres();                                  ///< 2. the units
+  void orient();                                         ///< 3. the anatomical frame's axes
+  void separate();                                       ///< 4. the spine cut, fragments and what is not cage
+  void settleSuperiorAndLeft();                          ///< 3, finished on the separated ribs
+  void numberRibs();                                     ///< 5. rib numbers and sides
+  void repair();                                         ///< 6. closed, manifold, embedded structures
+  void join(CMeshO& cage);                               ///< 7. one labelled surface, decimated
+  void placeAndCentre(CMeshO& cage);                     ///< 8. landmarks, the origin, the user's points
   PrepareResult res;
-  auto& log = res.log;
-  if (!(opt.minVolume >= 0) || !(opt.alpha > 0) || !(opt.offset > 0) || !(opt.edgeLength >= 0))
-    throw InputError("parameters: the minimum volume and edge length must be >= 0, alpha and offset > 0");
 
-  // 1. classify
+ private:
+  void prog(int pc, const char* what) const { if (progress_) progress_(pc, what); }
+  Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
+
+  const PrepareOptions& opt;
+  std::function<void(int, const char*)> progress_;
+  std::vector<std::string>& log = res.log;
+  std::vector<Structure> all;   // recognised layers, then (kept) the structures of the model
+  std::vector<Structure> kept;
+  std::vector<Vec3> spine;      // vertebral column points: vertebra layers and the cut-away bone
+  double diag = 0, scale = 1;   // the input's size (its units) and the factor to mm
+  Frame fr;
+  double x0 = 0, yMid = 0;      // the sternum's midline; halfway between the back of the cage and the sternum
+  Soup bone, cartilage, sternum;
+  std::vector<int> bonePart;    // per face of `bone`: its rib's part id
+};
+
+void Preparation::classify(const std::vector<InputLayer>& layers) {
   prog(2, "classifying the layers");
-  std::vector<Structure> all;
   std::vector<std::string> unknown;
   for (const auto& l : layers) {
     Structure s{l.name, classifyName(l.name), soupOf(*l.mesh)};
@@ -498,14 +456,14 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
                    : s.cls.kind == Kind::Vertebra ? std::string("vertebral column (support, not in the model)")
                                                   : std::string("bone (ribs, maybe fused to the spine)")) +
                   ", " + std::to_string(s.soup.F.size()) + " faces");
-  prog(5, "units and frame");
+}
 
-  // 2. units
+void Preparation::toMillimetres() {
   Eigen::AlignedBox3d box;
   for (const auto& s : all)
     for (const auto& p : s.soup.V) box.extend(p);
-  const double diag = box.diagonal().norm();
-  double scale = 1;
+  diag = box.diagonal().norm();
+  scale = 1;
   if (opt.units == Units::Metres || (opt.units == Units::Auto && diag < 3)) scale = 1000;
   else if (opt.units == Units::Centimetres || (opt.units == Units::Auto && diag < 60)) scale = 10;
   log.push_back("units: " + std::string(scale == 1000 ? "metres" : scale == 10 ? "centimetres" : "millimetres") +
@@ -516,24 +474,24 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
                      "(parameter 'Units').");
   for (auto& s : all)
     for (auto& p : s.soup.V) p *= scale;
+}
 
-  // 3. frame
-  Frame fr = findFrame(all, opt, scale * diag);
+void Preparation::orient() {
+  fr = findFrame(all, opt, scale * diag);
   for (auto& s : all) transform(s.soup, fr.R, Vec3::Zero());
   log.push_back("frame " + fr.how);
   Soup sternumAll;
   for (const auto& s : all)
     if (s.cls.kind == Kind::Sternum) append(sternumAll, s.soup);
-  double x0 = centroid(sternumAll).x();
+  x0 = centroid(sternumAll).x();
   Eigen::AlignedBox3d cageBox;
   for (const auto& s : all)
     for (const auto& p : s.soup.V) cageBox.extend(p);
-  const double yMid = 0.5 * (cageBox.min().y() + centroid(sternumAll).y());
+  yMid = 0.5 * (cageBox.min().y() + centroid(sternumAll).y());
+}
 
-  // 4. fragments, the vertebral column, what is not cage
+void Preparation::separate() {
   prog(10, "fragments and the spine");
-  std::vector<Vec3> spine;
-  std::vector<Structure> kept;
   // positions of the bone and sternum vertices: a cartilage sharing any of them touches its neighbours
   std::set<std::tuple<double, double, double>> bonePoints;
   for (const auto& s : all)
@@ -616,8 +574,9 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
     if (s.cls.kind != Kind::Bone && !keep.empty()) kept.push_back({s.name, s.cls, std::move(keep), s.wrapped});
     else if (s.cls.kind != Kind::Bone) log.push_back("'" + s.name + "': nothing left after dropping fragments");
   }
+}
 
-  auto vertebralEnd = [&](const Soup& r) {
+Vec3 Preparation::vertebralEnd(const Soup& r) const {
     Vec3 best(0, 0, 0);
     double d = 1e300;
     for (const auto& p : r.V)
@@ -626,7 +585,9 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
       for (const auto& p : r.V)
         if (std::abs(p.x() - x0) < d) d = std::abs(p.x() - x0), best = p;
     return best;
-  };
+}
+
+void Preparation::settleSuperiorAndLeft() {
   if (fr.superiorOpen) {  // superior: where the ribs' vertebral ends are (each rib runs down to the front)
     std::vector<std::pair<Vec3, Vec3>> ends;
     for (const auto& st : kept) {
@@ -661,8 +622,9 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
                     "the names are followed");
     }
   }
+}
 
-  // 5. number the ribs: per side from the top by the height of their vertebral end
+void Preparation::numberRibs() {
   prog(20, "numbering the ribs");
   std::map<int, std::vector<std::pair<double, Structure*>>> unnamed;  // side -> (end z, rib)
   std::map<int, std::set<int>> named;
@@ -700,11 +662,10 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
                        "). The analysis needs ribs 1-7 on each side and no gaps; import the missing ribs' segmentations.");
   }
   res.ribsRight = int(named[1].size()), res.ribsLeft = int(named[2].size());
+}
 
-  // 6. repair: wrap what is not a closed, manifold, self-intersection-free surface
+void Preparation::repair() {
   prog(25, "repairing the structures");
-  Soup bone, cartilage, sternum;
-  std::vector<int> bonePart;
   int done = 0;
   for (auto& s : kept) {
     prog(25 + 35 * done++ / int(kept.size()), "repairing the structures");
@@ -755,8 +716,9 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
       append(sternum, s.soup);
     }
   }
+}
 
-  // 7. join into one labelled surface, decimate, relabel
+void Preparation::join(CMeshO& cage) {
   prog(60, "joining the tissues");
   OwnedMesh boneM, cartM, sternM, joined;
   toMesh(bone, boneM);
@@ -783,8 +745,9 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
       log.push_back("decimated to edge length " + mm(opt.edgeLength, 2) + " mm: " + std::to_string(cage.fn) + " faces");
     }
   }
+}
 
-  // 8. landmarks, then the origin
+void Preparation::placeAndCentre(CMeshO& cage) {
   prog(90, "landmarks");
   Anatomy an = anatomyOf(cage);
   an.spine = spine;
@@ -825,9 +788,92 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
   }
   std::sort(lms.begin(), lms.end(), [](const Landmark& a, const Landmark& b) { return a.code < b.code; });
   res.landmarks = lms;
-  res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  prog(100, "done");
-  return res;
+}
+
+}  // namespace
+
+NameClass classifyName(const std::string& name) {
+  const auto w = words(name);
+  auto has = [&](const char* prefix) {
+    return std::any_of(w.begin(), w.end(), [&](const std::string& x) { return x.rfind(prefix, 0) == 0; });
+  };
+  NameClass c;
+  for (const auto& x : w) {
+    if (x == "left" || x == "l" || x == "lt" || x == "sinister") c.side = 2;
+    if (x == "right" || x == "r" || x == "rt" || x == "dexter") c.side = 1;
+  }
+  for (const auto& x : w)
+    if (std::isdigit(static_cast<unsigned char>(x[0])) && x.size() <= 2) c.number = std::stoi(x);
+  static const char* notCage[] = {"scapul", "clavic", "humer", "femur", "hip", "skull", "lung", "heart", "liver",
+                                  "aorta", "trachea", "esophag", "kidney", "spleen", "stomach", "sacrum", "pelvi",
+                                  "skin", "body", "muscle", "fat", "vein", "arter", "atrial", "ventric", "thyroid"};
+  for (const char* n : notCage)
+    if (has(n)) return {Kind::NotCage, c.side, c.number};
+  if (has("cartilag") || has("chondr")) return {Kind::Cartilage, c.side, c.number};
+  if (has("stern") || has("manubr") || has("xiph")) return {Kind::Sternum, 0, 0};
+  if (has("vertebr") || has("spine") || has("spinal") || has("column")) return {Kind::Vertebra, 0, 0};
+  const bool rib = has("rib") || has("costa");
+  if (rib && c.number >= 1 && c.number <= 12) return {Kind::Rib, c.side, c.number};
+  if (rib || has("bone") || has("skelet") || has("thorax") || has("cage")) return {Kind::Bone, c.side, 0};
+  return {Kind::Unknown, c.side, c.number};
+}
+
+std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped) {
+  std::ifstream in(path);
+  if (!in) throw InputError("Cannot read the picked points file '" + path + "': check the path.");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  std::vector<Landmark> out;
+  int skip = 0;
+  const std::regex point("<point\\b([^>]*)/?>");
+  auto attr = [](const std::string& tag, const std::string& key, std::string& val) {
+    const std::regex r("\\b" + key + "\\s*=\\s*\"([^\"]*)\"");
+    std::smatch m;
+    if (!std::regex_search(tag, m, r)) return false;
+    val = m[1];
+    return true;
+  };
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), point); it != std::sregex_iterator(); ++it) {
+    const std::string tag = (*it)[1];
+    std::string x, y, z, name, active = "1";
+    attr(tag, "active", active);
+    if (!attr(tag, "x", x) || !attr(tag, "y", y) || !attr(tag, "z", z) || !attr(tag, "name", name) || active == "0") {
+      ++skip;
+      continue;
+    }
+    std::size_t k = 0;
+    while (k < name.size() && std::isspace(static_cast<unsigned char>(name[k]))) ++k;
+    std::size_t e = k;
+    while (e < name.size() && std::isdigit(static_cast<unsigned char>(name[e]))) ++e;
+    if (e == k) {
+      ++skip;
+      continue;
+    }
+    out.push_back({std::stoi(name.substr(k, e - k)), Vec3(std::stod(x), std::stod(y), std::stod(z))});
+  }
+  if (out.empty() && text.find("<PickedPoints") == std::string::npos)
+    throw InputError("'" + path + "' is not a PickPoints file (.pp): no <PickedPoints> element.");
+  if (skipped) *skipped = skip;
+  return out;
+}
+
+PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
+                                 const std::function<void(int, const char*)>& progress) {
+  const auto t0 = std::chrono::steady_clock::now();
+  Preparation p(opt, progress);
+  p.classify(layers);
+  p.toMillimetres();
+  p.orient();
+  p.separate();
+  p.settleSuperiorAndLeft();
+  p.numberRibs();
+  p.repair();
+  p.join(cage);
+  p.placeAndCentre(cage);
+  p.res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (progress) progress(100, "done");
+  return p.res;
 }
 
 }  // namespace pectus::patient
