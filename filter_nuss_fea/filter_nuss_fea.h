@@ -25,10 +25,10 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   void runNussFea(pectus::ml::FilterContext& ctx);
   void initBarPlanner(MeshDocument& md, RichParameterList& par);
   void runBarPlanner(pectus::ml::FilterContext& ctx);
+  // a patient's CT segmentation (filter_patient.cpp)
+  void addPatientFilters();
   void initImportCt(RichParameterList& par);
   void runImportCt(pectus::ml::FilterContext& ctx);
-  // a patient's CT segmentation (filter_patient.cpp)
-  void addPrepareFilter();
   void initPreparePatient(RichParameterList& par);
   void runPreparePatient(pectus::ml::FilterContext& ctx);
 };

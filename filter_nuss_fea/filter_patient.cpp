@@ -1,17 +1,49 @@
-// MeshLab adapter of the patient-data core (patient/): 'Prepare Patient Rib Cage'. Maps parameters, the
-// visible layers, progress and errors; every decision is in patient/prepare.cpp.
+// MeshLab adapter of the patient-data core (patient/): 'Import CT Segmentation' and 'Prepare Patient Rib
+// Cage'. Maps parameters, files, the visible layers, progress and errors; every decision is in patient/.
 #include "filter_nuss_fea.h"
 
+#include <chrono>
+
 #include <vcg/complex/algorithms/update/normal.h>
+#include <vcg/complex/append.h>
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
+#include "ct_import.h"
 #include "prepare.h"
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
 
-void FilterNussFeaPlugin::addPrepareFilter() {
+void FilterNussFeaPlugin::addPatientFilters() {
+  pectus::ml::FilterSpec c;
+  c.id = FP_IMPORT_CT;
+  c.name = "Import CT Segmentation";
+  c.info =
+      "Reads a patient's CT segmentation as segmentation tools export it (3D Slicer, ITK-SNAP, TotalSegmentator, "
+      "InVesalius, Mimics) and adds one layer per structure, named after it.<br>"
+      "<b>Input</b> (parameter 'Path'): one file or a folder. A folder is read file by file in name order: every "
+      "*.stl (binary or ASCII), *.obj, *.ply, *.off, *.nii and *.nii.gz in it (not its subfolders); other files are "
+      "skipped and listed in the Log.<br>"
+      "<b>Names.</b> A mesh file or a one-structure NIfTI mask gives one layer named after the file without its "
+      "extension (rib_left_3.nii.gz -> 'rib_left_3'). A NIfTI label map with several labels (or a label table) "
+      "gives one layer per label present, in ascending label order, named from the file's own label table (as "
+      "TotalSegmentator writes it), else from parameter 'Label table', else from a table beside the file "
+      "(&lt;name&gt;.txt, .csv, .json or &lt;name&gt;_labels.txt, .csv, .json). A label map without any table, or a "
+      "label missing from its table, is refused. Label map surfaces are closed, unsmoothed marching-cubes "
+      "surfaces of each label's voxels, in mm.<br>"
+      "<b>Nothing is repaired or moved</b>: coordinates, frame and units stay as in the files (the next filter, "
+      "'Prepare Patient Rib Cage', finds the anatomical frame and the units). Vertices at the same position are "
+      "merged (STL stores none shared) and vertices no face uses are removed; faces with NaN or infinite "
+      "coordinates are dropped and counted in the Log. Duplicate faces, holes and other defects are kept.<br>"
+      "<b>Result.</b> The first structure's layer becomes the current layer. The Log has one summary line and "
+      "one line per structure: faces, vertices, connected components, source file (and label), size of the "
+      "bounding box; for labels the voxel count and spacing. If anything cannot be read, no layer is added.";
+  c.cls = MeshFilterInterface::MeshCreation;
+  c.arity = MeshFilterInterface::NONE;
+  c.needsCurrentMesh = false;
+  addFilter(this, c);
+
   pectus::ml::FilterSpec s;
   s.id = FP_PREPARE_PATIENT;
   s.name = "Prepare Patient Rib Cage";
@@ -145,4 +177,45 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
           std::to_string(r.ribsLeft) + " left ribs, " + std::to_string(r.wrapped) + " structures wrapped, " +
           std::to_string(r.dropped) + " pieces left out, " + std::to_string(r.landmarks.size()) + " landmarks; " +
           fmt(r.seconds, 3) + " s");
+}
+
+void FilterNussFeaPlugin::initImportCt(RichParameterList& par) {
+  par.addParam(RichString("path", "", "Path (file or folder)",
+                          "A segmentation file (.stl, .obj, .ply, .off, .nii, .nii.gz) or a folder of them (every such "
+                          "file in it, in name order). Absolute, or relative to the working folder."));
+  par.addParam(RichString("labelTable", "", "Label table",
+                          "Names of a NIfTI label map's values when the file has no table of its own: entries "
+                          "'value name' separated by ';' or new lines (e.g. '1 rib_left_1; 2 rib_left_2'; also "
+                          "'value,name'), a JSON object {\"1\": \"rib_left_1\"}, or the path of a file with such "
+                          "lines (3D Slicer colour tables work). Empty: a table beside the file (NAME.txt/.csv/.json "
+                          "or NAME_labels.*, for NAME.nii.gz). Not used for mesh files and one-structure masks."));
+  par.addParam(RichInt("minVoxels", 1, "Minimum voxels",
+                       "NIfTI only: a label or mask with fewer voxels is skipped (listed in the Log), 0 to 1,000,000,000. "
+                       "1 keeps every label present."));
+}
+
+void FilterNussFeaPlugin::runImportCt(FilterContext& ctx) {
+  pectus::patient::ImportOptions opt;
+  opt.labelTable = ctx.string("labelTable").toStdString();
+  opt.minVoxels = ctx.intIn("minVoxels", 0, 1000000000);
+  const std::string path = ctx.string("path").trimmed().toStdString();
+  const auto t0 = std::chrono::steady_clock::now();
+  pectus::patient::ImportReport report;
+  auto prog = [&](int pc, const char* w) { ctx.progress(pc, w); };
+  auto structures = pectus::patient::importSegmentation(path, opt, &report, prog);  // before any layer is added
+  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+
+  long long faces = 0, vertices = 0;
+  for (std::size_t i = 0; i < structures.size(); ++i) {
+    auto& s = structures[i];
+    MeshModel& mm = ctx.addLayer(QString::fromStdString(s.name), i == 0);  // the first one becomes current
+    vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(mm.cm, *s.mesh);
+    vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(mm.cm);
+    vcg::tri::UpdateBounding<CMeshO>::Box(mm.cm);
+    faces += mm.cm.fn, vertices += mm.cm.vn;
+  }
+  ctx.log("Imported " + std::to_string(structures.size()) + (structures.size() == 1 ? " structure" : " structures") +
+          " from " + path + ": " + std::to_string(faces) + " faces, " + std::to_string(vertices) +
+          " vertices in all; frame and units as in the files; " + fmt(secs, 3) + " s");
+  for (const auto& l : report.lines) ctx.log(l);
 }
