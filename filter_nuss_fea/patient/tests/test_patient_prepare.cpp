@@ -129,6 +129,8 @@ TEST(PatientPrepare, RefusesWithoutSternumCartilageOrOneSide) {
   expectError({{"ribs", &m[0]}, {"costal cartilage", &m[1]}}, "No sternum");
   expectError({{"ribs", &m[0]}, {"sternum", &m[2]}}, "No costal cartilage");
   expectError({{"Segment_1", &m[0]}, {"Segment_2", &m[1]}}, "None of the 2 layers");
+  // a 'sternum' at the centre of the bone: no anterior direction
+  expectError({{"ribs", &m[0]}, {"costal cartilage", &m[1]}, {"sternum", &m[0]}}, "Cannot find the anatomical frame");
   // the right ribs only: drop every face on the left
   OwnedMesh right;
   mapInto(e.layers[0], right, Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
