@@ -62,14 +62,15 @@ def main() -> int:
         return 1
 
     fe = example("filter_nuss_fea", "nuss_fea").set(
-        landmarkLayer=1, targetElevation=a.elevation, order=0 if a.order == 2 else 1,
+        landmarkLayer=0, targetElevation=a.elevation, order=0 if a.order == 2 else 1,
         analysis=0 if a.analysis == "large" else 1, resultBase=os.path.join(a.out, "nuss_result.vtu"))
     # the volumes and the index on the deformed cage (current after the FE filter) against the prepared one
-    after = [example("filter_thoracic_volume", n).set(compare=True, beforeLayer=0, landmarkLayer=1)
+    after = [example("filter_thoracic_volume", n).set(compare=True, beforeLayer=1, landmarkLayer=0)
              for n in ("thoracic_volume_slice", "thoracic_volume_envelope", "pectus_index")]
     analyse = mlx.Script([fe, *after])
     analyse.write(os.path.join(a.out, "analyse.mlx"))
-    r2 = mlx.run([cage, lms], analyse, [(os.path.join(a.out, "after.ply"), "vc vq", 2)])
+    # meshlabserver makes the last input current: the landmarks are layer 0, the cage layer 1 (current)
+    r2 = mlx.run([lms, cage], analyse, [(os.path.join(a.out, "after.ply"), "vc vq", 2)])
     for line in r2.log:
         print("  " + line)
     if r2.rc != 0:
@@ -81,14 +82,13 @@ def main() -> int:
             ("elevation of the lower sternum end (mm)", grab(log, r"sternum end displacement ([0-9.]+) mm")),
             ("max von Mises stress (MPa)", grab(log, r"Max von Mises stress ([0-9.]+) MPa")),
             ("max equivalent strain", grab(log, r"Max equivalent strain ([0-9.]+)")),
-            ("pectus index before", grab(log, r"[Pp]ectus index[^:]*: before ([0-9.]+)")),
-            ("pectus index after", grab(log, r"[Pp]ectus index[^:]*: before [0-9.]+,? after ([0-9.]+)"))]
+            ("pectus (Haller) index before", grab(log, r"Pectus index change: Haller ([0-9.]+) ->")),
+            ("pectus (Haller) index after", grab(log, r"Pectus index change: Haller [0-9.]+ -> ([0-9.]+)")),
+            ("slice method volume gain (cm3)", grab(log, r"Slice method intrathoracic volume change: ([-+0-9.]+) cm3")),
+            ("Ferguson envelope volume gain (cm3)", grab(log, r"Ferguson envelope thoracic volume change: ([-+0-9.]+) cm3"))]
     print(f"\n{'Table 6-1 quantity':45s} value")
     for k, v in rows:
         print(f"{k:45s} {'n/a' if v is None else f'{v:.2f}'}")
-    for line in log:
-        if line.startswith("Thoracic volume") or "Ferguson envelope" in line:
-            print(line)
     print(f"\n{time.time() - t0:.0f} s; results in {a.out}")
     return 0
 
