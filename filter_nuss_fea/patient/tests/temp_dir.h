@@ -1,9 +1,13 @@
-// A temporary folder for a test's files, removed with everything in it when the test ends.
+// Test helpers of the patient core: a temporary folder for a test's files (removed with everything in it
+// when the test ends) and the message of the InputError a call throws.
 #pragma once
 #include <filesystem>
 #include <fstream>
+#include <functional>
 #include <random>
 #include <string>
+
+#include "pectus/errors.h"
 
 namespace pectus::patient::testing {
 
@@ -27,5 +31,15 @@ struct TempDir {
     return path(name);
   }
 };
+
+/// the message of the InputError f throws, or "(no InputError)"
+inline std::string errorOf(const std::function<void()>& f) {
+  try {
+    f();
+  } catch (const pectus::InputError& e) {
+    return e.what();
+  }
+  return "(no InputError)";
+}
 
 }  // namespace pectus::patient::testing

@@ -16,6 +16,7 @@
 
 namespace fs = std::filesystem;
 using namespace pectus::patient;
+using pectus::patient::testing::errorOf;
 using pectus::patient::testing::TempDir;
 
 namespace {
@@ -106,15 +107,6 @@ void expectCube(const CMeshO& m, const std::string& what) {
   EXPECT_EQ(m.vn, 8) << what << ": the corners shared";
   EXPECT_NEAR(m.bbox.Dim()[0], 1.0, 1e-6) << what;
   EXPECT_EQ(countComponents(m), 1) << what;
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const pectus::InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
 }
 
 }  // namespace

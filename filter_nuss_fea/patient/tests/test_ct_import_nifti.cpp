@@ -14,6 +14,7 @@
 
 namespace fs = std::filesystem;
 using namespace pectus::patient;
+using pectus::patient::testing::errorOf;
 using pectus::patient::testing::TempDir;
 
 namespace {
@@ -33,15 +34,6 @@ LabelVolume boxes(const std::vector<std::pair<int, int>>& labelAndWidth) {
     i0 += w;
   }
   return v;
-}
-
-std::string errorOf(const std::function<void()>& f) {
-  try {
-    f();
-  } catch (const pectus::InputError& e) {
-    return e.what();
-  }
-  return "(no InputError)";
 }
 
 }  // namespace
