@@ -6,6 +6,7 @@
 #include <cmath>
 #include <fstream>
 #include <map>
+#include <numeric>
 #include <regex>
 #include <set>
 #include <sstream>
@@ -377,6 +378,41 @@ void relabel(CMeshO& m, const CMeshO& from) {
   writeFaceLabels(m, tissue, part);
 }
 
+// Deletes the closed shells of m whose signed volume is under minVolume: the voids and specks that a union
+// leaves where two structures' surfaces nearly coincide (a wrapped cartilage on the rib it joins). Each would
+// be a piece of its own in the tet mesh. Returns how many.
+int dropTinyShells(CMeshO& m, double minVolume) {
+  std::vector<int> parent(m.vert.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int a) {
+    while (parent[std::size_t(a)] != a) a = parent[std::size_t(a)] = parent[std::size_t(parent[std::size_t(a)])];
+    return a;
+  };
+  const auto idx = [&](const CFaceO& f, int k) { return int(vcg::tri::Index(m, f.cV(k))); };
+  for (const auto& f : m.face)
+    if (!f.IsD()) parent[std::size_t(find(idx(f, 1)))] = find(idx(f, 0)), parent[std::size_t(find(idx(f, 2)))] = find(idx(f, 0));
+  std::map<int, double> vol;
+  for (const auto& f : m.face)
+    if (!f.IsD()) {
+      const auto P = [&](int k) { return Vec3(f.cP(k)[0], f.cP(k)[1], f.cP(k)[2]); };
+      const Vec3 a = P(0), b = P(1), c = P(2);
+      vol[find(idx(f, 0))] += a.dot(b.cross(c)) / 6;
+    }
+  int dropped = 0;
+  for (const auto& [root, v] : vol) dropped += v < minVolume;
+  if (!dropped) return 0;
+  for (auto& f : m.face)
+    if (!f.IsD() && vol[find(idx(f, 0))] < minVolume) vcg::tri::Allocator<CMeshO>::DeleteFace(m, f);
+  for (auto& v : m.vert)
+    if (!v.IsD()) v.ClearV();
+  for (const auto& f : m.face)
+    if (!f.IsD())
+      for (int k = 0; k < 3; ++k) f.cV(k)->SetV();
+  for (auto& v : m.vert)
+    if (!v.IsD() && !v.IsV()) vcg::tri::Allocator<CMeshO>::DeleteVertex(m, v);
+  return dropped;
+}
+
 // The preparation's state, as each step hands it on to the next: the structures (in the project frame's axes
 // once the frame is found), the vertebral column's points, the frame, and the Log.
 class Preparation {
@@ -497,6 +533,29 @@ void Preparation::separate() {
   for (const auto& s : all)
     if (s.cls.kind == Kind::Rib || s.cls.kind == Kind::Bone || s.cls.kind == Kind::Sternum)
       for (const auto& p : s.soup.V) bonePoints.emplace(p.x(), p.y(), p.z());
+  // The cartilages join the ribs to the sternum. Where a segmentation's labels only touch, their surfaces
+  // coincide face to face, which a union cannot join into a manifold: wrapped with the offset, the
+  // cartilage overlaps the bone it joins. The wrap also reconnects the thin strips that a voxel surface
+  // splits where voxels meet at an edge or corner only (so it comes before the fragments are counted).
+  // The wraps are the step's costly part: computed side by side.
+  const auto touches = [&](const Soup& c) {
+    return std::any_of(c.V.begin(), c.V.end(), [&](const Vec3& p) { return bonePoints.count({p.x(), p.y(), p.z()}) > 0; });
+  };
+  std::vector<std::size_t> toWrap;
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (all[i].cls.kind == Kind::Cartilage && (touches(all[i].soup) || !defects(all[i].soup).empty())) toWrap.push_back(i);
+  std::vector<Soup> wraps(toWrap.size());
+  std::vector<std::string> wrapErrors(toWrap.size());
+#pragma omp parallel for schedule(dynamic)
+  for (int k = 0; k < int(toWrap.size()); ++k) {
+    try {
+      wraps[std::size_t(k)] = alphaWrap(all[toWrap[std::size_t(k)]].soup, opt.alpha, opt.offset);
+    } catch (const std::exception& e) {
+      wrapErrors[std::size_t(k)] = e.what();
+    }
+  }
+  for (std::size_t k = 0; k < toWrap.size(); ++k)
+    if (!wrapErrors[k].empty()) throw InputError("'" + all[toWrap[k]].name + "' could not be wrapped: " + wrapErrors[k]);
   for (auto& s : all) {
     if (s.cls.kind == Kind::Vertebra) {
       spine.insert(spine.end(), s.soup.V.begin(), s.soup.V.end());
@@ -524,17 +583,10 @@ void Preparation::separate() {
         s.soup = std::move(cut);
       }
     }
-    // The cartilages join the ribs to the sternum. Where a segmentation's labels only touch, their surfaces
-    // coincide face to face, which a union cannot join into a manifold: wrapped with the offset, the
-    // cartilage overlaps the bone it joins. The wrap also reconnects the thin strips that a voxel surface
-    // splits where voxels meet at an edge or corner only (so it comes before the fragments are counted).
-    const auto touches = [&](const Soup& c) {
-      return std::any_of(c.V.begin(), c.V.end(), [&](const Vec3& p) { return bonePoints.count({p.x(), p.y(), p.z()}) > 0; });
-    };
-    if (s.cls.kind == Kind::Cartilage && (touches(s.soup) || !defects(s.soup).empty())) {
+    if (const auto w = std::find(toWrap.begin(), toWrap.end(), std::size_t(&s - all.data())); w != toWrap.end()) {
       const double v0 = volume(s.soup);
       const std::size_t pieces0 = components(s.soup).size();
-      s.soup = alphaWrap(s.soup, opt.alpha, opt.offset);
+      s.soup = std::move(wraps[std::size_t(w - toWrap.begin())]);
       const double v1 = volume(s.soup);
       log.push_back("'" + s.name + "': wrapped so that it overlaps the ribs and the sternum it joins (" + std::to_string(pieces0) +
                     " -> " + std::to_string(components(s.soup).size()) + " pieces, " + mm(v0 / 1000, 2) + " -> " +
@@ -729,7 +781,9 @@ void Preparation::join(CMeshO& cage) {
   nuss::joinTissueLayers({{"ribs", &boneM, Tissue::Bone}, {"costal cartilage", &cartM, Tissue::Cartilage},
                           {"sternum", &sternM, Tissue::Sternum}},
                          {}, joined, &js);
-  log.push_back("joined: " + std::to_string(js.components) + " connected pieces, " + mm(js.unionVolume / 1000, 1) + " cm3 (the " +
+  const int shells = dropTinyShells(joined, std::max(opt.minVolume, 1.0));
+  log.push_back("joined: " + std::to_string(js.components - shells) + " connected pieces" +
+                (shells ? " (" + std::to_string(shells) + " tiny shells where two surfaces touch removed)" : std::string()) + ", " + mm(js.unionVolume / 1000, 1) + " cm3 (the " +
                 "structures add up to " + mm(js.sumVolume / 1000, 1) + " cm3), " + std::to_string(joined.fn) + " faces");
   prog(75, "decimating");
   cage.Clear();
@@ -739,6 +793,12 @@ void Preparation::join(CMeshO& cage) {
     for (const auto& f : cage.face) ar += double(vcg::DoubleArea(f)) / 2;
     const int target = int(ar / (0.433 * opt.edgeLength * opt.edgeLength));
     if (target < cage.fn) {
+      // in two stages: a retry (where a collapse made faces cross) starts again from its stage's input, so
+      // the first stage, from the union's hundreds of thousands of faces, goes to a fine edge where it rarely needs one
+      if (4 * target < cage.fn) {
+        ribcage::decimateEmbedded(cage, 4 * target, opt.edgeLength / 2);
+        vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
+      }
       ribcage::decimateEmbedded(cage, target, opt.edgeLength);
       vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
       relabel(cage, joined);
@@ -860,18 +920,32 @@ std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped) {
 
 PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
                                  const std::function<void(int, const char*)>& progress) {
-  const auto t0 = std::chrono::steady_clock::now();
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  auto t = t0;
+  std::string times;
+  const auto lap = [&](const char* step) {
+    const auto now = Clock::now();
+    times += (times.empty() ? "" : ", ") + std::string(step) + " " + mm(std::chrono::duration<double>(now - t).count()) + " s";
+    t = now;
+  };
   Preparation p(opt, progress);
   p.classify(layers);
   p.toMillimetres();
   p.orient();
+  lap("classify, units and frame");
   p.separate();
+  lap("separate");
   p.settleSuperiorAndLeft();
   p.numberRibs();
   p.repair();
+  lap("number and repair");
   p.join(cage);
+  lap("join and decimate");
   p.placeAndCentre(cage);
-  p.res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  lap("landmarks");
+  p.res.log.push_back("time: " + times);
+  p.res.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
   if (progress) progress(100, "done");
   return p.res;
 }

@@ -21,7 +21,7 @@
 //     makes each cartilage overlap the bone it joins, which the union needs; the wrap also reconnects the
 //     strips a voxel surface splits where voxels meet at an edge or a corner;
 //  7. the structures are joined (corefinement union: joinTissueLayers) into one surface with tissue and
-//     part per face, then decimated to the target edge length (kept embedded) and relabelled;
+//     part per face, the union's specks and voids (closed shells under the minimum volume) removed, then decimated to the target edge length (kept embedded) and relabelled;
 //  8. landmarks (labels.h codes) are placed from the anatomy; user points override them.
 // The result is in the project frame (labels.h): mm, +x patient's left, +y anterior, +z superior, x = 0 on
 // the sternum's midline, y = 0 at the vertebral bodies' anterior surface (else at the costovertebral

@@ -98,6 +98,8 @@ check(any("vertebral column found" in l and "cut at the costovertebral joints" i
       "the spine fused to the ribs is found and cut")
 check(any("scapula_left': not part of the rib cage" in l for l in log), "the scapulae are left out")
 check(any("12 right and 12 left ribs" in l for l in log), "12 ribs numbered on each side")
+pieces = mlx.grab(log, r"joined: (\d+) connected pieces", int)
+check(pieces == 5, f"the joined cage is one piece and the four floating ribs, as the generator's: {pieces} pieces")
 check_landmarks(log, truth, "messy STL export", joints=10.0)
 force = mlx.grab(log, r"Fe = ([0-9.]+) N")
 
