@@ -19,6 +19,7 @@
 
 #include "mesh_simplify.h"
 #include "pectus/errors.h"
+#include "shape_classify.h"
 #include "soup.h"
 #include "tissue_join.h"
 
@@ -385,7 +386,7 @@ class Preparation {
     if (!(opt.minVolume >= 0) || !(opt.alpha > 0) || !(opt.offset > 0) || !(opt.edgeLength >= 0))
       throw InputError("parameters: the minimum volume and edge length must be >= 0, alpha and offset > 0");
   }
-  void classify(const std::vector<InputLayer>& layers);  ///< 1. each layer's kind from its name
+  void classify(const std::vector<InputLayer>& layers);  ///< 1. each layer's kind from its name, else its shape
   void toMillimetres();                                  ///< 2. the units
   void orient();                                         ///< 3. the anatomical frame's axes
   void separate();                                       ///< 4. the spine cut, fragments and what is not cage
@@ -398,6 +399,8 @@ class Preparation {
 
  private:
   void prog(int pc, const char* what) const { if (progress_) progress_(pc, what); }
+  void classifyUnknownByShape(std::vector<Structure>& unknown);  ///< 1, for the layers whose names say nothing
+  void checkTheCage(std::size_t layers) const;  ///< 1, finished: a sternum, cartilage and ribs are there
   Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
 
   const PrepareOptions& opt;
@@ -415,7 +418,7 @@ class Preparation {
 
 void Preparation::classify(const std::vector<InputLayer>& layers) {
   prog(2, "classifying the layers");
-  std::vector<std::string> unknown;
+  std::vector<Structure> unknown;
   for (const auto& l : layers) {
     Structure s{l.name, classifyName(l.name), soupOf(*l.mesh)};
     if (s.soup.empty()) {
@@ -427,17 +430,45 @@ void Preparation::classify(const std::vector<InputLayer>& layers) {
       ++res.dropped;
       continue;
     }
-    if (s.cls.kind == Kind::Unknown) {
-      unknown.push_back(l.name);
+    weld(s.soup);
+    (s.cls.kind == Kind::Unknown ? unknown : all).push_back(std::move(s));
+  }
+  if (!unknown.empty()) classifyUnknownByShape(unknown);
+  checkTheCage(layers.size());
+  for (const auto& s : all)
+    log.push_back("'" + s.name + "': " +
+                  (s.cls.kind == Kind::Rib ? (s.cls.number ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number)
+                                                           : std::string("rib (side and number from its place)"))
+                   : s.cls.kind == Kind::Cartilage ? std::string("costal cartilage")
+                   : s.cls.kind == Kind::Sternum ? std::string("sternum")
+                   : s.cls.kind == Kind::Vertebra ? std::string("vertebral column (support, not in the model)")
+                                                  : std::string("bone (ribs, maybe fused to the spine)")) +
+                  ", " + std::to_string(s.soup.F.size()) + " faces");
+}
+
+void Preparation::classifyUnknownByShape(std::vector<Structure>& unknown) {
+  std::vector<LayerToClassify> in;
+  for (const auto& s : all) in.push_back({s.name, &s.soup, s.cls});
+  for (const auto& s : unknown) in.push_back({s.name, &s.soup, s.cls});
+  log.push_back(std::to_string(unknown.size()) + " layer" + (unknown.size() > 1 ? "s" : "") + " named like no rib cage "
+                "structure: classified by their shape");
+  const auto cls = classifyByShape(in, log);
+  const std::size_t named = all.size();
+  for (std::size_t i = 0; i < unknown.size(); ++i) {
+    const NameClass& c = cls[named + i];
+    if (c.kind == Kind::NotCage || c.kind == Kind::Unknown) {
+      ++res.dropped;
       continue;
     }
-    weld(s.soup);
-    all.push_back(std::move(s));
+    unknown[i].cls = {c.kind, 0, 0};  // side and number of a rib come from its place (numberRibs)
+    all.push_back(std::move(unknown[i]));
   }
-  for (const auto& n : unknown) log.push_back("'" + n + "': the name says no rib cage structure, left out (rename it to include it)");
+}
+
+void Preparation::checkTheCage(std::size_t layers) const {
   auto count = [&](Kind k) { return std::count_if(all.begin(), all.end(), [&](const Structure& s) { return s.cls.kind == k; }); };
   if (all.empty())
-    throw InputError("None of the " + std::to_string(layers.size()) + " layers is named like a rib cage structure: name them "
+    throw InputError("None of the " + std::to_string(layers) + " layers is named like a rib cage structure: name them "
                      "as TotalSegmentator does ('rib_left_1' ... 'rib_right_12', 'costal_cartilages', 'sternum', "
                      "'vertebrae_T1' ...) or 'bone', 'cartilage', 'sternum'.");
   if (!count(Kind::Sternum))
@@ -448,14 +479,6 @@ void Preparation::classify(const std::vector<InputLayer>& layers) {
                      "cartilages join the ribs to the sternum; segment them (TotalSegmentator's 'costal_cartilages').");
   if (!count(Kind::Rib) && !count(Kind::Bone))
     throw InputError("No ribs: none of the layers is named like 'rib_left_1', 'ribs' or 'bone'.");
-  for (const auto& s : all)
-    log.push_back("'" + s.name + "': " +
-                  (s.cls.kind == Kind::Rib ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number)
-                   : s.cls.kind == Kind::Cartilage ? std::string("costal cartilage")
-                   : s.cls.kind == Kind::Sternum ? std::string("sternum")
-                   : s.cls.kind == Kind::Vertebra ? std::string("vertebral column (support, not in the model)")
-                                                  : std::string("bone (ribs, maybe fused to the spine)")) +
-                  ", " + std::to_string(s.soup.F.size()) + " faces");
 }
 
 void Preparation::toMillimetres() {

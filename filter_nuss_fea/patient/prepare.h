@@ -5,7 +5,14 @@
 // The steps, in order (each one Logged):
 //  1. classify every layer by its name (TotalSegmentator's, 3D Slicer's, or generic names): rib (side
 //     and number), costal cartilage, sternum, vertebra, other bone (may hold ribs fused to the spine),
-//     or not rib cage (scapula, clavicle, humerus, organs: left out);
+//     or not rib cage (scapula, clavicle, humerus, organs: left out); layers whose names say nothing
+//     ('Segment_1', ...) by their shape and place among the others, in the input's own frame and units
+//     (shape_classify.h): many long pieces or one piece as wide as the cage -> bone; many small bars ->
+//     cartilage; the elongated one-piece layer nearest the cartilages -> sternum; then, in the axes the
+//     sternum gives, compact midline blocks behind the centre -> vertebrae, thin elongated pieces beside
+//     the midline reaching behind the centre -> ribs (side and number from step 5), plates behind and
+//     beside -> scapulae (left out), the rest left out; no cartilage or sternum by name or shape, or two
+//     equally good sternums: refused, asking to rename the layers;
 //  2. units: metres or centimetres are detected from the size of the whole and scaled to mm;
 //  3. the anatomical frame: anterior from the bone's centre to the sternum, the long axis along the
 //     sternum, snapped to the file's axes when within 30 degrees (CT exports are axis-aligned), superior
