@@ -66,6 +66,30 @@ std::vector<std::string> words(const std::string& name) {
 }
 
 // ---------------------------------------------------------------------------------------------------
+// 6. repair: CGAL's alpha wrap, refused when the result is no surface of the structure: empty, open or
+// non-manifold (a detail too fine for the input's gaps), or holding far more than the structure grown by the
+// offset (a detail coarser than the structure bridges its gaps and fills its concavities). Grown by the offset o,
+// a bar of thickness t = 2V/A gains about o A + o^2 A / (2 t); twice that much is not the structure any more.
+constexpr double kWrapGrowth = 2.0;
+
+Soup wrapOf(const std::string& name, const Soup& s, const PrepareOptions& opt) {
+  Soup w = alphaWrap(s, opt.alpha, opt.offset);
+  const std::string still = w.empty() ? std::string("empty") : defects(w);
+  if (!still.empty())
+    throw InputError("Alpha wrapping cannot close '" + name + "' at detail " + mm(opt.alpha, 2) + " mm (the result is " + still +
+                     "): raise 'Wrap detail (alpha)' or check the structure.");
+  const double v0 = volume(s), a0 = area(s), v1 = volume(w);
+  const double t = 2 * v0 / std::max(a0, 1e-300), o = opt.offset;
+  const double grown = v0 + o * a0 + o * o * a0 / std::max(2 * t, 1e-300);
+  if (v1 > kWrapGrowth * grown)
+    throw InputError("Alpha wrapping cannot follow '" + name + "' at detail " + mm(opt.alpha, 2) + " mm: the wrap holds " +
+                     mm(v1 / 1000, 2) + " cm3, " + mm(v1 / grown, 1) + " times the structure grown by the offset (" +
+                     mm(grown / 1000, 2) + " cm3), so it bridges the structure's gaps. Lower 'Wrap detail (alpha)' towards "
+                     "the structure's thickness (about " + mm(t, 1) + " mm).");
+  return w;
+}
+
+// ---------------------------------------------------------------------------------------------------
 // 3. the frame
 struct Frame {
   Mat3 R = Mat3::Identity();  // rows: patient's left, anterior, superior (in the scaled input frame)
@@ -557,7 +581,7 @@ void Preparation::separate() {
     if (s.cls.kind == Kind::Cartilage && (touches(s.soup) || !defects(s.soup).empty())) {
       const double v0 = volume(s.soup);
       const std::size_t pieces0 = components(s.soup).size();
-      s.soup = alphaWrap(s.soup, opt.alpha, opt.offset);
+      s.soup = wrapOf(s.name, s.soup, opt);
       const double v1 = volume(s.soup);
       log.push_back("'" + s.name + "': wrapped so that it overlaps the ribs and the sternum it joins (" + std::to_string(pieces0) +
                     " -> " + std::to_string(components(s.soup).size()) + " pieces, " + mm(v0 / 1000, 2) + " -> " +
@@ -719,11 +743,7 @@ void Preparation::repair() {
     if (!repaired.empty()) log.push_back(label + ": " + repaired + ", " + mm(volume(s.soup) / 1000, 2) + " cm3");
     if (!why.empty()) {
       const double v0 = volume(s.soup);
-      Soup w = alphaWrap(s.soup, opt.alpha, opt.offset);
-      const std::string still = defects(w);
-      if (!still.empty())
-        throw InputError("Alpha wrapping cannot close '" + s.name + "' at detail " + mm(opt.alpha, 2) + " mm (the result is " +
-                         still + "): raise 'Wrap detail (alpha)' or check the structure.");
+      Soup w = wrapOf(s.cls.kind == Kind::Rib ? label : s.name, s.soup, opt);
       const double v1 = volume(w);
       log.push_back(label + ": " + why + ": wrapped, " + mm(v0 / 1000, 2) + " -> " + mm(v1 / 1000, 2) + " cm3 (" +
                     (v1 >= v0 ? "+" : "") + mm(100 * (v1 - v0) / std::max(v0, 1e-9), 1) + " %)");

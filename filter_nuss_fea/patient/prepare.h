@@ -23,7 +23,9 @@
 //  5. ribs are numbered per side from the top by the height of their vertebral end (or from their names);
 //  6. each structure that is not a closed, 2-manifold, self-intersection-free surface gets the least repair
 //     that makes it one: duplicate faces removed, holes closed, else wrapped (CGAL alpha_wrap_3: detail
-//     alpha, offset), with its volume change reported; clean ones are kept. The costal cartilages are always
+//     alpha, offset), with its volume change reported; clean ones are kept. A wrap that is not closed and
+//     manifold, or holds more than twice the structure grown by the offset (the detail bridges its gaps),
+//     is refused naming the structure and the detail to change. The costal cartilages are always
 //     wrapped (before the fragments are counted): a segmentation's labels only touch, and the small offset
 //     makes each cartilage overlap the bone it joins, which the union needs; the wrap also reconnects the
 //     strips a voxel surface splits where voxels meet at an edge or a corner;

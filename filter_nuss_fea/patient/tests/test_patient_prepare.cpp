@@ -250,3 +250,17 @@ TEST(PatientPrepare, RefusesShapesThatSettleNothing) {
   EXPECT_NE(twice.find("'Segment_3' and 'Segment_4' are equally good sternums"), std::string::npos) << twice;
   EXPECT_NE(twice.find("Rename the layers"), std::string::npos) << twice;
 }
+
+// A wrap detail coarser than the structure bridges the costal cartilages' gaps: refused, naming the structure
+// and the detail to lower.
+TEST(PatientPrepare, RefusesAWrapThatBridgesTheStructure) {
+  std::array<OwnedMesh, 3> m;
+  toScanner(m);
+  PrepareOptions o;
+  o.wrapAll = true;  // the generator's structures are clean: only then wrapped
+  o.alpha = 20;
+  OwnedMesh cage;
+  const std::string msg = errorOf([&] { preparePatientCage(inputs(m), o, cage); });
+  EXPECT_NE(msg.find("Alpha wrapping cannot follow 'costal cartilage' at detail 20.00 mm"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("Lower 'Wrap detail (alpha)'"), std::string::npos) << msg;
+}
