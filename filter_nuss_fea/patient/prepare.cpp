@@ -257,11 +257,20 @@ Vec3 mean(const std::vector<Vec3>& v) {
   return v.empty() ? c : Vec3(c / double(v.size()));
 }
 
-std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, std::vector<std::string>& log) {
+// `given`: the codes of the user's points. A landmark that cannot be placed is refused unless the user gives it
+// (then the user's point, placed later, stands for it).
+std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, const std::set<int>& given,
+                                     std::vector<std::string>& log) {
   std::vector<Landmark> lms;
-  auto fail = [](const std::string& what, const std::string& why) {
-    throw InputError("Cannot place the landmark '" + what + "': " + why + ". Pick it with Edit > PickPoints and give the .pp "
-                     "file (parameter 'Picked points'), named by its code.");
+  auto fail = [&](int code, const std::string& what, const std::string& why) {
+    if (given.count(code)) {
+      log.push_back("landmark " + std::to_string(code) + " (" + what + ") cannot be placed automatically (" + why +
+                    "): the user's point stands for it");
+      return;
+    }
+    throw InputError("Cannot place the landmark '" + what + "' (code " + std::to_string(code) + "): " + why + ". Pick it "
+                     "with Edit > PickPoints on the input layers and give the .pp file (parameter 'Picked points'), the "
+                     "point named " + std::to_string(code) + ".");
   };
   // costovertebral joints: the rib head, the centre of the rib's vertebral end. The heads line up along the
   // spine: its axis (x0, yAxis) is where the ribs' medial-most posterior points lie (their median y); each
@@ -282,7 +291,11 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
   std::map<int, Vec3> cvj;
   for (const auto& [part, pts] : an.rib) {
     if (part < 101 || part > 212) continue;
-    if (!medialMost(pts)) fail("costovertebral joint " + std::to_string(part), "the rib has no part behind the cage's middle");
+    if (!medialMost(pts)) {
+      fail(part, "costovertebral joint of the " + sideName(part / 100) + " rib " + std::to_string(part % 100),
+           "the rib has no part behind the cage's middle");
+      continue;
+    }
     const Vec3* tip = nullptr;
     auto toAxis = [&](const Vec3& p) { return std::hypot(p.x() - x0, p.y() - yAxis); };
     for (const auto& p : pts)
@@ -294,7 +307,8 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
     lms.push_back({part, cvj[part]});
   }
   // sternum ends
-  if (an.sternum.empty()) fail("lower end of the sternum", "the joined cage has no sternum faces");
+  if (an.sternum.empty())  // every other landmark is placed from the sternum: no picked point stands for it
+    throw InputError("Cannot place the landmarks: the joined cage has no sternum faces. Check the sternum's layer.");
   double zLo = 1e300, zHi = -1e300;
   for (const auto& p : an.sternum) zLo = std::min(zLo, p.z()), zHi = std::max(zHi, p.z());
   std::vector<Vec3> lo, hi;
@@ -329,11 +343,13 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
     const double ap = yf - spineFront(z, m);
     if (ap < bestAp) bestAp = ap, zDeep = z, yDeep = yf;
   }
-  if (bestAp > 1e299) fail("deepest point of the funnel", "the sternum has no midline front surface");
-  lms.push_back({kFunnelDeepest, Vec3(x0, yDeep, zDeep)});
+  const bool deepFound = bestAp < 1e299;
+  if (!deepFound) fail(kFunnelDeepest, "deepest point of the funnel", "the sternum has no front surface near its midline");
+  else lms.push_back({kFunnelDeepest, Vec3(x0, yDeep, zDeep)});
   bool spineMeasured = false;
   const double ySpine = spineFront(zDeep, spineMeasured);
-  if (spineMeasured) lms.push_back({kVertebraAtDeepest, Vec3(x0, ySpine, zDeep)});
+  if (spineMeasured && deepFound) lms.push_back({kVertebraAtDeepest, Vec3(x0, ySpine, zDeep)});
+  else if (!deepFound) log.push_back("landmark 503 (vertebra at the deepest level) not placed: the deepest point is the user's");
   else log.push_back("no vertebral column in the input: landmark 503 (vertebra at the deepest level) not placed; the pectus "
                      "index then measures to the costovertebral joints' line");
   // bar exits at the mid-axillary line: halfway between the lateral-most points of ribs s and s+1
@@ -367,13 +383,14 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
   for (int side = 1; side <= 2; ++side)
     if (const auto it = an.rib.find(100 * side + 1); it != an.rib.end())
       for (const auto& p : it->second) zApex = std::max(zApex, p.z());
-  if (zApex < -1e299) fail("lung apex", "there is no first rib");
+  if (zApex < -1e299) fail(kLungApex, "lung apex", "there is no first rib");
   bool m = false;
   lms.push_back({kDiaphragmDome, Vec3(x0, 0.5 * (lower.y() + spineFront(zDome, m)), zDome)});
-  lms.push_back({kLungApex, Vec3(x0, 0.5 * (upper.y() + spineFront(zApex, m)), zApex)});
+  if (zApex > -1e299) lms.push_back({kLungApex, Vec3(x0, 0.5 * (upper.y() + spineFront(zApex, m)), zApex)});
   log.push_back("landmarks: " + std::to_string(cvj.size()) + " costovertebral joints, sternum ends at " + at(lower) + " and " +
-                at(upper) + ", deepest point at " + at(Vec3(x0, yDeep, zDeep)) + ", " + std::to_string(exits) +
-                " bar exits, diaphragm dome z " + mm(zDome) + ", lung apex z " + mm(zApex) + " (before centring)");
+                at(upper) + ", deepest point " + (deepFound ? "at " + at(Vec3(x0, yDeep, zDeep)) : std::string("the user's")) + ", " +
+                std::to_string(exits) + " bar exits, diaphragm dome z " + mm(zDome) + ", lung apex z " +
+                (zApex > -1e299 ? mm(zApex) : std::string("the user's")) + " (before centring)");
   return lms;
 }
 
@@ -794,7 +811,9 @@ void Preparation::placeAndCentre(CMeshO& cage) {
   prog(90, "landmarks");
   Anatomy an = anatomyOf(cage);
   an.spine = spine;
-  auto lms = placeLandmarks(an, x0, yMid, log);
+  std::set<int> given;
+  for (const auto& u : opt.userLandmarks) given.insert(u.code);
+  auto lms = placeLandmarks(an, x0, yMid, given, log);
   double ySpine = 0, zLow = 1e300;
   std::map<int, double> zBySide[3];
   {

@@ -31,7 +31,8 @@
 //     strips a voxel surface splits where voxels meet at an edge or a corner;
 //  7. the structures are joined (corefinement union: joinTissueLayers) into one surface with tissue and
 //     part per face, then decimated to the target edge length (kept embedded) and relabelled;
-//  8. landmarks (labels.h codes) are placed from the anatomy; user points override them.
+//  8. landmarks (labels.h codes) are placed from the anatomy; user points override them. A landmark that
+//     cannot be placed is refused naming it and its code (pick it: .pp file), unless the user gives it.
 // The result is in the project frame (labels.h): mm, +x patient's left, +y anterior, +z superior, x = 0 on
 // the sternum's midline, y = 0 at the vertebral bodies' anterior surface (else at the costovertebral
 // joints), z = 0 half a rib level below the lowest costovertebral joint.
@@ -93,8 +94,9 @@ struct PrepareResult {
 };
 
 /// Builds the labelled cage into `cage` (cleared first; face labels by writeFaceLabels). Throws InputError
-/// naming what to fix: no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised,
-/// a frame that cannot be found, a structure alpha wrapping cannot close, a landmark that cannot be placed.
+/// naming what to fix: no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised by
+/// name or shape (rename the layers), a frame that cannot be found, a structure alpha wrapping cannot close
+/// or follow at the requested detail, a landmark that cannot be placed and is not given.
 PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
                                  const std::function<void(int, const char*)>& progress = {});
 

@@ -264,3 +264,29 @@ TEST(PatientPrepare, RefusesAWrapThatBridgesTheStructure) {
   EXPECT_NE(msg.find("Alpha wrapping cannot follow 'costal cartilage' at detail 20.00 mm"), std::string::npos) << msg;
   EXPECT_NE(msg.find("Lower 'Wrap detail (alpha)'"), std::string::npos) << msg;
 }
+
+// A sternum split down its midline (the halves 30 mm apart, joined by their stretched faces) has no midline
+// front surface: the deepest point of the funnel cannot be placed, and the message says to pick it. A picked
+// point then stands for it.
+TEST(PatientPrepare, RefusesALandmarkThatCannotBePlacedUnlessPicked) {
+  const auto& e = exported();
+  std::array<OwnedMesh, 3> m;
+  for (int k = 0; k < 3; ++k) mapInto(e.layers[std::size_t(k)], m[std::size_t(k)], Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  for (auto& v : m[2].vert) v.P()[0] += v.P()[0] >= 0 ? 15.0f : -15.0f;
+  PrepareOptions o;
+  o.edgeLength = 0;
+  OwnedMesh cage;
+  const std::string msg = errorOf([&] { preparePatientCage(inputs(m), o, cage); });
+  EXPECT_NE(msg.find("Cannot place the landmark 'deepest point of the funnel' (code 501)"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("Edit > PickPoints"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("the point named 501"), std::string::npos) << msg;
+
+  const Landmark* deep = find(e.truth, kFunnelDeepest);
+  ASSERT_TRUE(deep);
+  o.userLandmarks = {{kFunnelDeepest, deep->p}};
+  const auto r = preparePatientCage(inputs(m), o, cage);
+  EXPECT_TRUE(logHas(r, "landmark 501 (deepest point of the funnel) cannot be placed automatically"));
+  const Landmark* got = find(r.landmarks, kFunnelDeepest);
+  ASSERT_TRUE(got);
+  EXPECT_LT((got->p - (r.inputToModel * deep->p.homogeneous()).head<3>()).norm(), 1e-6);
+}
