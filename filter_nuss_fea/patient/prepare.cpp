@@ -4,6 +4,7 @@
 #include <cctype>
 #include <chrono>
 #include <cmath>
+#include <exception>
 #include <fstream>
 #include <map>
 #include <numeric>
@@ -20,6 +21,7 @@
 
 #include "mesh_simplify.h"
 #include "pectus/errors.h"
+#include "shape_classify.h"
 #include "soup.h"
 #include "tissue_join.h"
 
@@ -62,6 +64,30 @@ std::vector<std::string> words(const std::string& name) {
   std::istringstream s(m);
   std::vector<std::string> w;
   for (std::string x; s >> x;) w.push_back(x);
+  return w;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// 6. repair: CGAL's alpha wrap, refused when the result is no surface of the structure: empty, open or
+// non-manifold (a detail too fine for the input's gaps), or holding far more than the structure grown by the
+// offset (a detail coarser than the structure bridges its gaps and fills its concavities). Grown by the offset o,
+// a bar of thickness t = 2V/A gains about o A + o^2 A / (2 t); twice that much is not the structure any more.
+constexpr double kWrapGrowth = 2.0;
+
+Soup wrapOf(const std::string& name, const Soup& s, const PrepareOptions& opt) {
+  Soup w = alphaWrap(s, opt.alpha, opt.offset);
+  const std::string still = w.empty() ? std::string("empty") : defects(w);
+  if (!still.empty())
+    throw InputError("Alpha wrapping cannot close '" + name + "' at detail " + mm(opt.alpha, 2) + " mm (the result is " + still +
+                     "): raise 'Wrap detail (alpha)' or check the structure.");
+  const double v0 = volume(s), a0 = area(s), v1 = volume(w);
+  const double t = 2 * v0 / std::max(a0, 1e-300), o = opt.offset;
+  const double grown = v0 + o * a0 + o * o * a0 / std::max(2 * t, 1e-300);
+  if (v1 > kWrapGrowth * grown)
+    throw InputError("Alpha wrapping cannot follow '" + name + "' at detail " + mm(opt.alpha, 2) + " mm: the wrap holds " +
+                     mm(v1 / 1000, 2) + " cm3, " + mm(v1 / grown, 1) + " times the structure grown by the offset (" +
+                     mm(grown / 1000, 2) + " cm3), so it bridges the structure's gaps. Lower 'Wrap detail (alpha)' towards "
+                     "the structure's thickness (about " + mm(t, 1) + " mm).");
   return w;
 }
 
@@ -233,11 +259,20 @@ Vec3 mean(const std::vector<Vec3>& v) {
   return v.empty() ? c : Vec3(c / double(v.size()));
 }
 
-std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, std::vector<std::string>& log) {
+// `given`: the codes of the user's points. A landmark that cannot be placed is refused unless the user gives it
+// (then the user's point, placed later, stands for it).
+std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, const std::set<int>& given,
+                                     std::vector<std::string>& log) {
   std::vector<Landmark> lms;
-  auto fail = [](const std::string& what, const std::string& why) {
-    throw InputError("Cannot place the landmark '" + what + "': " + why + ". Pick it with Edit > PickPoints and give the .pp "
-                     "file (parameter 'Picked points'), named by its code.");
+  auto fail = [&](int code, const std::string& what, const std::string& why) {
+    if (given.count(code)) {
+      log.push_back("landmark " + std::to_string(code) + " (" + what + ") cannot be placed automatically (" + why +
+                    "): the user's point stands for it");
+      return;
+    }
+    throw InputError("Cannot place the landmark '" + what + "' (code " + std::to_string(code) + "): " + why + ". Pick it "
+                     "with Edit > PickPoints on the input layers and give the .pp file (parameter 'Picked points'), the "
+                     "point named " + std::to_string(code) + ".");
   };
   // costovertebral joints: the rib head, the centre of the rib's vertebral end. The heads line up along the
   // spine: its axis (x0, yAxis) is where the ribs' medial-most posterior points lie (their median y); each
@@ -258,7 +293,11 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
   std::map<int, Vec3> cvj;
   for (const auto& [part, pts] : an.rib) {
     if (part < 101 || part > 212) continue;
-    if (!medialMost(pts)) fail("costovertebral joint " + std::to_string(part), "the rib has no part behind the cage's middle");
+    if (!medialMost(pts)) {
+      fail(part, "costovertebral joint of the " + sideName(part / 100) + " rib " + std::to_string(part % 100),
+           "the rib has no part behind the cage's middle");
+      continue;
+    }
     const Vec3* tip = nullptr;
     auto toAxis = [&](const Vec3& p) { return std::hypot(p.x() - x0, p.y() - yAxis); };
     for (const auto& p : pts)
@@ -270,7 +309,8 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
     lms.push_back({part, cvj[part]});
   }
   // sternum ends
-  if (an.sternum.empty()) fail("lower end of the sternum", "the joined cage has no sternum faces");
+  if (an.sternum.empty())  // every other landmark is placed from the sternum: no picked point stands for it
+    throw InputError("Cannot place the landmarks: the joined cage has no sternum faces. Check the sternum's layer.");
   double zLo = 1e300, zHi = -1e300;
   for (const auto& p : an.sternum) zLo = std::min(zLo, p.z()), zHi = std::max(zHi, p.z());
   std::vector<Vec3> lo, hi;
@@ -305,11 +345,13 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
     const double ap = yf - spineFront(z, m);
     if (ap < bestAp) bestAp = ap, zDeep = z, yDeep = yf;
   }
-  if (bestAp > 1e299) fail("deepest point of the funnel", "the sternum has no midline front surface");
-  lms.push_back({kFunnelDeepest, Vec3(x0, yDeep, zDeep)});
+  const bool deepFound = bestAp < 1e299;
+  if (!deepFound) fail(kFunnelDeepest, "deepest point of the funnel", "the sternum has no front surface near its midline");
+  else lms.push_back({kFunnelDeepest, Vec3(x0, yDeep, zDeep)});
   bool spineMeasured = false;
   const double ySpine = spineFront(zDeep, spineMeasured);
-  if (spineMeasured) lms.push_back({kVertebraAtDeepest, Vec3(x0, ySpine, zDeep)});
+  if (spineMeasured && deepFound) lms.push_back({kVertebraAtDeepest, Vec3(x0, ySpine, zDeep)});
+  else if (!deepFound) log.push_back("landmark 503 (vertebra at the deepest level) not placed: the deepest point is the user's");
   else log.push_back("no vertebral column in the input: landmark 503 (vertebra at the deepest level) not placed; the pectus "
                      "index then measures to the costovertebral joints' line");
   // bar exits at the mid-axillary line: halfway between the lateral-most points of ribs s and s+1
@@ -343,13 +385,14 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
   for (int side = 1; side <= 2; ++side)
     if (const auto it = an.rib.find(100 * side + 1); it != an.rib.end())
       for (const auto& p : it->second) zApex = std::max(zApex, p.z());
-  if (zApex < -1e299) fail("lung apex", "there is no first rib");
+  if (zApex < -1e299) fail(kLungApex, "lung apex", "there is no first rib");
   bool m = false;
   lms.push_back({kDiaphragmDome, Vec3(x0, 0.5 * (lower.y() + spineFront(zDome, m)), zDome)});
-  lms.push_back({kLungApex, Vec3(x0, 0.5 * (upper.y() + spineFront(zApex, m)), zApex)});
+  if (zApex > -1e299) lms.push_back({kLungApex, Vec3(x0, 0.5 * (upper.y() + spineFront(zApex, m)), zApex)});
   log.push_back("landmarks: " + std::to_string(cvj.size()) + " costovertebral joints, sternum ends at " + at(lower) + " and " +
-                at(upper) + ", deepest point at " + at(Vec3(x0, yDeep, zDeep)) + ", " + std::to_string(exits) +
-                " bar exits, diaphragm dome z " + mm(zDome) + ", lung apex z " + mm(zApex) + " (before centring)");
+                at(upper) + ", deepest point " + (deepFound ? "at " + at(Vec3(x0, yDeep, zDeep)) : std::string("the user's")) + ", " +
+                std::to_string(exits) + " bar exits, diaphragm dome z " + mm(zDome) + ", lung apex z " +
+                (zApex > -1e299 ? mm(zApex) : std::string("the user's")) + " (before centring)");
   return lms;
 }
 
@@ -421,7 +464,7 @@ class Preparation {
     if (!(opt.minVolume >= 0) || !(opt.alpha > 0) || !(opt.offset > 0) || !(opt.edgeLength >= 0))
       throw InputError("parameters: the minimum volume and edge length must be >= 0, alpha and offset > 0");
   }
-  void classify(const std::vector<InputLayer>& layers);  ///< 1. each layer's kind from its name
+  void classify(const std::vector<InputLayer>& layers);  ///< 1. each layer's kind from its name, else its shape
   void toMillimetres();                                  ///< 2. the units
   void orient();                                         ///< 3. the anatomical frame's axes
   void separate();                                       ///< 4. the spine cut, fragments and what is not cage
@@ -434,6 +477,8 @@ class Preparation {
 
  private:
   void prog(int pc, const char* what) const { if (progress_) progress_(pc, what); }
+  void classifyUnknownByShape(std::vector<Structure>& unknown);  ///< 1, for the layers whose names say nothing
+  void checkTheCage(std::size_t layers) const;  ///< 1, finished: a sternum, cartilage and ribs are there
   Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
 
   const PrepareOptions& opt;
@@ -451,7 +496,7 @@ class Preparation {
 
 void Preparation::classify(const std::vector<InputLayer>& layers) {
   prog(2, "classifying the layers");
-  std::vector<std::string> unknown;
+  std::vector<Structure> unknown;
   for (const auto& l : layers) {
     Structure s{l.name, classifyName(l.name), soupOf(*l.mesh)};
     if (s.soup.empty()) {
@@ -463,17 +508,45 @@ void Preparation::classify(const std::vector<InputLayer>& layers) {
       ++res.dropped;
       continue;
     }
-    if (s.cls.kind == Kind::Unknown) {
-      unknown.push_back(l.name);
+    weld(s.soup);
+    (s.cls.kind == Kind::Unknown ? unknown : all).push_back(std::move(s));
+  }
+  if (!unknown.empty()) classifyUnknownByShape(unknown);
+  checkTheCage(layers.size());
+  for (const auto& s : all)
+    log.push_back("'" + s.name + "': " +
+                  (s.cls.kind == Kind::Rib ? (s.cls.number ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number)
+                                                           : std::string("rib (side and number from its place)"))
+                   : s.cls.kind == Kind::Cartilage ? std::string("costal cartilage")
+                   : s.cls.kind == Kind::Sternum ? std::string("sternum")
+                   : s.cls.kind == Kind::Vertebra ? std::string("vertebral column (support, not in the model)")
+                                                  : std::string("bone (ribs, maybe fused to the spine)")) +
+                  ", " + std::to_string(s.soup.F.size()) + " faces");
+}
+
+void Preparation::classifyUnknownByShape(std::vector<Structure>& unknown) {
+  std::vector<LayerToClassify> in;
+  for (const auto& s : all) in.push_back({s.name, &s.soup, s.cls});
+  for (const auto& s : unknown) in.push_back({s.name, &s.soup, s.cls});
+  log.push_back(std::to_string(unknown.size()) + " layer" + (unknown.size() > 1 ? "s" : "") + " named like no rib cage "
+                "structure: classified by their shape");
+  const auto cls = classifyByShape(in, log);
+  const std::size_t named = all.size();
+  for (std::size_t i = 0; i < unknown.size(); ++i) {
+    const NameClass& c = cls[named + i];
+    if (c.kind == Kind::NotCage || c.kind == Kind::Unknown) {
+      ++res.dropped;
       continue;
     }
-    weld(s.soup);
-    all.push_back(std::move(s));
+    unknown[i].cls = {c.kind, 0, 0};  // side and number of a rib come from its place (numberRibs)
+    all.push_back(std::move(unknown[i]));
   }
-  for (const auto& n : unknown) log.push_back("'" + n + "': the name says no rib cage structure, left out (rename it to include it)");
+}
+
+void Preparation::checkTheCage(std::size_t layers) const {
   auto count = [&](Kind k) { return std::count_if(all.begin(), all.end(), [&](const Structure& s) { return s.cls.kind == k; }); };
   if (all.empty())
-    throw InputError("None of the " + std::to_string(layers.size()) + " layers is named like a rib cage structure: name them "
+    throw InputError("None of the " + std::to_string(layers) + " layers is named like a rib cage structure: name them "
                      "as TotalSegmentator does ('rib_left_1' ... 'rib_right_12', 'costal_cartilages', 'sternum', "
                      "'vertebrae_T1' ...) or 'bone', 'cartilage', 'sternum'.");
   if (!count(Kind::Sternum))
@@ -484,14 +557,6 @@ void Preparation::classify(const std::vector<InputLayer>& layers) {
                      "cartilages join the ribs to the sternum; segment them (TotalSegmentator's 'costal_cartilages').");
   if (!count(Kind::Rib) && !count(Kind::Bone))
     throw InputError("No ribs: none of the layers is named like 'rib_left_1', 'ribs' or 'bone'.");
-  for (const auto& s : all)
-    log.push_back("'" + s.name + "': " +
-                  (s.cls.kind == Kind::Rib ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number)
-                   : s.cls.kind == Kind::Cartilage ? std::string("costal cartilage")
-                   : s.cls.kind == Kind::Sternum ? std::string("sternum")
-                   : s.cls.kind == Kind::Vertebra ? std::string("vertebral column (support, not in the model)")
-                                                  : std::string("bone (ribs, maybe fused to the spine)")) +
-                  ", " + std::to_string(s.soup.F.size()) + " faces");
 }
 
 void Preparation::toMillimetres() {
@@ -545,17 +610,18 @@ void Preparation::separate() {
   for (std::size_t i = 0; i < all.size(); ++i)
     if (all[i].cls.kind == Kind::Cartilage && (touches(all[i].soup) || !defects(all[i].soup).empty())) toWrap.push_back(i);
   std::vector<Soup> wraps(toWrap.size());
-  std::vector<std::string> wrapErrors(toWrap.size());
+  std::vector<std::exception_ptr> wrapErrors(toWrap.size());
 #pragma omp parallel for schedule(dynamic)
   for (int k = 0; k < int(toWrap.size()); ++k) {
+    const Structure& c = all[toWrap[std::size_t(k)]];
     try {
-      wraps[std::size_t(k)] = alphaWrap(all[toWrap[std::size_t(k)]].soup, opt.alpha, opt.offset);
-    } catch (const std::exception& e) {
-      wrapErrors[std::size_t(k)] = e.what();
+      wraps[std::size_t(k)] = wrapOf(c.name, c.soup, opt);
+    } catch (...) {
+      wrapErrors[std::size_t(k)] = std::current_exception();
     }
   }
-  for (std::size_t k = 0; k < toWrap.size(); ++k)
-    if (!wrapErrors[k].empty()) throw InputError("'" + all[toWrap[k]].name + "' could not be wrapped: " + wrapErrors[k]);
+  for (const auto& e : wrapErrors)
+    if (e) std::rethrow_exception(e);
   for (auto& s : all) {
     if (s.cls.kind == Kind::Vertebra) {
       spine.insert(spine.end(), s.soup.V.begin(), s.soup.V.end());
@@ -748,11 +814,7 @@ void Preparation::repair() {
     if (!repaired.empty()) log.push_back(label + ": " + repaired + ", " + mm(volume(s.soup) / 1000, 2) + " cm3");
     if (!why.empty()) {
       const double v0 = volume(s.soup);
-      Soup w = alphaWrap(s.soup, opt.alpha, opt.offset);
-      const std::string still = defects(w);
-      if (!still.empty())
-        throw InputError("Alpha wrapping cannot close '" + s.name + "' at detail " + mm(opt.alpha, 2) + " mm (the result is " +
-                         still + "): raise 'Wrap detail (alpha)' or check the structure.");
+      Soup w = wrapOf(s.cls.kind == Kind::Rib ? label : s.name, s.soup, opt);
       const double v1 = volume(w);
       log.push_back(label + ": " + why + ": wrapped, " + mm(v0 / 1000, 2) + " -> " + mm(v1 / 1000, 2) + " cm3 (" +
                     (v1 >= v0 ? "+" : "") + mm(100 * (v1 - v0) / std::max(v0, 1e-9), 1) + " %)");
@@ -811,7 +873,9 @@ void Preparation::placeAndCentre(CMeshO& cage) {
   prog(90, "landmarks");
   Anatomy an = anatomyOf(cage);
   an.spine = spine;
-  auto lms = placeLandmarks(an, x0, yMid, log);
+  std::set<int> given;
+  for (const auto& u : opt.userLandmarks) given.insert(u.code);
+  auto lms = placeLandmarks(an, x0, yMid, given, log);
   double ySpine = 0, zLow = 1e300;
   std::map<int, double> zBySide[3];
   {

@@ -5,7 +5,14 @@
 // The steps, in order (each one Logged):
 //  1. classify every layer by its name (TotalSegmentator's, 3D Slicer's, or generic names): rib (side
 //     and number), costal cartilage, sternum, vertebra, other bone (may hold ribs fused to the spine),
-//     or not rib cage (scapula, clavicle, humerus, organs: left out);
+//     or not rib cage (scapula, clavicle, humerus, organs: left out); layers whose names say nothing
+//     ('Segment_1', ...) by their shape and place among the others, in the input's own frame and units
+//     (shape_classify.h): many long pieces or one piece as wide as the cage -> bone; many small bars ->
+//     cartilage; the elongated one-piece layer nearest the cartilages -> sternum; then, in the axes the
+//     sternum gives, compact midline blocks behind the centre -> vertebrae, thin elongated pieces beside
+//     the midline reaching behind the centre -> ribs (side and number from step 5), plates behind and
+//     beside -> scapulae (left out), the rest left out; no cartilage or sternum by name or shape, or two
+//     equally good sternums: refused, asking to rename the layers;
 //  2. units: metres or centimetres are detected from the size of the whole and scaled to mm;
 //  3. the anatomical frame: anterior from the bone's centre to the sternum, the long axis along the
 //     sternum, snapped to the file's axes when within 30 degrees (CT exports are axis-aligned), superior
@@ -16,13 +23,17 @@
 //  5. ribs are numbered per side from the top by the height of their vertebral end (or from their names);
 //  6. each structure that is not a closed, 2-manifold, self-intersection-free surface gets the least repair
 //     that makes it one: duplicate faces removed, holes closed, else wrapped (CGAL alpha_wrap_3: detail
-//     alpha, offset), with its volume change reported; clean ones are kept. The costal cartilages are always
+//     alpha, offset), with its volume change reported; clean ones are kept. A wrap that is not closed and
+//     manifold, or holds more than twice the structure grown by the offset (the detail bridges its gaps),
+//     is refused naming the structure and the detail to change. The costal cartilages are always
 //     wrapped (before the fragments are counted): a segmentation's labels only touch, and the small offset
 //     makes each cartilage overlap the bone it joins, which the union needs; the wrap also reconnects the
 //     strips a voxel surface splits where voxels meet at an edge or a corner;
 //  7. the structures are joined (corefinement union: joinTissueLayers) into one surface with tissue and
-//     part per face, the union's specks and voids (closed shells under the minimum volume) removed, then decimated to the target edge length (kept embedded) and relabelled;
-//  8. landmarks (labels.h codes) are placed from the anatomy; user points override them.
+//     part per face, the union's specks and voids (closed shells under the minimum volume) removed, then
+//     decimated to the target edge length (kept embedded) and relabelled;
+//  8. landmarks (labels.h codes) are placed from the anatomy; user points override them. A landmark that
+//     cannot be placed is refused naming it and its code (pick it: .pp file), unless the user gives it.
 // The result is in the project frame (labels.h): mm, +x patient's left, +y anterior, +z superior, x = 0 on
 // the sternum's midline, y = 0 at the vertebral bodies' anterior surface (else at the costovertebral
 // joints), z = 0 half a rib level below the lowest costovertebral joint.
@@ -84,8 +95,9 @@ struct PrepareResult {
 };
 
 /// Builds the labelled cage into `cage` (cleared first; face labels by writeFaceLabels). Throws InputError
-/// naming what to fix: no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised,
-/// a frame that cannot be found, a structure alpha wrapping cannot close, a landmark that cannot be placed.
+/// naming what to fix: no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised by
+/// name or shape (rename the layers), a frame that cannot be found, a structure alpha wrapping cannot close
+/// or follow at the requested detail, a landmark that cannot be placed and is not given.
 PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
                                  const std::function<void(int, const char*)>& progress = {});
 

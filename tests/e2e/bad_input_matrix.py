@@ -169,6 +169,12 @@ FILTERS = {
     "pectus_index": dict(mlx="filter_thoracic_volume/examples/pectus_index.mlx", base="closed", layout="thoracic",
                          set=dict(compare=False, levelSource=1, zLow=-50.0, zHigh=50.0, rays=90),
                          kinds=CLOSED_KINDS + ["no_landmarks"], group="pectus_index"),
+    # the patient filters: the input is the file 'path' names (import), or the only layer (prepare: one blob
+    # that neither its name nor its shape makes a rib cage of)
+    "import_ct": dict(mlx="filter_nuss_fea/examples/import_ct_segmentation.mlx", base="closed", layout="import",
+                      kinds=CLOSED_KINDS, group="patient"),
+    "prepare": dict(mlx="filter_nuss_fea/examples/prepare_patient_rib_cage.mlx", index=1, base="closed",
+                    kinds=CLOSED_KINDS, group="patient"),
 }
 # one ctest per group; a filter with split=True has its parameter cells in a second group <group>_params
 GROUPS = sorted({f["group"] for f in FILTERS.values()} | {f["group"] + "_params" for f in FILTERS.values() if f.get("split")})
@@ -299,6 +305,8 @@ class Runner:
             if kind == "no_landmarks":
                 over["levelSource" if key == "pectus_index" else "rangeSource"] = 0
             return [bad], 0, over
+        if lay == "import":  # the bad file is read from 'path'; a valid layer is loaded beside it, left alone
+            return [self.input_file(spec["base"], "valid")], 0, dict(path=bad)
         if lay == "save":
             return [bad], 0, dict(fileName=mlx.SaveFile(os.path.join(self.dir, "saved_polygonal.obj"), ".obj"))
         return [bad], 0, {}
@@ -403,8 +411,11 @@ without the filter).
 
 Inputs are made from a valid mesh of the filter's kind: a 6x6 saddle (open surface, 50 triangles) for the
 surface filters, a closed ellipsoid (288 triangles) for the thoracic volume filters, the generated rib
-cage (edge 8 mm, with tissue labels and its landmark layer) for the Nuss FE analysis. Parameter rows change
-one numeric parameter of the filter's example script (`filter_*/examples/*.mlx`) on the valid input.
+cage (edge 8 mm, with tissue labels and its landmark layer) for the Nuss FE analysis. The patient filters
+take the ellipsoid too: *Import CT Segmentation* reads it as the file its `path` names (a valid layer is
+loaded beside it and must stay unchanged), *Prepare Patient Rib Cage* as its only layer, a blob that neither
+its name nor its shape makes a rib cage of. Parameter rows change one numeric parameter of the filter's
+example script (`filter_*/examples/*.mlx`) on the valid input.
 
 Legend: **E** error (meshlabserver exit code 255, the message below in the Log and the error), **V** valid
 result (exit code 0, finite output; what the filter does with that input is documented by the message-less

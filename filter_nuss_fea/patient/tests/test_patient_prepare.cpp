@@ -3,12 +3,18 @@
 // numbered, labelled and landmarked like the generator's.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <memory>
+
+#include <vcg/complex/algorithms/create/platonic.h>
 
 #include "pectus/errors.h"
 #include "prepare.h"
 #include "ribcage.h"
+#include "soup.h"
+#include "temp_dir.h"
 
 using namespace pectus;
 using namespace pectus::patient;
@@ -43,6 +49,27 @@ const Landmark* find(const std::vector<Landmark>& l, int code) {
     if (x.code == code) return &x;
   return nullptr;
 }
+bool logHas(const PrepareResult& r, const std::string& words) {
+  return std::any_of(r.log.begin(), r.log.end(), [&](const std::string& l) { return l.find(words) != std::string::npos; });
+}
+// the connected pieces of m, one mesh each
+std::vector<std::unique_ptr<OwnedMesh>> piecesOf(const CMeshO& m) {
+  Soup s = soupOf(m);
+  weld(s);
+  std::vector<std::unique_ptr<OwnedMesh>> out;
+  for (const auto& p : components(s)) {
+    out.push_back(std::make_unique<OwnedMesh>());
+    toMesh(p, *out.back());
+  }
+  return out;
+}
+// the layers mapped into a scanner frame: RAS, mm, an offset origin
+void toScanner(std::array<OwnedMesh, 3>& m) {
+  const auto& e = exported();
+  const Eigen::Matrix3d M = Eigen::Vector3d(-1, 1, 1).asDiagonal();
+  for (int k = 0; k < 3; ++k) mapInto(e.layers[std::size_t(k)], m[std::size_t(k)], M, Eigen::Vector3d(120, -35, 800));
+}
+using pectus::patient::testing::errorOf;
 }  // namespace
 
 TEST(PatientNames, TotalSegmentatorSlicerAndGenericNames) {
@@ -128,7 +155,8 @@ TEST(PatientPrepare, RefusesWithoutSternumCartilageOrOneSide) {
   };
   expectError({{"ribs", &m[0]}, {"costal cartilage", &m[1]}}, "No sternum");
   expectError({{"ribs", &m[0]}, {"sternum", &m[2]}}, "No costal cartilage");
-  expectError({{"Segment_1", &m[0]}, {"Segment_2", &m[1]}}, "None of the 2 layers");
+  // no sternum by name, and none by shape: the ribs and the cartilages alone
+  expectError({{"Segment_1", &m[0]}, {"Segment_2", &m[1]}}, "Rename the layers");
   // a 'sternum' at the centre of the bone: no anterior direction
   expectError({{"ribs", &m[0]}, {"costal cartilage", &m[1]}, {"sternum", &m[0]}}, "Cannot find the anatomical frame");
   // the right ribs only: drop every face on the left
@@ -154,4 +182,111 @@ TEST(PatientPrepare, PickedPointsFile) {
   EXPECT_DOUBLE_EQ(p[0].p.x(), 1.5);
   EXPECT_EQ(skipped, 2);
   EXPECT_THROW(readPickedPoints(::testing::TempDir() + "/none.pp"), InputError);
+}
+
+// The generator's layers named as a 3D Slicer export names segments ('Segment_1', ...), the ribs one layer each
+// (as TotalSegmentator's labels give them): classified by their shape, numbered by their place, and prepared to
+// the cage the names give.
+TEST(PatientPrepare, UnnamedLayersClassifiedByShape) {
+  std::array<OwnedMesh, 3> m;
+  toScanner(m);
+  PrepareOptions o;
+  o.edgeLength = 3.0;
+  OwnedMesh named, unnamed;
+  const auto r0 = preparePatientCage(inputs(m), o, named);
+  const auto ribs = piecesOf(m[0]);
+  ASSERT_EQ(ribs.size(), 24u);
+  // the order of a segmentation's segments says nothing: cartilage first, the sternum among the ribs
+  std::vector<InputLayer> in{{"Segment_1", &m[1]}};
+  for (std::size_t k = 0; k < ribs.size(); ++k) {
+    if (k == 9) in.push_back({"Segment_" + std::to_string(in.size() + 1), &m[2]});
+    in.push_back({"Segment_" + std::to_string(in.size() + 1), ribs[k].get()});
+  }
+  const auto r1 = preparePatientCage(in, o, unnamed);
+  for (const auto& l : r1.log)
+    if (l.find("by its shape") != std::string::npos) std::printf("  %s\n", l.c_str());
+  EXPECT_TRUE(logHas(r1, "'Segment_1': costal cartilage (by its shape"));
+  EXPECT_TRUE(logHas(r1, "'Segment_11': sternum (by its shape"));
+  EXPECT_TRUE(logHas(r1, "'Segment_2': rib (by its shape"));
+  EXPECT_EQ(r1.ribsRight, 12);
+  EXPECT_EQ(r1.ribsLeft, 12);
+  double worst = 0;
+  for (int side = 1; side <= 2; ++side)
+    for (int rib = 1; rib <= 12; ++rib) {
+      const Landmark* a = find(r0.landmarks, cvjLandmark(side, rib));
+      const Landmark* b = find(r1.landmarks, cvjLandmark(side, rib));
+      ASSERT_TRUE(a && b) << "joint " << cvjLandmark(side, rib);
+      worst = std::max(worst, (b->p - a->p).norm());
+    }
+  std::printf("  costovertebral joints, by shape vs by name: at most %.3f mm apart\n", worst);
+  EXPECT_LT(worst, 2.0);
+  for (int code : {kSternumLowerEnd, kFunnelDeepest}) {
+    const Landmark* a = find(r0.landmarks, code);
+    const Landmark* b = find(r1.landmarks, code);
+    ASSERT_TRUE(a && b) << code;
+    EXPECT_LT((b->p - a->p).norm(), 2.0) << code;
+  }
+}
+
+// Layers whose names say nothing and whose shapes settle nothing are refused with what to rename: two blobs,
+// and the generator's layers with two equally good sternums.
+TEST(PatientPrepare, RefusesShapesThatSettleNothing) {
+  OwnedMesh sphere, box;
+  vcg::tri::Sphere(sphere, 3);
+  vcg::tri::Box(box, vcg::Box3<CMeshO::ScalarType>(Point3m(-20, -30, -40), Point3m(60, 50, 40)));
+  for (auto& v : sphere.vert) v.P() = v.P() * 50.0f;
+  OwnedMesh cage;
+  const std::string blobs = errorOf([&] { preparePatientCage({{"Segment_1", &sphere}, {"Segment_2", &box}}, {}, cage); });
+  EXPECT_NE(blobs.find("Cannot tell the rib cage's structures from the shapes"), std::string::npos) << blobs;
+  EXPECT_NE(blobs.find("'Segment_1', 'Segment_2'"), std::string::npos) << blobs;
+  EXPECT_NE(blobs.find("costal cartilages"), std::string::npos) << blobs;
+  EXPECT_NE(blobs.find("Rename the layers: 'sternum', 'costal_cartilages'"), std::string::npos) << blobs;
+
+  std::array<OwnedMesh, 3> m;
+  toScanner(m);
+  const std::string twice = errorOf([&] {
+    preparePatientCage({{"Segment_1", &m[0]}, {"Segment_2", &m[1]}, {"Segment_3", &m[2]}, {"Segment_4", &m[2]}}, {}, cage);
+  });
+  EXPECT_NE(twice.find("'Segment_3' and 'Segment_4' are equally good sternums"), std::string::npos) << twice;
+  EXPECT_NE(twice.find("Rename the layers"), std::string::npos) << twice;
+}
+
+// A wrap detail coarser than the structure bridges the costal cartilages' gaps: refused, naming the structure
+// and the detail to lower.
+TEST(PatientPrepare, RefusesAWrapThatBridgesTheStructure) {
+  std::array<OwnedMesh, 3> m;
+  toScanner(m);
+  PrepareOptions o;
+  o.wrapAll = true;  // the generator's structures are clean: only then wrapped
+  o.alpha = 20;
+  OwnedMesh cage;
+  const std::string msg = errorOf([&] { preparePatientCage(inputs(m), o, cage); });
+  EXPECT_NE(msg.find("Alpha wrapping cannot follow 'costal cartilage' at detail 20.00 mm"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("Lower 'Wrap detail (alpha)'"), std::string::npos) << msg;
+}
+
+// A sternum split down its midline (the halves 30 mm apart, joined by their stretched faces) has no midline
+// front surface: the deepest point of the funnel cannot be placed, and the message says to pick it. A picked
+// point then stands for it.
+TEST(PatientPrepare, RefusesALandmarkThatCannotBePlacedUnlessPicked) {
+  const auto& e = exported();
+  std::array<OwnedMesh, 3> m;
+  for (int k = 0; k < 3; ++k) mapInto(e.layers[std::size_t(k)], m[std::size_t(k)], Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  for (auto& v : m[2].vert) v.P()[0] += v.P()[0] >= 0 ? 15.0f : -15.0f;
+  PrepareOptions o;
+  o.edgeLength = 0;
+  OwnedMesh cage;
+  const std::string msg = errorOf([&] { preparePatientCage(inputs(m), o, cage); });
+  EXPECT_NE(msg.find("Cannot place the landmark 'deepest point of the funnel' (code 501)"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("Edit > PickPoints"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("the point named 501"), std::string::npos) << msg;
+
+  const Landmark* deep = find(e.truth, kFunnelDeepest);
+  ASSERT_TRUE(deep);
+  o.userLandmarks = {{kFunnelDeepest, deep->p}};
+  const auto r = preparePatientCage(inputs(m), o, cage);
+  EXPECT_TRUE(logHas(r, "landmark 501 (deepest point of the funnel) cannot be placed automatically"));
+  const Landmark* got = find(r.landmarks, kFunnelDeepest);
+  ASSERT_TRUE(got);
+  EXPECT_LT((got->p - (r.inputToModel * deep->p.homogeneous()).head<3>()).norm(), 1e-6);
 }
