@@ -39,8 +39,10 @@ def main() -> int:
     ap.add_argument("out", help="folder for the results")
     ap.add_argument("--elevation", type=float, default=44.7, help="measured rise of the lower sternum end (mm)")
     ap.add_argument("--order", type=int, choices=(1, 2), default=2, help="1: TET4, 2: TET10 (default)")
-    ap.add_argument("--analysis", choices=("large", "small"), default="large", help="large displacement or small strain")
-    ap.add_argument("--edge", type=float, default=2.0, help="edge length of the prepared cage (mm)")
+    ap.add_argument("--analysis", choices=("large", "small"), default="small",
+                    help="small strain (default) or large displacement (its Newton solve may stop short on a "
+                         "prepared cage: the Log says at which force)")
+    ap.add_argument("--edge", type=float, default=4.0, help="edge length of the prepared cage (mm)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     cage, lms = os.path.join(a.out, "cage.ply"), os.path.join(a.out, "cage_landmarks.ply")

@@ -53,7 +53,7 @@ PREPARE_FRAME = ["Automatic (from the anatomy)", "RAS (x right, y anterior, z su
 def prepare_patient_rib_cage(**kw) -> Filter:
     return _build("Prepare Patient Rib Cage", {
         "units": (Enum, 0, PREPARE_UNITS), "frame": (Enum, 0, PREPARE_FRAME), "minVolume": (Float, 200.0),
-        "alpha": (Float, 0.5), "offset": (Float, 0.03), "edgeLength": (Float, 2.0), "wrapAll": (Bool, False),
+        "alpha": (Float, 0.5), "offset": (Float, 0.03), "edgeLength": (Float, 4.0), "wrapAll": (Bool, False),
         "pickedPoints": (String, "")}, dict(kw))
 
 

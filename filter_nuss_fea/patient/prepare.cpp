@@ -492,6 +492,7 @@ class Preparation {
   double x0 = 0, yMid = 0;      // the sternum's midline; halfway between the back of the cage and the sternum
   Soup bone, cartilage, sternum;
   std::vector<int> bonePart;    // per face of `bone`: its rib's part id
+  OwnedMesh joined;             // the labelled union before decimation
 };
 
 void Preparation::classify(const std::vector<InputLayer>& layers) {
@@ -834,7 +835,7 @@ void Preparation::repair() {
 
 void Preparation::join(CMeshO& cage) {
   prog(60, "joining the tissues");
-  OwnedMesh boneM, cartM, sternM, joined;
+  OwnedMesh boneM, cartM, sternM;
   toMesh(bone, boneM);
   writeFaceLabels(boneM, std::vector<int>(bone.F.size(), int(Tissue::Bone)), bonePart);
   toMesh(cartilage, cartM);
@@ -871,7 +872,7 @@ void Preparation::join(CMeshO& cage) {
 
 void Preparation::placeAndCentre(CMeshO& cage) {
   prog(90, "landmarks");
-  Anatomy an = anatomyOf(cage);
+  Anatomy an = anatomyOf(joined);  // the full-detail surface: the landmarks do not depend on the edge length
   an.spine = spine;
   std::set<int> given;
   for (const auto& u : opt.userLandmarks) given.insert(u.code);
