@@ -220,6 +220,10 @@ void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
 namespace {
 QStringList orders() { return QStringList() << "Quadratic TET10 (no locking)" << "Linear TET4 (thesis, ANSYS SOLID185)"; }
 QStringList analyses() { return QStringList() << "Large displacement (nonlinear)" << "Small strain (linear)"; }
+QStringList materials() {
+  return QStringList() << "St Venant-Kirchhoff" << "Neo-Hookean (FEBio)" << "Neo-Hookean (CalculiX hyperelastic)";
+}
+QStringList calibrations() { return QStringList() << "Force search" << "Displacement control"; }
 QStringList modes() { return QStringList() << "Calibrate Fe to the target elevation" << "Given elevating force"; }
 QStringList fields() { return QStringList() << "von Mises stress (MPa)" << "Equivalent strain"; }
 QStringList sides() { return QStringList() << "Right" << "Left"; }
@@ -242,11 +246,26 @@ void addCalibrationParams(RichParameterList& par) {
   par.addParam(RichFloat("maxForce", 1000.0f, "Maximum force (N)",
                          "Calibration gives up (with a message) if this force does not reach the target."));
   par.addParam(RichFloat("tolerance", 0.1f, "Calibration tolerance (mm)", "|simulated - target elevation| allowed."));
+  par.addParam(RichEnum("calibration", 0, calibrations(), "Calibration method",
+                        "Force search: solves for trial forces until the elevation is within the tolerance (each a whole "
+                        "load path in large displacement). Displacement control: one large-displacement solve that "
+                        "prescribes the elevation and reads the force (the same result, fewer solves)."));
 }
 void addModelParams(RichParameterList& par) {
   par.addParam(RichEnum("analysis", 0, analyses(), "Analysis",
-                        "Large displacement: total Lagrangian St Venant-Kirchhoff, Newton-Raphson with load increments "
+                        "Large displacement: total Lagrangian (the material below), Newton-Raphson with load increments "
                         "(the thesis used ANSYS' large-displacement static solver). Small strain: linear elasticity."));
+  par.addParam(RichEnum("material", 0, materials(), "Material (large displacement)",
+                        "Every tissue's model in the large-displacement analysis (same E and nu; small strain is "
+                        "linear elasticity whatever this says). St Venant-Kirchhoff lets a strongly compressed tet "
+                        "invert; neo-Hookean resists it (its energy grows without bound as the volume goes to zero) "
+                        "and lets a child's cage reach the elevation."));
+  par.addParam(RichBool("lineSearch", false, "Newton line search",
+                        "Large displacement: scale each Newton correction so that the residual falls (fewer failing "
+                        "increments on a soft cartilage)."));
+  par.addParam(RichBool("adaptiveSteps", false, "Adaptive load steps",
+                        "Large displacement: grow the load increment where Newton converges fast and halve it where it "
+                        "does not (the curve's stops are still hit exactly)."));
   par.addParam(RichEnum("order", 0, orders(), "Element",
                         "TET10: quadratic tetrahedra (accurate on thin ribs). TET4: linear, as the thesis' SOLID185; "
                         "stiffer (locking) on a coarse mesh, so the calibrated force is higher."));
@@ -281,9 +300,17 @@ void readCalibrationParams(FilterContext& ctx, pectus::nuss::Options& o, bool ca
   o.targetElevation = calibrate ? ctx.floatIn("targetElevation", 0, 300, true) : 0.0;
   o.maxForce = ctx.floatIn("maxForce", 0, 1e6, true);
   o.tolerance = ctx.floatIn("tolerance", 0, 50, true);
+  o.calibration = ctx.enumIn("calibration", 2) == 0 ? pectus::nuss::CalibrationMethod::ForceSearch
+                                                    : pectus::nuss::CalibrationMethod::DisplacementControl;
 }
 void readModelParams(FilterContext& ctx, pectus::nuss::Options& o) {
   o.nonlinear = ctx.enumIn("analysis", 2) == 0;
+  constexpr pectus::fe::MaterialModel kMaterials[] = {pectus::fe::MaterialModel::StVenantKirchhoff,
+                                                      pectus::fe::MaterialModel::NeoHookean,
+                                                      pectus::fe::MaterialModel::NeoHookeanDecoupled};
+  o.material = kMaterials[ctx.enumIn("material", 3)];
+  o.newton.lineSearch = ctx.boolean("lineSearch");
+  o.newton.adaptiveSteps = ctx.boolean("adaptiveSteps");
   o.mesh.order = ctx.enumIn("order", 2) == 0 ? 2 : 1;
   o.mesh.radiusEdgeRatio = ctx.floatIn("tetQuality", 0, 100);
   if (o.mesh.radiusEdgeRatio > 0 && o.mesh.radiusEdgeRatio < 1.2)

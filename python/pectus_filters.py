@@ -61,13 +61,17 @@ NUSS_INPUT = ["Current layer (one labelled surface)", "One layer per tissue (vis
 NUSS_MODE = ["Calibrate Fe to the target elevation", "Given elevating force"]
 NUSS_ANALYSIS = ["Large displacement (nonlinear)", "Small strain (linear)"]
 NUSS_ORDER = ["Quadratic TET10 (no locking)", "Linear TET4 (thesis, ANSYS SOLID185)"]
+NUSS_MATERIAL = ["St Venant-Kirchhoff", "Neo-Hookean (FEBio)", "Neo-Hookean (CalculiX hyperelastic)"]
+NUSS_CALIBRATION_METHOD = ["Force search", "Displacement control"]
 NUSS_FIELD = ["von Mises stress (MPa)", "Equivalent strain"]
 SIDES = ["Right", "Left"]
 
 
 # parameter groups the FE filter and the bar planner share (as in filter_nuss_fea.cpp)
-NUSS_CALIBRATION = {"targetElevation": (Float, 44.7), "maxForce": (Float, 1000.0), "tolerance": (Float, 0.1)}
-NUSS_MODEL = {"analysis": (Enum, 0, NUSS_ANALYSIS), "order": (Enum, 0, NUSS_ORDER), "tetQuality": (Float, 2.0),
+NUSS_CALIBRATION = {"targetElevation": (Float, 44.7), "maxForce": (Float, 1000.0), "tolerance": (Float, 0.1),
+                    "calibration": (Enum, 0, NUSS_CALIBRATION_METHOD)}
+NUSS_MODEL = {"analysis": (Enum, 0, NUSS_ANALYSIS), "material": (Enum, 0, NUSS_MATERIAL), "lineSearch": (Bool, False),
+              "adaptiveSteps": (Bool, False), "order": (Enum, 0, NUSS_ORDER), "tetQuality": (Float, 2.0),
               "maxTetVolume": (Float, 0.0), "nuBone": (Float, 0.3), "nuCartilage": (Float, 0.4)}
 NUSS_PATCHES = {"jointRadius": (Float, 6.0), "sternumLoadRadius": (Float, 8.0), "ribSupportRadius": (Float, 6.0)}
 
