@@ -161,7 +161,11 @@ Frame findFrame(const std::vector<Structure>& all, const PrepareOptions& opt, do
 }
 
 // ---------------------------------------------------------------------------------------------------
-// 4. the vertebral column inside a bone layer: the posterior midline bone that runs the whole height.
+// 4. the vertebral column inside a bone layer. Kept as the support (SpineMode::Keep), it reaches this far (mm)
+// along each rib beyond the cut, into the rib's end, so that column and rib overlap
+constexpr double kColumnOverlap = 3.0;
+
+// The column: the posterior midline bone that runs the whole height.
 // Returns the half-width of the cut band around the midline (0: no column found).
 double spineHalfWidth(const Soup& bone, double x0, double yMid) {
   double z0 = 1e300, z1 = -1e300;
@@ -198,6 +202,9 @@ struct Anatomy {
   std::map<int, std::vector<Vec3>> rib;  // part -> bone vertices
   std::vector<Vec3> sternum, cartilage, junction;  // junction: vertices shared by sternum and cartilage faces
   std::vector<Vec3> spine;               // vertebral column points (from vertebra layers or the cut)
+  // the ribs' own surfaces before the join (part -> points), for the costovertebral joints when the column
+  // is kept: in the joined cage the column covers the rib heads (empty: the joints come from `rib`)
+  std::map<int, std::vector<Vec3>> ribBeforeJoin;
 };
 
 Anatomy anatomyOf(const CMeshO& cage) {
@@ -248,14 +255,15 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
       if (p.y() < yMid && (!best || std::abs(p.x() - x0) < std::abs(best->x() - x0))) best = &p;
     return best;
   };
+  const auto& ribs = an.ribBeforeJoin.empty() ? an.rib : an.ribBeforeJoin;
   std::vector<double> medialY;
-  for (const auto& [part, pts] : an.rib)
+  for (const auto& [part, pts] : ribs)
     if (part >= 101 && part <= 212)
       if (const Vec3* m = medialMost(pts)) medialY.push_back(m->y());
   std::nth_element(medialY.begin(), medialY.begin() + long(medialY.size() / 2), medialY.end());
   const double yAxis = medialY.empty() ? yMid : medialY[medialY.size() / 2];
   std::map<int, Vec3> cvj;
-  for (const auto& [part, pts] : an.rib) {
+  for (const auto& [part, pts] : ribs) {
     if (part < 101 || part > 212) continue;
     if (!medialMost(pts)) fail("costovertebral joint " + std::to_string(part), "the rib has no part behind the cage's middle");
     const Vec3* tip = nullptr;
@@ -399,6 +407,7 @@ class Preparation {
  private:
   void prog(int pc, const char* what) const { if (progress_) progress_(pc, what); }
   Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
+  void repairColumn(const Structure& s);     ///< 6. for the column kept as the support, into `column`
 
   const PrepareOptions& opt;
   std::function<void(int, const char*)> progress_;
@@ -411,6 +420,7 @@ class Preparation {
   double x0 = 0, yMid = 0;      // the sternum's midline; halfway between the back of the cage and the sternum
   Soup bone, cartilage, sternum;
   std::vector<int> bonePart;    // per face of `bone`: its rib's part id
+  Soup column;                  // the vertebral column kept as the fixed support (SpineMode::Keep), repaired
 };
 
 void Preparation::classify(const std::vector<InputLayer>& layers) {
@@ -500,28 +510,38 @@ void Preparation::separate() {
   for (auto& s : all) {
     if (s.cls.kind == Kind::Vertebra) {
       spine.insert(spine.end(), s.soup.V.begin(), s.soup.V.end());
+      if (opt.spine == SpineMode::Keep) kept.push_back({s.name, s.cls, s.soup});  // the support, repaired in step 6
       continue;
     }
     double rCut = 0;
     if (s.cls.kind == Kind::Bone) {
       rCut = spineHalfWidth(s.soup, x0, yMid);
       if (rCut > 0) {
-        Soup cut;
+        Soup cut, away;
         int removed = 0;
         for (const auto& f : s.soup.F) {
           const Vec3 c = (s.soup.V[std::size_t(f[0])] + s.soup.V[std::size_t(f[1])] + s.soup.V[std::size_t(f[2])]) / 3.0;
-          if (c.y() < yMid && std::abs(c.x() - x0) < rCut) {
+          const bool behind = c.y() < yMid;
+          if (behind && std::abs(c.x() - x0) < rCut) {
             for (int k = 0; k < 3; ++k) spine.push_back(s.soup.V[std::size_t(f[std::size_t(k)])]);
             ++removed;
           } else {
             cut.F.push_back(f);
           }
+          // the column kept as the support reaches kColumnOverlap mm further along the ribs than the cut, so
+          // that the two solids overlap there (the union then joins them; their cut ends would only touch)
+          if (behind && std::abs(c.x() - x0) < rCut + kColumnOverlap) away.F.push_back(f);
         }
         cut.V = s.soup.V;
         weld(cut);
+        away.V = std::move(s.soup.V);
+        weld(away);
+        const bool keepColumn = opt.spine == SpineMode::Keep;
         log.push_back("'" + s.name + "': vertebral column found (posterior midline, " + mm(2 * rCut) + " mm wide): cut at the "
-                      "costovertebral joints, " + std::to_string(removed) + " faces removed");
+                      "costovertebral joints, " + std::to_string(removed) + " faces removed" +
+                      (keepColumn ? "; the column is kept as the fixed support" : ""));
         s.soup = std::move(cut);
+        if (keepColumn) kept.push_back({s.name + " vertebral column", {Kind::Vertebra, 0, 0}, std::move(away)});
       }
     }
     // The cartilages join the ribs to the sternum. Where a segmentation's labels only touch, their surfaces
@@ -670,6 +690,10 @@ void Preparation::repair() {
   for (auto& s : kept) {
     prog(25 + 35 * done++ / int(kept.size()), "repairing the structures");
     if (s.cls.kind == Kind::NotCage) continue;
+    if (s.cls.kind == Kind::Vertebra) {  // only kept as the support (SpineMode::Keep)
+      repairColumn(s);
+      continue;
+    }
     if (s.wrapped) {
       append(cartilage, s.soup);
       continue;
@@ -718,17 +742,74 @@ void Preparation::repair() {
   }
 }
 
+// The column kept as the support: closed (duplicate faces removed, holes closed: the ends the cut left), then
+// always wrapped, so that it overlaps the rib ends it holds (the offset, as the cartilages overlap; vertebra
+// layers that only touch the ribs are joined so too). Wrapping an open surface would give a thin hollow
+// shell (the wrap enters through the holes): a column whose holes do not close is wrapped coarsely instead,
+// detail 4 mm, which bridges them (its shape matters little: all of it is held fixed). Pieces under the
+// minimum volume are dropped.
+void Preparation::repairColumn(const Structure& s) {
+  Soup c = s.soup;
+  const double v0 = volume(c);
+  const int dup = removeDuplicateFaces(c);
+  int holes = 0, border = 0;
+  auto countBorder = [&] {
+    std::map<std::pair<int, int>, int> use;
+    for (const auto& f : c.F)
+      for (int e = 0; e < 3; ++e) {
+        const int a = f[std::size_t(e)], b = f[std::size_t((e + 1) % 3)];
+        ++use[{std::min(a, b), std::max(a, b)}];
+      }
+    int n = 0;
+    for (const auto& [e, k] : use) n += k == 1;
+    return n;
+  };
+  if (countBorder() > 0) holes = closeHoles(c);
+  border = countBorder();
+  constexpr double kCoarseAlpha = 4.0;
+  const double alpha = border > 0 ? std::max(opt.alpha, kCoarseAlpha) : opt.alpha;
+  Soup w = alphaWrap(border > 0 ? s.soup : c, alpha, opt.offset);
+  Soup keep;
+  int small = 0;
+  for (auto& p : components(w)) {
+    if (volume(p) < opt.minVolume) {
+      ++small;
+      continue;
+    }
+    append(keep, p);
+  }
+  const std::string still = defects(keep);
+  if (keep.empty() || !still.empty())
+    throw InputError("Alpha wrapping cannot close the vertebral column from '" + s.name + "' at detail " + mm(alpha, 2) + " mm (" +
+                     (keep.empty() ? std::string("nothing is left") : "the result is " + still) +
+                     "): set 'Spine' to cut at the costovertebral joints, or check the layer.");
+  log.push_back("vertebral column ('" + s.name + "'), kept as the fixed support: " +
+                (dup ? std::to_string(dup) + " duplicate faces removed, " : std::string()) +
+                (holes > 0 ? std::to_string(holes) + " holes closed, " : std::string()) +
+                (border > 0 ? std::to_string(border) + " border edges stay open, wrapped coarsely (detail " + mm(alpha, 1) + " mm)"
+                            : std::string("wrapped")) +
+                ", " + mm(v0 / 1000, 2) + " -> " + mm(volume(keep) / 1000, 2) + " cm3, " + std::to_string(components(keep).size()) +
+                " pieces" + (small ? " (" + std::to_string(small) + " under the minimum volume dropped)" : std::string()));
+  append(column, keep);
+  ++res.wrapped;
+}
+
 void Preparation::join(CMeshO& cage) {
   prog(60, "joining the tissues");
-  OwnedMesh boneM, cartM, sternM, joined;
+  OwnedMesh boneM, cartM, sternM, columnM, joined;
   toMesh(bone, boneM);
   writeFaceLabels(boneM, std::vector<int>(bone.F.size(), int(Tissue::Bone)), bonePart);
   toMesh(cartilage, cartM);
   toMesh(sternum, sternM);
+  std::vector<nuss::TissueLayer> layers{{"ribs", &boneM, Tissue::Bone}, {"costal cartilage", &cartM, Tissue::Cartilage},
+                                        {"sternum", &sternM, Tissue::Sternum}};
+  if (!column.empty()) {  // a layer of its own (it overlaps the ribs), its faces and tets part kVertebralColumn
+    toMesh(column, columnM);
+    writeFaceLabels(columnM, std::vector<int>(column.F.size(), int(Tissue::Bone)), std::vector<int>(column.F.size(), kVertebralColumn));
+    layers.push_back({"vertebral column", &columnM, Tissue::Bone});
+  }
   nuss::JoinStats js;
-  nuss::joinTissueLayers({{"ribs", &boneM, Tissue::Bone}, {"costal cartilage", &cartM, Tissue::Cartilage},
-                          {"sternum", &sternM, Tissue::Sternum}},
-                         {}, joined, &js);
+  nuss::joinTissueLayers(layers, {}, joined, &js);
   log.push_back("joined: " + std::to_string(js.components) + " connected pieces, " + mm(js.unionVolume / 1000, 1) + " cm3 (the " +
                 "structures add up to " + mm(js.sumVolume / 1000, 1) + " cm3), " + std::to_string(joined.fn) + " faces");
   prog(75, "decimating");
@@ -751,6 +832,10 @@ void Preparation::placeAndCentre(CMeshO& cage) {
   prog(90, "landmarks");
   Anatomy an = anatomyOf(cage);
   an.spine = spine;
+  if (!column.empty()) {  // the joints from the ribs as cut, as without the column
+    for (std::size_t f = 0; f < bone.F.size(); ++f)
+      for (int k = 0; k < 3; ++k) an.ribBeforeJoin[bonePart[f]].push_back(bone.V[std::size_t(bone.F[f][std::size_t(k)])]);
+  }
   auto lms = placeLandmarks(an, x0, yMid, log);
   double ySpine = 0, zLow = 1e300;
   std::map<int, double> zBySide[3];

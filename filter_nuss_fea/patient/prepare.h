@@ -12,7 +12,10 @@
 //     where the cage is narrow, the patient's left from the right-handed scanner frame (or from the names);
 //  4. fragments (pieces under the minimum volume) are dropped; bone fused to the vertebral column is cut
 //     at the costovertebral joints (the column is the posterior midline bone running the whole height);
-//     pieces of such a layer that do not reach the cut (scapulae, loose pieces) are left out;
+//     pieces of such a layer that do not reach the cut (scapulae, loose pieces) are left out. The column
+//     (the cut-away bone and the vertebra layers) is left out of the model, as the thesis does, or kept as
+//     the fixed support (PrepareOptions::spine): then it is always wrapped (so that it overlaps the rib heads
+//     it joins, as the cartilages do) and joined as tissue bone, part kVertebralColumn (400);
 //  5. ribs are numbered per side from the top by the height of their vertebral end (or from their names);
 //  6. each structure that is not a closed, 2-manifold, self-intersection-free surface gets the least repair
 //     that makes it one: duplicate faces removed, holes closed, else wrapped (CGAL alpha_wrap_3: detail
@@ -57,6 +60,10 @@ struct InputLayer {
 };
 
 enum class Units { Auto, Millimetres, Centimetres, Metres };
+/// The vertebral column: cut away at the costovertebral joints (the thesis: the joints are the fixed
+/// support), or kept in the model as the fixed support (tissue bone, part kVertebralColumn; the FE
+/// analysis fixes all its nodes). Landmarks are the same either way.
+enum class SpineMode { Cut, Keep };
 enum class FrameMode { Auto, RAS, LPS, Model };
 
 struct PrepareOptions {
@@ -70,6 +77,7 @@ struct PrepareOptions {
   double offset = 0.03;
   double edgeLength = 2.0;   ///< mm: the joined surface is decimated to this edge length (0: kept as is)
   bool wrapAll = false;      ///< wrap every structure, clean or not
+  SpineMode spine = SpineMode::Cut;
   /// user landmarks in the INPUT layers' frame and units (picked points); each replaces the automatic
   /// landmark of its code
   std::vector<Landmark> userLandmarks;
