@@ -744,10 +744,13 @@ void Preparation::repair() {
 
 // The column kept as the support: closed (duplicate faces removed, holes closed: the ends the cut left), then
 // always wrapped, so that it overlaps the rib ends it holds (the offset, as the cartilages overlap; vertebra
-// layers that only touch the ribs are joined so too). Wrapping an open surface would give a thin hollow
-// shell (the wrap enters through the holes): a column whose holes do not close is wrapped coarsely instead,
-// detail 4 mm, which bridges them (its shape matters little: all of it is held fixed). Pieces under the
-// minimum volume are dropped.
+// layers that only touch the ribs are joined so too). Its shape matters little (all of it is held fixed),
+// so it is wrapped at a coarse detail, kColumnAlpha at least: the wrap bridges the disc gaps between the
+// vertebrae and the narrow gaps between the column and the ribs beside it, which would leave the joined
+// surface with walls closer than the decimation's edge length (a decimated surface folding through itself
+// there). Wrapping an open surface would give a thin hollow shell (the wrap enters through the holes): a
+// column whose holes do not close is wrapped at 4 mm, which bridges them. Pieces under the minimum volume
+// are dropped.
 void Preparation::repairColumn(const Structure& s) {
   Soup c = s.soup;
   const double v0 = volume(c);
@@ -766,8 +769,8 @@ void Preparation::repairColumn(const Structure& s) {
   };
   if (countBorder() > 0) holes = closeHoles(c);
   border = countBorder();
-  constexpr double kCoarseAlpha = 4.0;
-  const double alpha = border > 0 ? std::max(opt.alpha, kCoarseAlpha) : opt.alpha;
+  constexpr double kColumnAlpha = 2.0, kOpenAlpha = 4.0;
+  const double alpha = std::max(opt.alpha, border > 0 ? kOpenAlpha : kColumnAlpha);
   Soup w = alphaWrap(border > 0 ? s.soup : c, alpha, opt.offset);
   Soup keep;
   int small = 0;
@@ -786,8 +789,8 @@ void Preparation::repairColumn(const Structure& s) {
   log.push_back("vertebral column ('" + s.name + "'), kept as the fixed support: " +
                 (dup ? std::to_string(dup) + " duplicate faces removed, " : std::string()) +
                 (holes > 0 ? std::to_string(holes) + " holes closed, " : std::string()) +
-                (border > 0 ? std::to_string(border) + " border edges stay open, wrapped coarsely (detail " + mm(alpha, 1) + " mm)"
-                            : std::string("wrapped")) +
+                (border > 0 ? std::to_string(border) + " border edges stay open, " : std::string()) + "wrapped at detail " +
+                mm(alpha, 1) + " mm" +
                 ", " + mm(v0 / 1000, 2) + " -> " + mm(volume(keep) / 1000, 2) + " cm3, " + std::to_string(components(keep).size()) +
                 " pieces" + (small ? " (" + std::to_string(small) + " under the minimum volume dropped)" : std::string()));
   append(column, keep);
