@@ -202,9 +202,6 @@ struct Anatomy {
   std::map<int, std::vector<Vec3>> rib;  // part -> bone vertices
   std::vector<Vec3> sternum, cartilage, junction;  // junction: vertices shared by sternum and cartilage faces
   std::vector<Vec3> spine;               // vertebral column points (from vertebra layers or the cut)
-  // the ribs' own surfaces before the join (part -> points), for the costovertebral joints when the column
-  // is kept: in the joined cage the column covers the rib heads (empty: the joints come from `rib`)
-  std::map<int, std::vector<Vec3>> ribBeforeJoin;
 };
 
 Anatomy anatomyOf(const CMeshO& cage) {
@@ -255,15 +252,14 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
       if (p.y() < yMid && (!best || std::abs(p.x() - x0) < std::abs(best->x() - x0))) best = &p;
     return best;
   };
-  const auto& ribs = an.ribBeforeJoin.empty() ? an.rib : an.ribBeforeJoin;
   std::vector<double> medialY;
-  for (const auto& [part, pts] : ribs)
+  for (const auto& [part, pts] : an.rib)
     if (part >= 101 && part <= 212)
       if (const Vec3* m = medialMost(pts)) medialY.push_back(m->y());
   std::nth_element(medialY.begin(), medialY.begin() + long(medialY.size() / 2), medialY.end());
   const double yAxis = medialY.empty() ? yMid : medialY[medialY.size() / 2];
   std::map<int, Vec3> cvj;
-  for (const auto& [part, pts] : ribs) {
+  for (const auto& [part, pts] : an.rib) {
     if (part < 101 || part > 212) continue;
     if (!medialMost(pts)) fail("costovertebral joint " + std::to_string(part), "the rib has no part behind the cage's middle");
     const Vec3* tip = nullptr;
@@ -421,6 +417,8 @@ class Preparation {
   Soup bone, cartilage, sternum;
   std::vector<int> bonePart;    // per face of `bone`: its rib's part id
   Soup column;                  // the vertebral column kept as the fixed support (SpineMode::Keep), repaired
+  OwnedMesh withoutColumn;      // with the column kept: the cage joined without it, where the landmarks are placed
+  void joinAndDecimate(const std::vector<nuss::TissueLayer>& layers, CMeshO& out, bool logIt);
 };
 
 void Preparation::classify(const std::vector<InputLayer>& layers) {
@@ -799,7 +797,7 @@ void Preparation::repairColumn(const Structure& s) {
 
 void Preparation::join(CMeshO& cage) {
   prog(60, "joining the tissues");
-  OwnedMesh boneM, cartM, sternM, columnM, joined;
+  OwnedMesh boneM, cartM, sternM, columnM;
   toMesh(bone, boneM);
   writeFaceLabels(boneM, std::vector<int>(bone.F.size(), int(Tissue::Bone)), bonePart);
   toMesh(cartilage, cartM);
@@ -811,11 +809,24 @@ void Preparation::join(CMeshO& cage) {
     writeFaceLabels(columnM, std::vector<int>(column.F.size(), int(Tissue::Bone)), std::vector<int>(column.F.size(), kVertebralColumn));
     layers.push_back({"vertebral column", &columnM, Tissue::Bone});
   }
+  joinAndDecimate(layers, cage, true);
+  if (!column.empty()) {
+    // the landmarks come from the cage as the cut mode makes it, so that they are the same either way: with
+    // the column, the rib ends (and so the costovertebral joints) lie inside it
+    prog(80, "joining without the column (for the landmarks)");
+    layers.pop_back();
+    joinAndDecimate(layers, withoutColumn, false);
+  }
+}
+
+void Preparation::joinAndDecimate(const std::vector<nuss::TissueLayer>& layers, CMeshO& cage, bool logIt) {
+  OwnedMesh joined;
   nuss::JoinStats js;
   nuss::joinTissueLayers(layers, {}, joined, &js);
-  log.push_back("joined: " + std::to_string(js.components) + " connected pieces, " + mm(js.unionVolume / 1000, 1) + " cm3 (the " +
-                "structures add up to " + mm(js.sumVolume / 1000, 1) + " cm3), " + std::to_string(joined.fn) + " faces");
-  prog(75, "decimating");
+  if (logIt)
+    log.push_back("joined: " + std::to_string(js.components) + " connected pieces, " + mm(js.unionVolume / 1000, 1) + " cm3 (the " +
+                  "structures add up to " + mm(js.sumVolume / 1000, 1) + " cm3), " + std::to_string(joined.fn) + " faces");
+  if (logIt) prog(75, "decimating");
   cage.Clear();
   copyLabelledMesh(cage, joined);
   if (opt.edgeLength > 0) {
@@ -826,19 +837,15 @@ void Preparation::join(CMeshO& cage) {
       ribcage::decimateEmbedded(cage, target, opt.edgeLength);
       vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
       relabel(cage, joined);
-      log.push_back("decimated to edge length " + mm(opt.edgeLength, 2) + " mm: " + std::to_string(cage.fn) + " faces");
+      if (logIt) log.push_back("decimated to edge length " + mm(opt.edgeLength, 2) + " mm: " + std::to_string(cage.fn) + " faces");
     }
   }
 }
 
 void Preparation::placeAndCentre(CMeshO& cage) {
   prog(90, "landmarks");
-  Anatomy an = anatomyOf(cage);
+  Anatomy an = anatomyOf(column.empty() ? cage : withoutColumn);  // without the column: see join()
   an.spine = spine;
-  if (!column.empty()) {  // the joints from the ribs as cut, as without the column
-    for (std::size_t f = 0; f < bone.F.size(); ++f)
-      for (int k = 0; k < 3; ++k) an.ribBeforeJoin[bonePart[f]].push_back(bone.V[std::size_t(bone.F[f][std::size_t(k)])]);
-  }
   auto lms = placeLandmarks(an, x0, yMid, log);
   double ySpine = 0, zLow = 1e300;
   std::map<int, double> zBySide[3];

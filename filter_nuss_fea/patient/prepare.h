@@ -25,7 +25,8 @@
 //     strips a voxel surface splits where voxels meet at an edge or a corner;
 //  7. the structures are joined (corefinement union: joinTissueLayers) into one surface with tissue and
 //     part per face, then decimated to the target edge length (kept embedded) and relabelled;
-//  8. landmarks (labels.h codes) are placed from the anatomy; user points override them.
+//  8. landmarks (labels.h codes) are placed from the anatomy; user points override them. With the column kept,
+//     they are placed on the cage joined without it (a second join), so that they are those of the cut mode.
 // The result is in the project frame (labels.h): mm, +x patient's left, +y anterior, +z superior, x = 0 on
 // the sternum's midline, y = 0 at the vertebral bodies' anterior surface (else at the costovertebral
 // joints), z = 0 half a rib level below the lowest costovertebral joint.
