@@ -162,9 +162,10 @@ void feHoldsTheColumnAndMovesTheSternumAsWithoutIt() {
   // The column is a rigid support where the cut model is held at the joints: close results, up to the
   // discretisation. The two cages are decimated separately (the kept one has the column's area too), so their
   // cartilages are meshed differently, and TET4 at 4 mm edges (1-2 elements across a cartilage) is
-  // mesh-sensitive: measured, cut 331 mm at 4.0 mm edges and 372 mm at 3.7 mm (+12 %), kept 375 mm (+13 %).
+  // mesh-sensitive: measured at 100 N, cut 331 mm at 4.0 mm edges, 372 mm at 3.7 mm (+12 %) and 417 mm at
+  // 4.3 mm (+26 %); kept, 375 mm at 4.0 mm (+13 %).
   EXPECT_GT(b.elevation, 0.0);
-  EXPECT_LT(std::abs(rel), 0.20);
+  EXPECT_LT(std::abs(rel), 0.25);
 }
 
 // The thoracic volume leaves the column's faces out: the same volume whether it was kept or cut away.
