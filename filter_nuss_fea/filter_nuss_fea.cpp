@@ -451,7 +451,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
 
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ctx.log("Nuss FE model: " + std::to_string(a.mesh.numTets()) + (a.mesh.order == 2 ? " TET10" : " TET4") + " elements, " +
-          std::to_string(a.mesh.numNodes()) + " nodes, " + std::to_string(a.fixedNodes.size()) + " fixed nodes at the joints, Fe on " +
+          std::to_string(a.mesh.numNodes()) + " nodes, " + std::to_string(a.fixedAtJoints) + " fixed nodes at the joints, Fe on " +
           std::to_string(a.sternumNodes.size()) + " sternum nodes, Fsr on " + a.supportNames[0] + "/" + a.supportNames[1] + "/" +
           a.supportNames[2] + "/" + a.supportNames[3] + (cage.weldedFaces ? "; welded " + std::to_string(cage.weldedFaces) + " sliver faces" : "") +
           (cage.unreferencedVertices ? "; dropped " + std::to_string(cage.unreferencedVertices) + " vertices of no face" : "") +
