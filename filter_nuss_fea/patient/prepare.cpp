@@ -688,10 +688,7 @@ void Preparation::repair() {
   for (auto& s : kept) {
     prog(25 + 35 * done++ / int(kept.size()), "repairing the structures");
     if (s.cls.kind == Kind::NotCage) continue;
-    if (s.cls.kind == Kind::Vertebra) {  // only kept as the support (SpineMode::Keep)
-      repairColumn(s);
-      continue;
-    }
+    if (s.cls.kind == Kind::Vertebra) continue;  // the column kept as the support: last, below
     if (s.wrapped) {
       append(cartilage, s.soup);
       continue;
@@ -738,6 +735,10 @@ void Preparation::repair() {
       append(sternum, s.soup);
     }
   }
+  // after the others: alpha wrapping draws on CGAL's default random generator, so the structures wrapped
+  // before the column come out exactly as when it is cut (and so do the landmarks)
+  for (const auto& s : kept)
+    if (s.cls.kind == Kind::Vertebra) repairColumn(s);
 }
 
 // The column kept as the support: closed (duplicate faces removed, holes closed: the ends the cut left), then
@@ -804,19 +805,19 @@ void Preparation::join(CMeshO& cage) {
   toMesh(sternum, sternM);
   std::vector<nuss::TissueLayer> layers{{"ribs", &boneM, Tissue::Bone}, {"costal cartilage", &cartM, Tissue::Cartilage},
                                         {"sternum", &sternM, Tissue::Sternum}};
-  if (!column.empty()) {  // a layer of its own (it overlaps the ribs), its faces and tets part kVertebralColumn
-    toMesh(column, columnM);
-    writeFaceLabels(columnM, std::vector<int>(column.F.size(), int(Tissue::Bone)), std::vector<int>(column.F.size(), kVertebralColumn));
-    layers.push_back({"vertebral column", &columnM, Tissue::Bone});
+  if (column.empty()) {
+    joinAndDecimate(layers, cage, true);
+    return;
   }
+  // the landmarks come from the cage as the cut mode makes it (joined first, as there), so that they are the
+  // same either way: with the column, the rib ends (and so the costovertebral joints) lie inside it
+  joinAndDecimate(layers, withoutColumn, false);
+  prog(70, "joining the tissues and the vertebral column");
+  // the column: a layer of its own (it overlaps the ribs), its faces and tets part kVertebralColumn
+  toMesh(column, columnM);
+  writeFaceLabels(columnM, std::vector<int>(column.F.size(), int(Tissue::Bone)), std::vector<int>(column.F.size(), kVertebralColumn));
+  layers.push_back({"vertebral column", &columnM, Tissue::Bone});
   joinAndDecimate(layers, cage, true);
-  if (!column.empty()) {
-    // the landmarks come from the cage as the cut mode makes it, so that they are the same either way: with
-    // the column, the rib ends (and so the costovertebral joints) lie inside it
-    prog(80, "joining without the column (for the landmarks)");
-    layers.pop_back();
-    joinAndDecimate(layers, withoutColumn, false);
-  }
 }
 
 void Preparation::joinAndDecimate(const std::vector<nuss::TissueLayer>& layers, CMeshO& cage, bool logIt) {
