@@ -163,7 +163,8 @@ void feHoldsTheColumnAndMovesTheSternumAsWithoutIt() {
   // discretisation. The two cages are decimated separately (the kept one has the column's area too), so their
   // cartilages are meshed differently, and TET4 at 4 mm edges (1-2 elements across a cartilage) is
   // mesh-sensitive: measured at 100 N, cut 331 mm at 4.0 mm edges, 372 mm at 3.7 mm (+12 %) and 417 mm at
-  // 4.3 mm (+26 %); kept, 375 mm at 4.0 mm (+13 %).
+  // 4.3 mm (+26 %); kept, 375-381 mm at 4.0 mm (+13-15 %: the decimation is not quite the same from run to
+  // run of the preparation).
   EXPECT_GT(b.elevation, 0.0);
   EXPECT_LT(std::abs(rel), 0.25);
 }
