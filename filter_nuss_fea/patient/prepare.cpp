@@ -735,8 +735,7 @@ void Preparation::repair() {
       append(sternum, s.soup);
     }
   }
-  // after the others: alpha wrapping draws on CGAL's default random generator, so the structures wrapped
-  // before the column come out exactly as when it is cut (and so do the landmarks)
+  // after the others, so that they are repaired in the same order as when the column is cut
   for (const auto& s : kept)
     if (s.cls.kind == Kind::Vertebra) repairColumn(s);
 }
