@@ -478,11 +478,14 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
 
   const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   ctx.log("Nuss FE model: " + std::to_string(a.mesh.numTets()) + (a.mesh.order == 2 ? " TET10" : " TET4") + " elements, " +
-          std::to_string(a.mesh.numNodes()) + " nodes, " + std::to_string(a.fixedNodes.size()) + " fixed nodes at the joints, Fe on " +
+          std::to_string(a.mesh.numNodes()) + " nodes, " + std::to_string(a.fixedAtJoints) + " fixed nodes at the joints, Fe on " +
           std::to_string(a.sternumNodes.size()) + " sternum nodes, Fsr on " + a.supportNames[0] + "/" + a.supportNames[1] + "/" +
           a.supportNames[2] + "/" + a.supportNames[3] + (cage.weldedFaces ? "; welded " + std::to_string(cage.weldedFaces) + " sliver faces" : "") +
           (cage.unreferencedVertices ? "; dropped " + std::to_string(cage.unreferencedVertices) + " vertices of no face" : "") +
           joinText);
+  if (a.fixedOnColumn > 0)
+    ctx.log("fixed: " + std::to_string(a.fixedAtJoints) + " nodes at the costovertebral joints, " + std::to_string(a.fixedOnColumn) +
+            " on the vertebral column (part " + std::to_string(pectus::kVertebralColumn) + ", kept as the fixed support)");
   ctx.log(std::string("Nuss FE result (") + (o.nonlinear ? "large displacement" : "small strain") + "): Fe = " + fmt(a.force, 2) +
           " N (Fs = " + fmt(a.force / 2, 2) + " N, Fsr = " + fmt(a.force / 4, 2) + " N)" +
           (calibrate ? ", calibrated to " + fmt(o.targetElevation, 2) + " mm in " + std::to_string(a.calibration->evaluations) + " solves" : "") +

@@ -52,8 +52,8 @@ void FilterNussFeaPlugin::addPatientFilters() {
       "rib cage and landmarks that 'Nuss Procedure FE Analysis', the thoracic volume filters, the pectus index and the bar "
       "planner take. Every decision goes to the Log.<br>"
       "<b>Layers by name</b> (TotalSegmentator's, 3D Slicer's or generic): 'rib_left_3' / 'Rib R 3' ribs, "
-      "'costal_cartilages' / 'cartilage', 'sternum', 'vertebrae_T5' (the spine: used for the frame and landmarks, not "
-      "in the model), 'bone' / 'ribs' (ribs, possibly fused to the spine). Scapulae, clavicles, humeri and organs are "
+      "'costal_cartilages' / 'cartilage', 'sternum', 'vertebrae_T5' (the spine: used for the frame and landmarks; in the "
+      "model only when 'Spine' keeps it), 'bone' / 'ribs' (ribs, possibly fused to the spine). Scapulae, clavicles, humeri and organs are "
       "left out, and so are labelled cages (a previous result). Point layers named '... user landmarks' are your "
       "landmarks (vertex quality = code, in the input layers' frame).<br>"
       "<b>Layers whose names say nothing</b> ('Segment_1', ...) are classified by their shape and place, each decision "
@@ -65,7 +65,8 @@ void FilterNussFeaPlugin::addPatientFilters() {
       "<b>Steps.</b> Units (metres or cm scaled to mm); the anatomical frame (anterior towards the sternum, the long "
       "axis along it, superior from the rib numbers or the ribs' slope, left from the right-handed scanner frame); "
       "fragments under the minimum volume dropped; bone fused to the vertebral column cut at the costovertebral "
-      "joints (pieces that do not reach the spine, such as scapulae, left out); ribs numbered per side from the top; "
+      "joints (pieces that do not reach the spine, such as scapulae, left out); the column left out, or kept as "
+      "the fixed support (parameter 'Spine': then wrapped and joined to the ribs as bone, part 400); ribs numbered per side from the top; "
       "each structure made a closed, manifold, self-intersection-free surface by the least repair that does it "
       "(duplicate faces removed, holes closed, else CGAL's alpha wrapping; the costal cartilages are always wrapped, "
       "so that they overlap the ribs and sternum they join; the Log gives each repair and volume change); the "
@@ -110,6 +111,12 @@ void FilterNussFeaPlugin::initPreparePatient(RichParameterList& par) {
                          "time and memory grow with the cube of 1/edge: 4 mm suits it, 2 mm shows the anatomy finer."));
   par.addParam(RichBool("wrapAll", d.wrapAll, "Wrap every structure",
                         "Wrap the clean structures too (by default only the ones that need it are wrapped)."));
+  par.addParam(RichEnum("spine", int(d.spine),
+                        QStringList() << "cut at the costovertebral joints" << "keep as the fixed support", "Spine",
+                        "The vertebral column (bone fused to the ribs in one layer, and vertebra layers). Cut: left out of "
+                        "the model, the ribs cut at the costovertebral joints, where the FE analysis fixes them (the "
+                        "thesis). Keep: joined to the ribs as bone, part 400; the FE analysis fixes all of it as well as "
+                        "the joints, and the thoracic volume filters leave it out. The landmarks are the same."));
   par.addParam(RichString("pickedPoints", "", "Picked points (.pp)",
                           "Optional: a MeshLab PickPoints file (Edit > PickPoints, Save) with points picked on the input "
                           "layers, each named by its landmark code ('500', '501 deepest point', ...). Each replaces the "
@@ -127,6 +134,7 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
   if (o.edgeLength > 0 && o.edgeLength < 0.5)
     throw pectus::InputError("parameter 'edgeLength' (Target edge length) must be 0 or 0.5-10 mm, got " + fmt(o.edgeLength));
   o.wrapAll = ctx.boolean("wrapAll");
+  o.spine = pectus::patient::SpineMode(ctx.enumIn("spine", 2));
   const std::string pp = ctx.string("pickedPoints").trimmed().toStdString();
   if (!pp.empty()) {
     int skipped = 0;

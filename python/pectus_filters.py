@@ -48,13 +48,14 @@ def import_ct_segmentation(**kw) -> Filter:
 PREPARE_UNITS = ["Automatic", "Millimetres", "Centimetres", "Metres"]
 PREPARE_FRAME = ["Automatic (from the anatomy)", "RAS (x right, y anterior, z superior)",
                  "LPS (x left, y posterior, z superior)", "Project frame (x left, y anterior, z superior)"]
+PREPARE_SPINE = ["cut at the costovertebral joints", "keep as the fixed support"]
 
 
 def prepare_patient_rib_cage(**kw) -> Filter:
     return _build("Prepare Patient Rib Cage", {
         "units": (Enum, 0, PREPARE_UNITS), "frame": (Enum, 0, PREPARE_FRAME), "minVolume": (Float, 200.0),
         "alpha": (Float, 0.5), "offset": (Float, 0.03), "edgeLength": (Float, 4.0), "wrapAll": (Bool, False),
-        "pickedPoints": (String, "")}, dict(kw))
+        "spine": (Enum, 0, PREPARE_SPINE), "pickedPoints": (String, "")}, dict(kw))
 
 
 NUSS_INPUT = ["Current layer (one labelled surface)", "One layer per tissue (visible layers)"]

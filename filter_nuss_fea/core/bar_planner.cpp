@@ -73,10 +73,18 @@ std::vector<int> parseLevels(const std::string& text) {
   return out;
 }
 
-vol::Soup deformedSurface(const CageSurface& cage, const Analysis& a) {
+// the cage surface the volumes and the index measure: without a vertebral column kept as the support
+// (labels.h, kVertebralColumn), as the thoracic volume filters leave it out
+vol::Soup measuredSurface(const CageSurface& cage) {
   vol::Soup s;
-  s.F = cage.surface.faces;
   s.V = cage.surface.vertices;
+  for (size_t f = 0; f < cage.surface.faces.size(); ++f)
+    if (cage.facePart[f] != kVertebralColumn) s.F.push_back(cage.surface.faces[f]);
+  return s;
+}
+
+vol::Soup deformedSurface(const CageSurface& cage, const Analysis& a) {
+  vol::Soup s = measuredSurface(cage);
   for (size_t i = 0; i < s.V.size(); ++i) s.V[i] += a.result.displacement(static_cast<int>(i));
   return s;
 }
@@ -128,9 +136,7 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
 
   Plan plan;
   progress(1, "Volumes and pectus index before");
-  vol::Soup before;
-  before.V = cage.surface.vertices;
-  before.F = cage.surface.faces;
+  const vol::Soup before = measuredSurface(cage);
   plan.sliceBefore = vol::sliceVolume(before, sliceRange, opt.slice).volume;
   plan.envelopeBefore = vol::fergusonEnvelope(before, envelopeRange, envelope).volume;
   plan.hallerBefore = vol::pectusIndex(before, index).haller;

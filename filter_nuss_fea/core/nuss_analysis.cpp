@@ -42,6 +42,7 @@ std::string partName(int tissue, int part) {
   if (part == kManubrium) return "manubrium";
   if (part == kSternumBody) return "sternum body";
   if (part == kXiphoid) return "xiphoid";
+  if (part == kVertebralColumn) return "vertebral column";
   const int side = part / 100, rib = part % 100;
   if ((side == 1 || side == 2) && rib >= 1 && rib <= 12)
     return std::string(side == 1 ? "right " : "left ") +
@@ -220,7 +221,8 @@ void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const
 void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl, Analysis& s) {
   const fe::TetMesh& mesh = s.mesh;
   checkRadii(pl);
-  // fixed: all mesh nodes (surface and interior) near a costovertebral joint landmark
+  // fixed: all mesh nodes (surface and interior) near a costovertebral joint landmark, and every node of the
+  // vertebral column's tets when the column is in the model
   std::vector<char> fixed(mesh.nodes.size(), 0);
   int joints = 0;
   for (const auto& l : lms) {
@@ -238,8 +240,15 @@ void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Plac
     throw InputError(
         "No costovertebral joint landmarks (codes 100*side + rib) in the landmark layer: the analysis fixes the ribs there. "
         "Pick the landmark layer written by 'Create Pectus Excavatum Rib Cage' or add one vertex per joint with that code as quality.");
-  for (int i = 0; i < mesh.numNodes(); ++i)
+  s.fixedAtJoints = int(std::count(fixed.begin(), fixed.end(), char(1)));
+  // the vertebral column kept as the support ('Prepare Patient Rib Cage', part kVertebralColumn): all of it
+  for (int t = 0; t < mesh.numTets(); ++t)
+    if (s.tetPart[size_t(t)] == kVertebralColumn)
+      for (int k = 0; k < mesh.nodesPerTet(); ++k) fixed[size_t(mesh.tets[size_t(t)][size_t(k)])] |= 2;
+  for (int i = 0; i < mesh.numNodes(); ++i) {
     if (fixed[i]) s.fixedNodes.push_back(i);
+    if (fixed[i] == 2) ++s.fixedOnColumn;
+  }
   placeLoads(cage, lms, pl, s);
 }
 
@@ -339,7 +348,7 @@ int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, co
   for (int t = 0; t < mesh.numTets(); ++t) compTet.emplace(find(parent, mesh.tets[t][0]), t);
   for (const auto& [root, t] : compTet)
     if (!fixedIn.count(root))
-      throw InputError("A part of the model is not held by any costovertebral joint (the connected piece containing the " +
+      throw InputError("A part of the model is not held by any costovertebral joint or the vertebral column (the connected piece containing the " +
                        partName(mesh.tissue[t], tetPart[t]) +
                        "): the system would be singular. Connect it to the cage, remove it, or add its joint landmark.");
   // pieces that hang on the rest by a node or an edge only (tets sharing no face with it) turn about that

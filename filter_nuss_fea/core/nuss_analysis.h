@@ -5,7 +5,8 @@
 // TetGen; each tet takes the tissue and part of the surface face nearest to its centroid. Materials:
 // bone and sternum E = 11.5 GPa, pectus costal cartilage E = 12.25 MPa (thesis), Poisson ratios given.
 // Boundary conditions (Fig. 6-4): every node within `jointRadius` of a costovertebral joint landmark is
-// fixed (head and tubercle rigid). Loads (Fig. 6-3, Fe = 2 Fs = 4 Fsr): the elevating force Fe along
+// fixed (head and tubercle rigid); a vertebral column in the model (part kVertebralColumn, as 'Prepare
+// Patient Rib Cage' keeps it) is the fixed support: every node of its tets is fixed too. Loads (Fig. 6-3, Fe = 2 Fs = 4 Fsr): the elevating force Fe along
 // `direction` (default anterior, +y) spread evenly over the sternum's surface nodes within
 // `sternumLoadRadius` of the lower sternum end; four rib support forces Fsr = Fe/4, opposite to Fe,
 // each spread over the surface nodes of one rib (the ribs s and s+1 above and below the bar's exit in
@@ -147,6 +148,8 @@ struct Analysis {
   double maxStressAll = 0, maxStrainAll = 0;     ///< including the joints and load patches
   double maxStrainCartilage = 0, maxStrainBone = 0;
   std::vector<int> fixedNodes, sternumNodes;
+  int fixedAtJoints = 0;   ///< of fixedNodes: within the joint radius of a costovertebral joint
+  int fixedOnColumn = 0;   ///< of fixedNodes: the others, nodes of the vertebral column's tets (part kVertebralColumn)
   std::vector<std::vector<int>> supportNodes;    ///< right s, right s+1, left s, left s+1 (then the second bar's)
   std::vector<std::string> supportNames;
   std::vector<int> secondSternumNodes;           ///< the second bar's sternal patch (empty: one bar)

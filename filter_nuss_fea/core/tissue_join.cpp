@@ -122,7 +122,13 @@ Solid toSolid(const TissueLayer& l, Tissue tissue) {
   return s;
 }
 
-// parts of unlabelled layers: bone pieces from the nearest joint, sternum body, cartilage from the nearest bone
+// a bone layer labelled as the vertebral column throughout (the support 'Prepare Patient Rib Cage' can keep)
+bool column(const Solid& s) {
+  return !s.part.empty() && std::all_of(s.part.begin(), s.part.end(), [](int p) { return p == kVertebralColumn; });
+}
+
+// parts of unlabelled layers: bone pieces from the nearest joint, sternum body, cartilage from the nearest
+// rib (not the vertebral column)
 void assignParts(std::vector<Solid>& solids, const std::vector<Landmark>& lms) {
   for (auto& s : solids) {
     if (std::any_of(s.part.begin(), s.part.end(), [](int p) { return p != 0; })) continue;
@@ -153,7 +159,7 @@ void assignParts(std::vector<Solid>& solids, const std::vector<Landmark>& lms) {
                                      s.mesh.point(source(halfedge(f, s.mesh), s.mesh)));
       double bd = 1e300;
       for (const auto& b : solids)
-        if (b.tissue == Tissue::Bone)
+        if (b.tissue == Tissue::Bone && !column(b))
           if (const auto [d, p] = b.nearest(c); d < bd) bd = d, s.part[f.idx()] = p;
     }
   }

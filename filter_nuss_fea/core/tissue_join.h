@@ -13,8 +13,9 @@
 //
 // Parts: a layer carrying face labels (as 'Create Pectus Excavatum Rib Cage' writes them) keeps its
 // parts. Otherwise: each connected piece of a bone layer is the rib of the nearest costovertebral joint
-// landmark (100*side + rib); a cartilage face belongs to the rib nearest to it; sternum faces are the
-// sternum body (302).
+// landmark (100*side + rib); a cartilage face belongs to the rib nearest to it (a bone layer labelled as
+// the vertebral column, part 400, is never that rib); sternum faces are the sternum body (302). A layer
+// labelled throughout as the vertebral column keeps part 400 on its faces and on the tets it contains.
 #pragma once
 #include <string>
 #include <vector>

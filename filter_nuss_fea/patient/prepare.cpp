@@ -188,7 +188,11 @@ Frame findFrame(const std::vector<Structure>& all, const PrepareOptions& opt, do
 }
 
 // ---------------------------------------------------------------------------------------------------
-// 4. the vertebral column inside a bone layer: the posterior midline bone that runs the whole height.
+// 4. the vertebral column inside a bone layer. Kept as the support (SpineMode::Keep), it reaches this far (mm)
+// along each rib beyond the cut, into the rib's end, so that column and rib overlap
+constexpr double kColumnOverlap = 3.0;
+
+// The column: the posterior midline bone that runs the whole height.
 // Returns the half-width of the cut band around the midline (0: no column found).
 double spineHalfWidth(const Soup& bone, double x0, double yMid) {
   double z0 = 1e300, z1 = -1e300;
@@ -480,6 +484,7 @@ class Preparation {
   void classifyUnknownByShape(std::vector<Structure>& unknown);  ///< 1, for the layers whose names say nothing
   void checkTheCage(std::size_t layers) const;  ///< 1, finished: a sternum, cartilage and ribs are there
   Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
+  void repairColumn(const Structure& s);     ///< 6. for the column kept as the support, into `column`
 
   const PrepareOptions& opt;
   std::function<void(int, const char*)> progress_;
@@ -492,7 +497,10 @@ class Preparation {
   double x0 = 0, yMid = 0;      // the sternum's midline; halfway between the back of the cage and the sternum
   Soup bone, cartilage, sternum;
   std::vector<int> bonePart;    // per face of `bone`: its rib's part id
-  OwnedMesh joined;             // the labelled union before decimation
+  Soup column;                  // the vertebral column kept as the fixed support (SpineMode::Keep), repaired
+  OwnedMesh joined;             // the labelled union of ribs, cartilages and sternum, before decimation
+  void unite(const std::vector<nuss::TissueLayer>& layers, OwnedMesh& out, bool logIt);  ///< 7. the union, cleaned
+  void decimate(const OwnedMesh& joinedSurface, CMeshO& cage);                            ///< 7. to the edge length
 };
 
 void Preparation::classify(const std::vector<InputLayer>& layers) {
@@ -520,7 +528,7 @@ void Preparation::classify(const std::vector<InputLayer>& layers) {
                                                            : std::string("rib (side and number from its place)"))
                    : s.cls.kind == Kind::Cartilage ? std::string("costal cartilage")
                    : s.cls.kind == Kind::Sternum ? std::string("sternum")
-                   : s.cls.kind == Kind::Vertebra ? std::string("vertebral column (support, not in the model)")
+                   : s.cls.kind == Kind::Vertebra ? std::string(opt.spine == SpineMode::Keep ? "vertebral column (kept as the fixed support)" : "vertebral column (frame and landmarks, not in the model)")
                                                   : std::string("bone (ribs, maybe fused to the spine)")) +
                   ", " + std::to_string(s.soup.F.size()) + " faces");
 }
@@ -626,28 +634,38 @@ void Preparation::separate() {
   for (auto& s : all) {
     if (s.cls.kind == Kind::Vertebra) {
       spine.insert(spine.end(), s.soup.V.begin(), s.soup.V.end());
+      if (opt.spine == SpineMode::Keep) kept.push_back({s.name, s.cls, s.soup});  // the support, repaired in step 6
       continue;
     }
     double rCut = 0;
     if (s.cls.kind == Kind::Bone) {
       rCut = spineHalfWidth(s.soup, x0, yMid);
       if (rCut > 0) {
-        Soup cut;
+        Soup cut, away;
         int removed = 0;
         for (const auto& f : s.soup.F) {
           const Vec3 c = (s.soup.V[std::size_t(f[0])] + s.soup.V[std::size_t(f[1])] + s.soup.V[std::size_t(f[2])]) / 3.0;
-          if (c.y() < yMid && std::abs(c.x() - x0) < rCut) {
+          const bool behind = c.y() < yMid;
+          if (behind && std::abs(c.x() - x0) < rCut) {
             for (int k = 0; k < 3; ++k) spine.push_back(s.soup.V[std::size_t(f[std::size_t(k)])]);
             ++removed;
           } else {
             cut.F.push_back(f);
           }
+          // the column kept as the support reaches kColumnOverlap mm further along the ribs than the cut, so
+          // that the two solids overlap there (the union then joins them; their cut ends would only touch)
+          if (behind && std::abs(c.x() - x0) < rCut + kColumnOverlap) away.F.push_back(f);
         }
         cut.V = s.soup.V;
         weld(cut);
+        away.V = std::move(s.soup.V);
+        weld(away);
+        const bool keepColumn = opt.spine == SpineMode::Keep;
         log.push_back("'" + s.name + "': vertebral column found (posterior midline, " + mm(2 * rCut) + " mm wide): cut at the "
-                      "costovertebral joints, " + std::to_string(removed) + " faces removed");
+                      "costovertebral joints, " + std::to_string(removed) + " faces removed" +
+                      (keepColumn ? "; the column is kept as the fixed support" : ""));
         s.soup = std::move(cut);
+        if (keepColumn) kept.push_back({s.name + " vertebral column", {Kind::Vertebra, 0, 0}, std::move(away)});
       }
     }
     if (const auto w = std::find(toWrap.begin(), toWrap.end(), std::size_t(&s - all.data())); w != toWrap.end()) {
@@ -789,6 +807,7 @@ void Preparation::repair() {
   for (auto& s : kept) {
     prog(25 + 35 * done++ / int(kept.size()), "repairing the structures");
     if (s.cls.kind == Kind::NotCage) continue;
+    if (s.cls.kind == Kind::Vertebra) continue;  // the column kept as the support: last, below
     if (s.wrapped) {
       append(cartilage, s.soup);
       continue;
@@ -831,48 +850,130 @@ void Preparation::repair() {
       append(sternum, s.soup);
     }
   }
+  // after the others, so that they are repaired in the same order as when the column is cut
+  for (const auto& s : kept)
+    if (s.cls.kind == Kind::Vertebra) repairColumn(s);
+}
+
+// The column kept as the support: closed (duplicate faces removed, holes closed: the ends the cut left), then
+// always wrapped, so that it overlaps the rib ends it holds (the offset, as the cartilages overlap; vertebra
+// layers that only touch the ribs are joined so too). Its shape matters little (all of it is held fixed),
+// so it is wrapped at a coarse detail, kColumnAlpha at least: the wrap bridges the disc gaps between the
+// vertebrae and the narrow gaps between the column and the ribs beside it, which would leave the joined
+// surface with walls closer than the decimation's edge length (a decimated surface folding through itself
+// there). Wrapping an open surface would give a thin hollow shell (the wrap enters through the holes): a
+// column whose holes do not close is wrapped at 4 mm, which bridges them. Pieces under the minimum volume
+// are dropped.
+void Preparation::repairColumn(const Structure& s) {
+  Soup c = s.soup;
+  const double v0 = volume(c);
+  const int dup = removeDuplicateFaces(c);
+  int holes = 0, border = 0;
+  auto countBorder = [&] {
+    std::map<std::pair<int, int>, int> use;
+    for (const auto& f : c.F)
+      for (int e = 0; e < 3; ++e) {
+        const int a = f[std::size_t(e)], b = f[std::size_t((e + 1) % 3)];
+        ++use[{std::min(a, b), std::max(a, b)}];
+      }
+    int n = 0;
+    for (const auto& [e, k] : use) n += k == 1;
+    return n;
+  };
+  if (countBorder() > 0) holes = closeHoles(c);
+  border = countBorder();
+  constexpr double kColumnAlpha = 2.0, kOpenAlpha = 4.0;
+  const double alpha = std::max(opt.alpha, border > 0 ? kOpenAlpha : kColumnAlpha);
+  Soup w = alphaWrap(border > 0 ? s.soup : c, alpha, opt.offset);
+  Soup keep;
+  int small = 0;
+  for (auto& p : components(w)) {
+    if (volume(p) < opt.minVolume) {
+      ++small;
+      continue;
+    }
+    append(keep, p);
+  }
+  const std::string still = defects(keep);
+  if (keep.empty() || !still.empty())
+    throw InputError("Alpha wrapping cannot close the vertebral column from '" + s.name + "' at detail " + mm(alpha, 2) + " mm (" +
+                     (keep.empty() ? std::string("nothing is left") : "the result is " + still) +
+                     "): set 'Spine' to cut at the costovertebral joints, or check the layer.");
+  log.push_back("vertebral column ('" + s.name + "'), kept as the fixed support: " +
+                (dup ? std::to_string(dup) + " duplicate faces removed, " : std::string()) +
+                (holes > 0 ? std::to_string(holes) + " holes closed, " : std::string()) +
+                (border > 0 ? std::to_string(border) + " border edges stay open, " : std::string()) + "wrapped at detail " +
+                mm(alpha, 1) + " mm" +
+                ", " + mm(v0 / 1000, 2) + " -> " + mm(volume(keep) / 1000, 2) + " cm3, " + std::to_string(components(keep).size()) +
+                " pieces" + (small ? " (" + std::to_string(small) + " under the minimum volume dropped)" : std::string()));
+  append(column, keep);
+  ++res.wrapped;
 }
 
 void Preparation::join(CMeshO& cage) {
   prog(60, "joining the tissues");
-  OwnedMesh boneM, cartM, sternM;
+  OwnedMesh boneM, cartM, sternM, columnM;
   toMesh(bone, boneM);
   writeFaceLabels(boneM, std::vector<int>(bone.F.size(), int(Tissue::Bone)), bonePart);
   toMesh(cartilage, cartM);
   toMesh(sternum, sternM);
+  std::vector<nuss::TissueLayer> layers{{"ribs", &boneM, Tissue::Bone}, {"costal cartilage", &cartM, Tissue::Cartilage},
+                                        {"sternum", &sternM, Tissue::Sternum}};
+  if (column.empty()) {
+    unite(layers, joined, true);
+    decimate(joined, cage);
+    return;
+  }
+  // the landmarks come from the cage as the cut mode joins it, so that they are the same either way: with the
+  // column, the rib ends (and so the costovertebral joints) lie inside it
+  unite(layers, joined, false);
+  prog(70, "joining the tissues and the vertebral column");
+  // the column: a layer of its own (it overlaps the ribs), its faces and tets part kVertebralColumn
+  toMesh(column, columnM);
+  writeFaceLabels(columnM, std::vector<int>(column.F.size(), int(Tissue::Bone)), std::vector<int>(column.F.size(), kVertebralColumn));
+  layers.push_back({"vertebral column", &columnM, Tissue::Bone});
+  OwnedMesh withColumn;
+  unite(layers, withColumn, true);
+  decimate(withColumn, cage);
+}
+
+void Preparation::unite(const std::vector<nuss::TissueLayer>& layers, OwnedMesh& out, bool logIt) {
   nuss::JoinStats js;
-  nuss::joinTissueLayers({{"ribs", &boneM, Tissue::Bone}, {"costal cartilage", &cartM, Tissue::Cartilage},
-                          {"sternum", &sternM, Tissue::Sternum}},
-                         {}, joined, &js);
-  const int shells = dropTinyShells(joined, std::max(opt.minVolume, 1.0));
-  log.push_back("joined: " + std::to_string(js.components - shells) + " connected pieces" +
-                (shells ? " (" + std::to_string(shells) + " tiny shells where two surfaces touch removed)" : std::string()) + ", " + mm(js.unionVolume / 1000, 1) + " cm3 (the " +
-                "structures add up to " + mm(js.sumVolume / 1000, 1) + " cm3), " + std::to_string(joined.fn) + " faces");
+  nuss::joinTissueLayers(layers, {}, out, &js);
+  const int shells = dropTinyShells(out, std::max(opt.minVolume, 1.0));
+  if (logIt)
+    log.push_back("joined: " + std::to_string(js.components - shells) + " connected pieces" +
+                  (shells ? " (" + std::to_string(shells) + " tiny shells where two surfaces touch removed)" : std::string()) +
+                  ", " + mm(js.unionVolume / 1000, 1) + " cm3 (the structures add up to " + mm(js.sumVolume / 1000, 1) +
+                  " cm3), " + std::to_string(out.fn) + " faces");
+}
+
+void Preparation::decimate(const OwnedMesh& joinedSurface, CMeshO& cage) {
   prog(75, "decimating");
   cage.Clear();
-  copyLabelledMesh(cage, joined);
-  if (opt.edgeLength > 0) {
-    double ar = 0;
-    for (const auto& f : cage.face) ar += double(vcg::DoubleArea(f)) / 2;
-    const int target = int(ar / (0.433 * opt.edgeLength * opt.edgeLength));
-    if (target < cage.fn) {
-      // in two stages: a retry (where a collapse made faces cross) starts again from its stage's input, so
-      // the first stage, from the union's hundreds of thousands of faces, goes to a fine edge where it rarely needs one
-      if (4 * target < cage.fn) {
-        ribcage::decimateEmbedded(cage, 4 * target, opt.edgeLength / 2);
-        vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
-      }
-      ribcage::decimateEmbedded(cage, target, opt.edgeLength);
-      vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
-      relabel(cage, joined);
-      log.push_back("decimated to edge length " + mm(opt.edgeLength, 2) + " mm: " + std::to_string(cage.fn) + " faces");
-    }
+  copyLabelledMesh(cage, joinedSurface);
+  if (!(opt.edgeLength > 0)) return;
+  double ar = 0;
+  for (const auto& f : cage.face) ar += double(vcg::DoubleArea(f)) / 2;
+  const int target = int(ar / (0.433 * opt.edgeLength * opt.edgeLength));
+  if (target >= cage.fn) return;
+  // in two stages: a retry (where a collapse made faces cross) starts again from its stage's input, so the first
+  // stage, from the union's hundreds of thousands of faces, goes to a fine edge where it rarely needs one
+  if (4 * target < cage.fn) {
+    ribcage::decimateEmbedded(cage, 4 * target, opt.edgeLength / 2);
+    vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
   }
+  ribcage::decimateEmbedded(cage, target, opt.edgeLength);
+  vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
+  relabel(cage, joinedSurface);
+  log.push_back("decimated to edge length " + mm(opt.edgeLength, 2) + " mm: " + std::to_string(cage.fn) + " faces");
 }
 
 void Preparation::placeAndCentre(CMeshO& cage) {
   prog(90, "landmarks");
-  Anatomy an = anatomyOf(joined);  // the full-detail surface: the landmarks do not depend on the edge length
+  // the full-detail union without the column (see join()): the landmarks depend neither on the edge length nor
+  // on the spine mode
+  Anatomy an = anatomyOf(joined);
   an.spine = spine;
   std::set<int> given;
   for (const auto& u : opt.userLandmarks) given.insert(u.code);

@@ -19,7 +19,10 @@
 //     where the cage is narrow, the patient's left from the right-handed scanner frame (or from the names);
 //  4. fragments (pieces under the minimum volume) are dropped; bone fused to the vertebral column is cut
 //     at the costovertebral joints (the column is the posterior midline bone running the whole height);
-//     pieces of such a layer that do not reach the cut (scapulae, loose pieces) are left out;
+//     pieces of such a layer that do not reach the cut (scapulae, loose pieces) are left out. The column
+//     (the cut-away bone and the vertebra layers) is left out of the model, as the thesis does, or kept as
+//     the fixed support (PrepareOptions::spine): then it is always wrapped (so that it overlaps the rib heads
+//     it joins, as the cartilages do) and joined as tissue bone, part kVertebralColumn (400);
 //  5. ribs are numbered per side from the top by the height of their vertebral end (or from their names);
 //  6. each structure that is not a closed, 2-manifold, self-intersection-free surface gets the least repair
 //     that makes it one: duplicate faces removed, holes closed, else wrapped (CGAL alpha_wrap_3: detail
@@ -31,8 +34,10 @@
 //     strips a voxel surface splits where voxels meet at an edge or a corner;
 //  7. the structures are joined (corefinement union: joinTissueLayers) into one surface with tissue and
 //     part per face, the union's specks and voids (closed shells under the minimum volume) removed, then
-//     decimated to the target edge length (kept embedded) and relabelled;
-//  8. landmarks (labels.h codes) are placed from the anatomy; user points override them. A landmark that
+//     decimated to the target edge length (kept embedded) and relabelled; a column kept as the support is
+//     a structure of its own in a second union;
+//  8. landmarks (labels.h codes) are placed from the anatomy, on the full-detail union without the column
+//     (the same whatever the edge length and the spine mode); user points override them. A landmark that
 //     cannot be placed is refused naming it and its code (pick it: .pp file), unless the user gives it.
 // The result is in the project frame (labels.h): mm, +x patient's left, +y anterior, +z superior, x = 0 on
 // the sternum's midline, y = 0 at the vertebral bodies' anterior surface (else at the costovertebral
@@ -68,6 +73,10 @@ struct InputLayer {
 };
 
 enum class Units { Auto, Millimetres, Centimetres, Metres };
+/// The vertebral column: cut away at the costovertebral joints (the thesis: the joints are the fixed
+/// support), or kept in the model as the fixed support (tissue bone, part kVertebralColumn; the FE
+/// analysis fixes all its nodes). Landmarks are the same either way.
+enum class SpineMode { Cut, Keep };
 enum class FrameMode { Auto, RAS, LPS, Model };
 
 struct PrepareOptions {
@@ -83,6 +92,7 @@ struct PrepareOptions {
   /// with its cube: 4 mm gives about 100,000 tets for a child's cage (2 mm: about 480,000)
   double edgeLength = 4.0;
   bool wrapAll = false;      ///< wrap every structure, clean or not
+  SpineMode spine = SpineMode::Cut;
   /// user landmarks in the INPUT layers' frame and units (picked points); each replaces the automatic
   /// landmark of its code
   std::vector<Landmark> userLandmarks;

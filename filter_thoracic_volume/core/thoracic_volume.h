@@ -20,7 +20,9 @@ struct Soup {
   std::vector<Eigen::Vector3d> V;
   std::vector<std::array<int, 3>> F;
 };
-/// Live faces of m (vertex indices of the vcg vertex vector); throws InputError on NaN coordinates.
+/// Live faces of m (vertex indices of the vcg vertex vector), without the faces labelled as the vertebral
+/// column (part kVertebralColumn of labels.h: the column a prepared patient cage keeps as the FE support);
+/// throws InputError on NaN coordinates.
 Soup soupFromMesh(const CMeshO& m, const std::string& layer);
 
 /// Signed enclosed volume of a closed, consistently oriented triangle mesh by the divergence

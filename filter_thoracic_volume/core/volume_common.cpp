@@ -3,6 +3,7 @@
 #include <sstream>
 
 #include "pectus/errors.h"
+#include "pectus/labels.h"
 #include "thoracic_volume.h"
 
 namespace pectus::vol {
@@ -16,8 +17,12 @@ Soup soupFromMesh(const CMeshO& m, const std::string& layer) {
       throw InputError("layer '" + layer + "' has NaN or infinite vertex coordinates; clean it first");
   }
   s.F.reserve(m.face.size());
-  for (const auto& f : m.face) {
-    if (f.IsD()) continue;
+  // a vertebral column kept in a prepared cage is left out: the volume is the one inside the ribs, the same
+  // whether the column was kept or cut away (labels.h, kVertebralColumn)
+  const auto labels = readFaceLabels(m);
+  for (std::size_t i = 0; i < m.face.size(); ++i) {
+    const auto& f = m.face[i];
+    if (f.IsD() || (labels && labels->part[i] == kVertebralColumn)) continue;
     std::array<int, 3> t;
     for (int k = 0; k < 3; ++k) t[k] = int(vcg::tri::Index(m, f.cV(k)));
     s.F.push_back(t);

@@ -24,9 +24,12 @@ namespace pectus {
 enum class Tissue : int { Unknown = 0, Bone = 1, Cartilage = 2, Sternum = 3 };
 
 // Anatomical part id: ribs and their cartilages 100*side + rib number (side 1 = right, 2 = left),
-// sternum parts 301 manubrium, 302 body, 303 xiphoid.
+// sternum parts 301 manubrium, 302 body, 303 xiphoid; 400 the vertebral column (tissue bone), present only
+// when 'Prepare Patient Rib Cage' keeps it as the fixed support: the FE analysis fixes every node of its
+// tets, and the thoracic volume filters leave its faces out (the volume is the one inside the ribs).
 inline int ribPart(int side, int rib) { return 100 * side + rib; }
 constexpr int kManubrium = 301, kSternumBody = 302, kXiphoid = 303;
+constexpr int kVertebralColumn = 400;
 
 // Landmark codes (vertex quality of the landmarks layer)
 //  100*side + k     costovertebral joint of rib k (side 1 right, 2 left): centre of the rib's posterior end cap
