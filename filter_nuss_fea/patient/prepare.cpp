@@ -500,7 +500,7 @@ class Preparation {
   Soup column;                  // the vertebral column kept as the fixed support (SpineMode::Keep), repaired
   OwnedMesh joined;             // the labelled union of ribs, cartilages and sternum, before decimation
   void unite(const std::vector<nuss::TissueLayer>& layers, OwnedMesh& out, bool logIt);  ///< 7. the union, cleaned
-  void decimate(const OwnedMesh& joinedSurface, CMeshO& cage);                            ///< 7. to the edge length
+  void decimate(OwnedMesh& joinedSurface, CMeshO& cage);                                  ///< 7. to the edge length
 };
 
 void Preparation::classify(const std::vector<InputLayer>& layers) {
@@ -948,7 +948,7 @@ void Preparation::unite(const std::vector<nuss::TissueLayer>& layers, OwnedMesh&
                   " cm3), " + std::to_string(out.fn) + " faces");
 }
 
-void Preparation::decimate(const OwnedMesh& joinedSurface, CMeshO& cage) {
+void Preparation::decimate(OwnedMesh& joinedSurface, CMeshO& cage) {
   prog(75, "decimating");
   cage.Clear();
   copyLabelledMesh(cage, joinedSurface);
