@@ -7,7 +7,7 @@ written as messy STL surfaces (ribs fused to the spine, fragments, duplicate fac
 a hole, scapulae) and as TotalSegmentator's per-structure NIfTI masks. Rows:
   - preparing it (import + prepare, meshlabserver): wall time, peak memory, faces, the prepare step's own time;
   - the generator making the same cage at the prepared cage's edge length (4 mm);
-  - the calibrated analysis (44.7 mm) of each, large displacement TET10 by default (neo-Hookean, displacement
+  - the calibrated analysis (44.7 mm) of each, large displacement TET10 with the FE filter's defaults (neo-Hookean, displacement
     control, line search, adaptive steps): force, wall time, peak memory.
 
     /usr/bin/python3 bench/patient_pipeline.py [--analysis large|small] [--order 2|1] [--fe messy,masks,generated]
@@ -64,8 +64,6 @@ def main() -> int:
     a = ap.parse_args()
     fe = dict(targetElevation=44.7, analysis=0 if a.analysis == "large" else 1, order=0 if a.order == 2 else 1,
               resultBase="")
-    if a.analysis == "large":  # as python/patient.py: neo-Hookean, the elevation prescribed, robust Newton
-        fe.update(material=1, calibration=1, lineSearch=True, adaptiveSteps=True)
     P = os.path.join(a.out, "patient")
     t0 = time.time()
     subprocess.run([os.path.join(BUILD, "filter_nuss_fea", "pectus_ct_phantom"), P, "--only", "messy,masks"],

@@ -1,5 +1,6 @@
 #include "filter_nuss_fea.h"
 
+#include <algorithm>
 #include <chrono>
 
 #include <QFileInfo>
@@ -223,6 +224,16 @@ QStringList analyses() { return QStringList() << "Large displacement (nonlinear)
 QStringList materials() {
   return QStringList() << "St Venant-Kirchhoff" << "Neo-Hookean (FEBio)" << "Neo-Hookean (CalculiX hyperelastic)";
 }
+// the 'material' and 'calibration' entries, in the order of materials() and calibrations()
+constexpr pectus::fe::MaterialModel kMaterials[] = {pectus::fe::MaterialModel::StVenantKirchhoff,
+                                                    pectus::fe::MaterialModel::NeoHookean,
+                                                    pectus::fe::MaterialModel::NeoHookeanDecoupled};
+constexpr pectus::nuss::CalibrationMethod kCalibrations[] = {pectus::nuss::CalibrationMethod::ForceSearch,
+                                                             pectus::nuss::CalibrationMethod::DisplacementControl};
+template <class T, std::size_t N>
+int entryOf(const T (&entries)[N], T value) {
+  return int(std::find(entries, entries + N, value) - entries);
+}
 QStringList calibrations() { return QStringList() << "Force search" << "Displacement control"; }
 QStringList modes() { return QStringList() << "Calibrate Fe to the target elevation" << "Given elevating force"; }
 QStringList fields() { return QStringList() << "von Mises stress (MPa)" << "Equivalent strain"; }
@@ -241,12 +252,14 @@ void addLandmarkParam(MeshDocument& md, RichParameterList& par) {
 }
 void addCalibrationParams(RichParameterList& par) {
   par.addParam(RichFloat("targetElevation", 44.7f, "Target elevation (mm)",
-                         "Measured rise of the lower sternum end (CT before, X-ray after). Thesis Table 6-1: 34.0-44.7 mm "
-                         "(patient 1: 44.7 mm)."));
+                         "Measured rise of the lower sternum end (CT before, X-ray after; thesis Table 6-1: 34.0-44.7 mm, "
+                         "patient 1: 44.7 mm). 0: from the model, the rise that brings the lower sternum end onto the chest "
+                         "line (the line between the most anterior rib or cartilage points right and left of it, at its "
+                         "level). A target beyond twice that depth is refused before any solve, with the reachable range."));
   par.addParam(RichFloat("maxForce", 1000.0f, "Maximum force (N)",
                          "Calibration gives up (with a message) if this force does not reach the target."));
   par.addParam(RichFloat("tolerance", 0.1f, "Calibration tolerance (mm)", "|simulated - target elevation| allowed."));
-  par.addParam(RichEnum("calibration", 0, calibrations(), "Calibration method",
+  par.addParam(RichEnum("calibration", entryOf(kCalibrations, pectus::nuss::Options{}.calibration), calibrations(), "Calibration method",
                         "Force search: solves for trial forces until the elevation is within the tolerance (each a whole "
                         "load path in large displacement). Displacement control: one large-displacement solve that "
                         "prescribes the elevation and reads the force (the same result, fewer solves)."));
@@ -255,15 +268,16 @@ void addModelParams(RichParameterList& par) {
   par.addParam(RichEnum("analysis", 0, analyses(), "Analysis",
                         "Large displacement: total Lagrangian (the material below), Newton-Raphson with load increments "
                         "(the thesis used ANSYS' large-displacement static solver). Small strain: linear elasticity."));
-  par.addParam(RichEnum("material", 0, materials(), "Material (large displacement)",
+  const pectus::nuss::Options d;  // the analysis' defaults
+  par.addParam(RichEnum("material", entryOf(kMaterials, d.material), materials(), "Material (large displacement)",
                         "Every tissue's model in the large-displacement analysis (same E and nu; small strain is "
                         "linear elasticity whatever this says). St Venant-Kirchhoff lets a strongly compressed tet "
                         "invert; neo-Hookean resists it (its energy grows without bound as the volume goes to zero) "
                         "and lets a child's cage reach the elevation."));
-  par.addParam(RichBool("lineSearch", false, "Newton line search",
+  par.addParam(RichBool("lineSearch", d.newton.lineSearch, "Newton line search",
                         "Large displacement: scale each Newton correction so that the residual falls (fewer failing "
                         "increments on a soft cartilage)."));
-  par.addParam(RichBool("adaptiveSteps", false, "Adaptive load steps",
+  par.addParam(RichBool("adaptiveSteps", d.newton.adaptiveSteps, "Adaptive load steps",
                         "Large displacement: grow the load increment where Newton converges fast and halve it where it "
                         "does not (the curve's stops are still hit exactly)."));
   par.addParam(RichEnum("order", 0, orders(), "Element",
@@ -297,17 +311,14 @@ std::vector<pectus::Landmark> readLandmarkParam(FilterContext& ctx) {
   return lms;
 }
 void readCalibrationParams(FilterContext& ctx, pectus::nuss::Options& o, bool calibrate) {
-  o.targetElevation = calibrate ? ctx.floatIn("targetElevation", 0, 300, true) : 0.0;
+  o.targetElevation = calibrate ? ctx.floatIn("targetElevation", 0, 300) : 0.0;
+  o.targetFromChestLine = calibrate && o.targetElevation == 0;
   o.maxForce = ctx.floatIn("maxForce", 0, 1e6, true);
   o.tolerance = ctx.floatIn("tolerance", 0, 50, true);
-  o.calibration = ctx.enumIn("calibration", 2) == 0 ? pectus::nuss::CalibrationMethod::ForceSearch
-                                                    : pectus::nuss::CalibrationMethod::DisplacementControl;
+  o.calibration = kCalibrations[ctx.enumIn("calibration", 2)];
 }
 void readModelParams(FilterContext& ctx, pectus::nuss::Options& o) {
   o.nonlinear = ctx.enumIn("analysis", 2) == 0;
-  constexpr pectus::fe::MaterialModel kMaterials[] = {pectus::fe::MaterialModel::StVenantKirchhoff,
-                                                      pectus::fe::MaterialModel::NeoHookean,
-                                                      pectus::fe::MaterialModel::NeoHookeanDecoupled};
   o.material = kMaterials[ctx.enumIn("material", 3)];
   o.newton.lineSearch = ctx.boolean("lineSearch");
   o.newton.adaptiveSteps = ctx.boolean("adaptiveSteps");
@@ -372,8 +383,8 @@ void FilterNussFeaPlugin::initNussFea(MeshDocument& md, RichParameterList& par) 
                         "rib's number, sternum faces are the sternum body. The joined surface is the result layer."));
   addLandmarkParam(md, par);
   par.addParam(RichEnum("mode", 0, modes(), "Force",
-                        "Calibrate: search Fe so the sternum end rises by the target elevation (secant/bracketing on the "
-                        "force-displacement curve, to the tolerance). Given: apply the elevating force below."));
+                        "Calibrate: find Fe so the sternum end rises by the target elevation (by the calibration method "
+                        "below). Given: apply the elevating force below."));
   par.addParam(RichFloat("force", 140.0f, "Elevating force Fe (N)",
                          "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N."));
   addCalibrationParams(par);
@@ -459,7 +470,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
     nuss::writeCurveCsv(base + "_force_displacement.csv", a);
     nuss::writeRibPathCsv(base + "_rib_strain.csv", path);
     std::vector<std::pair<double, std::string>> hl;
-    if (calibrate) hl.push_back({o.targetElevation, "target " + fmt(o.targetElevation, 1) + " mm"});
+    if (calibrate) hl.push_back({a.target.elevation, "target " + fmt(a.target.elevation, 1) + " mm"});
     pectus::ml::writeLinePlot(base + "_force_displacement.png", "Elevating force vs sternum end displacement (Fig. 6-14)",
                               "Elevating force Fe (N)", "Displacement of the end of the sternum (mm)",
                               {{o.nonlinear ? "large displacement" : "small strain", a.curve, 0x1f77b4, true}}, hl);
@@ -486,9 +497,10 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   if (a.fixedOnColumn > 0)
     ctx.log("fixed: " + std::to_string(a.fixedAtJoints) + " nodes at the costovertebral joints, " + std::to_string(a.fixedOnColumn) +
             " on the vertebral column (part " + std::to_string(pectus::kVertebralColumn) + ", kept as the fixed support)");
+  if (calibrate) ctx.log("Target elevation " + a.target.describe());
   ctx.log(std::string("Nuss FE result (") + (o.nonlinear ? "large displacement" : "small strain") + "): Fe = " + fmt(a.force, 2) +
           " N (Fs = " + fmt(a.force / 2, 2) + " N, Fsr = " + fmt(a.force / 4, 2) + " N)" +
-          (calibrate ? ", calibrated to " + fmt(o.targetElevation, 2) + " mm in " + std::to_string(a.calibration->evaluations) + " solves" : "") +
+          (calibrate ? ", calibrated to " + fmt(a.target.elevation, 2) + " mm in " + std::to_string(a.calibration->evaluations) + " solves" : "") +
           "; sternum end displacement " + fmt(a.elevation, 2) + " mm; linear compliance " + fmt(a.linearCompliance, 4) + " mm/N");
   ctx.log("Max von Mises stress " + fmt(a.maxStress, 2) + " MPa at the " + a.maxStressAt.describe() +
           " (away from the joints and load patches; " + fmt(a.maxStressAll, 2) + " MPa including them)");
@@ -556,7 +568,8 @@ void FilterNussFeaPlugin::runBarPlanner(FilterContext& ctx) {
   ctx.doc().setCurrentMesh(res.id());
 
   const size_t n = plan.rows.size();
-  ctx.log("Nuss bar planner: " + std::to_string(n) + " options, each calibrated to " + fmt(o.analysis.targetElevation, 2) +
+  ctx.log("Target elevation " + plan.target.describe());
+  ctx.log("Nuss bar planner: " + std::to_string(n) + " options, each calibrated to " + fmt(plan.target.elevation, 2) +
           " mm (" + (o.analysis.nonlinear ? "large displacement" : "small strain") + ", " + std::to_string(plan.tets) +
           (plan.order == 2 ? " TET10" : " TET4") + " elements meshed once in " + fmt(plan.secondsMesh, 1) + " s; reuse saved " +
           fmt(plan.secondsMesh * double(n - 1), 1) + " s of TetGen); before: slice " + fmt(plan.sliceBefore / 1000, 2) + " cm3, envelope " +

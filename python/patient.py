@@ -37,11 +37,12 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("segmentation", help="a folder of structure files, or one file")
     ap.add_argument("out", help="folder for the results")
-    ap.add_argument("--elevation", type=float, default=44.7, help="measured rise of the lower sternum end (mm)")
+    ap.add_argument("--elevation", type=float, default=44.7,
+                    help="measured rise of the lower sternum end (mm); 0: to the chest line (from the model)")
     ap.add_argument("--order", type=int, choices=(1, 2), default=2, help="1: TET4, 2: TET10 (default)")
     ap.add_argument("--analysis", choices=("large", "small"), default="large",
-                    help="large displacement (default: neo-Hookean, the elevation prescribed, Newton with line search "
-                         "and adaptive steps; minutes) or small strain (seconds)")
+                    help="large displacement (default, with the FE filter's defaults: neo-Hookean, the elevation "
+                         "prescribed, Newton with line search and adaptive steps; minutes) or small strain (seconds)")
     ap.add_argument("--edge", type=float, default=4.0, help="edge length of the prepared cage (mm)")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -65,9 +66,7 @@ def main() -> int:
 
     fe = example("filter_nuss_fea", "nuss_fea").set(
         landmarkLayer=0, targetElevation=a.elevation, order=0 if a.order == 2 else 1,
-        analysis=0 if a.analysis == "large" else 1, resultBase=os.path.join(a.out, "nuss_result.vtu"),
-        # a child's soft cartilage: St Venant-Kirchhoff lets its tets invert under the bar's lift, neo-Hookean does not
-        **(dict(material=1, calibration=1, lineSearch=True, adaptiveSteps=True) if a.analysis == "large" else {}))
+        analysis=0 if a.analysis == "large" else 1, resultBase=os.path.join(a.out, "nuss_result.vtu"))
     # the volumes and the index on the deformed cage (current after the FE filter) against the prepared one
     after = [example("filter_thoracic_volume", n).set(compare=True, beforeLayer=1, landmarkLayer=0)
              for n in ("thoracic_volume_slice", "thoracic_volume_envelope", "pectus_index")]

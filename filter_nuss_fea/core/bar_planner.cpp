@@ -94,8 +94,9 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
     if (opt.progress) opt.progress(pc, w);
   };
   const auto tAll = Clock::now();
-  if (!(opt.analysis.targetElevation > 0))
-    throw InputError("The bar planner calibrates every option to the sternal elevation: give a positive target elevation (mm).");
+  if (!(opt.analysis.targetElevation > 0) && !opt.analysis.targetFromChestLine)
+    throw InputError("The bar planner calibrates every option to the sternal elevation: give a positive target elevation (mm), "
+                     "or take it from the chest line.");
   if (opt.levels.empty()) throw InputError("No bar level given: list the intercostal spaces to compare, e.g. '3,4,5'.");
   if (!opt.oneBar && !opt.twoBars) throw InputError("Neither one bar nor two bars asked for: choose at least one configuration.");
   if (opt.twoBars && opt.secondOffset == 0) throw InputError("The second bar's offset must not be 0: it would share the first bar's space.");
@@ -135,6 +136,7 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
   index.rays = opt.indexRays;
 
   Plan plan;
+  plan.target = resolveTarget(cage, lms, opt.analysis);  // refuses a target past the chest line's reach
   progress(1, "Volumes and pectus index before");
   const vol::Soup before = measuredSurface(cage);
   plan.sliceBefore = vol::sliceVolume(before, sliceRange, opt.slice).volume;

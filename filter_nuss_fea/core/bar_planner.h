@@ -31,7 +31,7 @@ struct PlanOptions {
   bool oneBar = true, twoBars = true;
   int secondOffset = -1;      ///< second bar in space level + secondOffset (negative: above)
   double secondShare = 0.5;   ///< share of Fe on the second bar
-  Options analysis;           ///< targetElevation > 0 (the planner always calibrates); place.intercostalSpace is set per option
+  Options analysis;           ///< targetElevation > 0 or targetFromChestLine (the planner always calibrates); place.intercostalSpace is set per option
   vol::SliceParams slice;     ///< range: landmarks 700 (diaphragm dome) .. 701 (lung apex), as the slice filter's default
   vol::EnvelopeParams envelope;  ///< range: landmarks 500 (lower sternum end) .. 701, as the envelope filter's default
   int indexRays = 720;        ///< pectus index at the level of landmark 501 (midline x of 501, spine y of 503)
@@ -56,6 +56,7 @@ struct PlanRow {
 struct Plan {
   std::vector<PlanRow> rows;
   double sliceBefore = 0, envelopeBefore = 0, hallerBefore = 0;
+  Target target;              ///< every option's target elevation, and the chest line
   int best = -1;              ///< row of the best option (PlanOptions::best)
   Analysis bestAnalysis;      ///< its analysis (deformed model, stresses)
   int tets = 0, order = 1;

@@ -454,6 +454,87 @@ Model buildModel(const CageSurface& cage, const fe::TetgenOptions& mesh) {
   return m;
 }
 
+std::string ChestLine::describe() const {
+  return "lower sternum end " + mm(std::abs(depth)) + " mm " + (depth >= 0 ? "behind" : "in front of") + " the chest line between " +
+         pointText(right) + " and " + pointText(left);
+}
+
+ChestLine chestLine(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl) {
+  checkRadii(pl);
+  Vector3d end;
+  if (pl.sternumPoint) end = *pl.sternumPoint;
+  else if (auto p = findLandmark(lms, kSternumLowerEnd)) end = *p;
+  else throw InputError("No lower sternum end landmark (code 500) and no sternum point given: the chest line is measured there.");
+  const Vector3d dir = pl.direction.normalized();
+  const auto& V = cage.surface.vertices;
+  // 1. the sternum's anterior surface near its lower end
+  std::optional<Vector3d> front;
+  for (size_t f = 0; f < cage.surface.faces.size(); ++f)
+    if (cage.surface.faceTissue[f] == int(Tissue::Sternum))
+      for (int v : cage.surface.faces[f])
+        if ((V[v] - end).norm() <= pl.sternumLoadRadius && (!front || dir.dot(V[v]) > dir.dot(*front))) front = V[v];
+  if (!front)
+    throw InputError("No sternum surface lies within " + mm(pl.sternumLoadRadius) + " mm of the lower sternum end " + pointText(end) +
+                     ": the chest line depth is measured from the sternum's anterior surface there.");
+  // 2. the most anterior cage point on each side of the sternum, in a slab around the lower end's level
+  std::optional<Vector3d> side[2];
+  for (size_t f = 0; f < cage.surface.faces.size(); ++f) {
+    if (cage.facePart[f] == kVertebralColumn || cage.surface.faceTissue[f] == int(Tissue::Sternum)) continue;
+    for (int v : cage.surface.faces[f]) {
+      if (std::abs(V[v].z() - end.z()) > kChestLineSlab) continue;
+      const double dx = V[v].x() - end.x();
+      if (std::abs(dx) <= kChestLineGap) continue;
+      auto& best = side[dx > 0 ? 1 : 0];  // +x: the patient's left
+      if (!best || dir.dot(V[v]) > dir.dot(*best)) best = V[v];
+    }
+  }
+  for (int k = 0; k < 2; ++k)
+    if (!side[k])
+      throw InputError(std::string("No rib or cartilage lies ") + (k ? "left" : "right") + " of the lower sternum end " + pointText(end) +
+                       " within " + mm(kChestLineSlab) + " mm of its level: the chest line cannot be drawn; give the target elevation.");
+  // 3. the line between the two points, where it passes the sternum; the depth along the force direction
+  ChestLine c;
+  c.right = *side[0];
+  c.left = *side[1];
+  c.sternumFront = *front;
+  const double t = (front->x() - c.right.x()) / (c.left.x() - c.right.x());
+  c.depth = dir.dot(c.right + t * (c.left - c.right)) - dir.dot(*front);
+  return c;
+}
+
+std::string Target::describe() const {
+  std::string s = mm(elevation) + " mm, " + (fromChestLine ? "from the model: " : "as given");
+  if (!chest) return s + (fromChestLine ? "" : " (no chest line: the cage has no ribs beside the lower sternum end)");
+  return s + (fromChestLine ? "" : " (") + chest->describe() + (fromChestLine ? "" : ")");
+}
+
+Target resolveTarget(const CageSurface& cage, const std::vector<Landmark>& lms, const Options& opt) {
+  Target t;
+  if (opt.targetFromChestLine) {
+    t.chest = chestLine(cage, lms, opt.place);
+    if (!(t.chest->depth > 1.0))
+      throw InputError("The target elevation is to come from the model, but the " + t.chest->describe() +
+                       ": there is no depression to correct. Give the target elevation (mm).");
+    t.elevation = t.chest->depth;
+    t.fromChestLine = true;
+    return t;
+  }
+  t.elevation = std::max(0.0, opt.targetElevation);
+  try {
+    t.chest = chestLine(cage, lms, opt.place);
+  } catch (const InputError&) {
+    return t;  // no chest line to check against (a test body, a cage without ribs beside the sternum)
+  }
+  if (t.elevation > 0 && t.chest->depth > 1.0 && t.elevation > t.chest->reach()) {
+    std::ostringstream s;
+    s << "The target elevation " << mm(t.elevation) << " mm lies beyond what the model reaches: the " << t.chest->describe()
+      << ", so the reachable targets are (0, " << mm(t.chest->reach()) << "] mm (up to " << kMaxCorrection
+      << " times the depth; 0 takes the chest line itself). Lower the target elevation.";
+    throw InputError(s.str());
+  }
+  return t;
+}
+
 namespace {
 void checkOptions(const Options& opt) {
   if (!(opt.nuBone > -1 && opt.nuBone < 0.5) || !(opt.nuCartilage > -1 && opt.nuCartilage < 0.5))
@@ -464,26 +545,32 @@ void checkOptions(const Options& opt) {
   if (!std::isfinite(opt.targetElevation)) throw InputError("The target elevation must be a finite number (mm).");
 }
 
-Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<Landmark>& lms, const Options& opt);
+Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<Landmark>& lms, const Options& given,
+                      const Target& target);
 }  // namespace
 
 Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, const Options& opt) {
   checkOptions(opt);
+  const Target target = resolveTarget(cage, lms, opt);
   if (opt.progress) opt.progress(5, "TetGen (after checking the surface)");
-  return analyzeModel(cage, buildModel(cage, opt.mesh), lms, opt);
+  return analyzeModel(cage, buildModel(cage, opt.mesh), lms, opt, target);
 }
 
 Analysis analyze(const CageSurface& cage, const Model& model, const std::vector<Landmark>& lms, const Options& opt) {
   checkOptions(opt);
-  return analyzeModel(cage, model, lms, opt);
+  return analyzeModel(cage, model, lms, opt, resolveTarget(cage, lms, opt));
 }
 
 namespace {
-Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<Landmark>& lms, const Options& opt) {
+Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<Landmark>& lms, const Options& given,
+                      const Target& target) {
+  Options opt = given;
+  opt.targetElevation = target.elevation;
   auto progress = [&](int pc, const std::string& w) {
     if (opt.progress) opt.progress(pc, w);
   };
   Analysis a;
+  a.target = target;
   a.mesh = std::move(model.mesh);
   a.tetPart = std::move(model.tetPart);
   a.secondsMesh = model.secondsMesh;

@@ -68,13 +68,35 @@ struct Placement {
 /// surface nodes within 10 mm in |x| of its most lateral node, which is where the generator puts the
 /// landmarks). Throws InputError naming the missing rib when the cage has no rib s or s+1 on that side.
 Eigen::Vector3d barExit(const CageSurface& cage, const std::vector<Landmark>& lms, int side, int space);
+/// The chest line at the lower sternum end: where the sternum would lie on a normal chest. In the slab
+/// |z - z_end| <= kChestLineSlab around the lower sternum end, the most anterior cage point right of the
+/// sternum and the most anterior one left of it (more than kChestLineGap mm to each side, vertebral column
+/// left out) span the line; `depth` is how far the sternum's anterior surface near its lower end (within
+/// the Fe patch radius) lies behind that line along the force direction: the rise that brings the lower
+/// sternum end onto the chest line.
+constexpr double kChestLineSlab = 10.0, kChestLineGap = 20.0;
+/// The model is taken to reach at most this multiple of the chest line depth: past it the sternum would
+/// stand further in front of the chest line than it lay behind it, an over-correction no repair aims at.
+/// (Nuss repairs over-correct: the thesis' patients 4 and 5, index 3.7 and 3.6, rose 35.4 and 37.5 mm.)
+constexpr double kMaxCorrection = 2.0;
+struct ChestLine {
+  Eigen::Vector3d right = Eigen::Vector3d::Zero(), left = Eigen::Vector3d::Zero();  ///< the line's ends
+  Eigen::Vector3d sternumFront = Eigen::Vector3d::Zero();  ///< anterior-most sternum point near its lower end
+  double depth = 0;  ///< mm along the force direction; <= 0: the sternum lies on or in front of the line
+  double reach() const { return kMaxCorrection * depth; }  ///< the largest target the model accepts (mm)
+  std::string describe() const;  ///< "lower sternum end 38.2 mm behind the chest line between (..) and (..)"
+};
+/// Throws InputError when the lower sternum end is unknown or no cage point lies to one side of it.
+ChestLine chestLine(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl);
+
 /// Places the loads of `pl` on the cage surface (no mesh, no solve): throws the InputError the analysis
 /// would throw for them (missing landmark, a space outside the ribs, a second bar beside the sternum).
 void checkPlacement(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl);
 
 /// Newton settings of the analysis: 5 increments at least, relative tolerances 1e-6 (the elevation is
 /// converged to far below the 0.1 mm calibration tolerance), modified Newton (refactorise only when
-/// the residual stalls), up to 60 iterations per increment, 6 cut-backs.
+/// the residual stalls), up to 60 iterations per increment, 6 cut-backs, a line search on the residual and
+/// load increments that grow and shrink with the iteration count (a soft cartilage's hard load path).
 inline fe::NewtonOptions analysisNewton() {
   fe::NewtonOptions n;
   n.loadSteps = 5;
@@ -83,6 +105,8 @@ inline fe::NewtonOptions analysisNewton() {
   n.maxIterations = 60;
   n.maxCutbacks = 6;
   n.modified = true;
+  n.lineSearch = true;
+  n.adaptiveSteps = true;
   return n;
 }
 
@@ -99,17 +123,34 @@ struct Options {
   fe::TetgenOptions mesh;           ///< quality, max volume, order (1 TET4, 2 TET10)
   double nuBone = 0.3, nuCartilage = 0.4;
   bool nonlinear = true;            ///< large displacement (total Lagrangian, `material`)
-  fe::MaterialModel material = fe::MaterialModel::StVenantKirchhoff;  ///< every tissue's large-displacement model
-  CalibrationMethod calibration = CalibrationMethod::ForceSearch;      ///< when targetElevation > 0
+  /// every tissue's large-displacement model: neo-Hookean resists the compression of a thin cartilage that
+  /// inverts a St Venant-Kirchhoff tet on the way to a child's measured elevation
+  fe::MaterialModel material = fe::MaterialModel::NeoHookean;
+  /// when targetElevation > 0: one displacement-controlled solve (a force search takes several)
+  CalibrationMethod calibration = CalibrationMethod::DisplacementControl;
   fe::NewtonOptions newton = analysisNewton();  ///< loadSteps is a minimum; the curve step adds stops
   double force = 140;               ///< Fe (N) when targetElevation <= 0
   double targetElevation = 0;       ///< mm; > 0: calibrate Fe to this sternal elevation
+  /// calibrate Fe to the chest line depth (chestLine(); targetElevation is ignored)
+  bool targetFromChestLine = false;
   double tolerance = 0.1;           ///< calibration tolerance (mm)
   double maxForce = 1000;           ///< N; the target is unreachable if Fe = maxForce does not reach it
   double curveStep = 20;            ///< N: force-displacement curve step (thesis 20 N)
   Placement place;
   std::function<void(int, const std::string&)> progress;  ///< (percent, what)
 };
+
+/// The target of a calibration, resolved before any mesh or solve: the chest line depth when
+/// opt.targetFromChestLine, else opt.targetElevation (0: a given force), which must not exceed the chest
+/// line's reach when the cage has a chest line. Throws InputError naming the reachable range.
+struct Target {
+  double elevation = 0;          ///< mm; 0: no calibration (a given force)
+  bool fromChestLine = false;    ///< the elevation is the chest line depth
+  std::optional<ChestLine> chest;  ///< measured when the cage has a sternum and ribs on both sides of it
+  /// "38.2 mm, from the model: lower sternum end ..." / "44.7 mm, as given (lower sternum end ...)"
+  std::string describe() const;
+};
+Target resolveTarget(const CageSurface& cage, const std::vector<Landmark>& lms, const Options& opt);
 
 /// Where a value sits: the tet, its centroid, tissue and anatomical part, and whether it lies near the
 /// spine (within kNearSpine mm of the costovertebral joint of its rib).
@@ -139,6 +180,7 @@ struct Analysis {
   double elevation = 0;               ///< mm
   double linearCompliance = 0;        ///< mm/N of the linear model
   std::optional<fe::CalibrationResult> calibration;
+  Target target;                      ///< the calibration's target (elevation 0: a given force) and the chest line
   /// (Fe N, elevation mm) from 0: every increment (force search or a given force: incl. each curveStep N;
   /// displacement control: every elevation step, about curveStep N apart at the linear compliance)
   std::vector<std::pair<double, double>> curve;

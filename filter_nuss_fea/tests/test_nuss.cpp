@@ -230,3 +230,46 @@ TEST(NussAnalysis, DisplacementControlCalibratesInOneSolve) {
   EXPECT_NE(errorOf([] { nuss::parseCalibrationMethod("arc"); }).find("displacement"), std::string::npos);
   EXPECT_NE(errorOf([] { fe::parseMaterialModel("mooney"); }).find("neo-hookean"), std::string::npos);
 }
+
+// The chest line target: on a cage whose funnel centre lies at the lower sternum end, the depth is the
+// generator's funnel (the lower end lies behind the most anterior rib points at its level), the target
+// from the model is that depth, and a target past the reach is refused before TetGen; the default cage
+// (funnel centred on the sternal body, its lower end at the chest line) has no depression to correct there.
+TEST(NussAnalysis, ChestLineTargetAndReach) {
+  ribcage::RibCageParams p;
+  p.edgeLength = 6.0;
+  p.funnelCenterZ = 1.1;
+  OwnedMesh m;
+  ribcage::RibCageStats st;
+  const auto lms = ribcage::generateRibCage(p, m, &st);
+  const auto surf = nuss::cageFromMesh(m);
+  const nuss::ChestLine c = nuss::chestLine(surf, lms, nuss::Placement{});
+  EXPECT_GT(c.depth, 0.6 * st.funnelDepth);
+  EXPECT_LT(c.depth, 1.2 * st.funnelDepth);
+  EXPECT_LT(c.right.x(), -nuss::kChestLineGap);
+  EXPECT_GT(c.left.x(), nuss::kChestLineGap);
+  EXPECT_NEAR(c.right.y(), c.left.y(), 5.0);  // the generated cage is symmetric
+
+  auto o = coarse();
+  o.targetFromChestLine = true;
+  const nuss::Target t = nuss::resolveTarget(surf, lms, o);
+  EXPECT_TRUE(t.fromChestLine);
+  EXPECT_DOUBLE_EQ(t.elevation, c.depth);
+  EXPECT_NE(t.describe().find("from the model"), std::string::npos) << t.describe();
+  const nuss::Analysis a = nuss::analyze(surf, lms, o);  // small strain: calibrated exactly
+  EXPECT_NEAR(a.elevation, c.depth, 1e-6 * c.depth);
+  EXPECT_DOUBLE_EQ(a.target.elevation, c.depth);
+
+  auto far = coarse();
+  far.targetElevation = c.reach() + 1.0;
+  const std::string e = errorOf([&] { nuss::analyze(surf, lms, far); });
+  EXPECT_NE(e.find("reachable targets are (0, "), std::string::npos) << e;
+  far.targetElevation = c.reach() - 1.0;
+  EXPECT_NO_THROW(nuss::resolveTarget(surf, lms, far));
+
+  // the default cage: the lower sternum end lies at the chest line, so the model gives no target
+  auto fromModel = coarse();
+  fromModel.targetFromChestLine = true;
+  const std::string flat = errorOf([&] { nuss::resolveTarget(nuss::cageFromMesh(cage().mesh), cage().lms, fromModel); });
+  EXPECT_NE(flat.find("no depression to correct"), std::string::npos) << flat;
+}

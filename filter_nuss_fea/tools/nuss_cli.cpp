@@ -1,15 +1,18 @@
 // Command-line driver of the Nuss FE analysis core (bench/nuss_convergence.py, quick studies):
 //   pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]
-//                   [--target mm | --force N] [--linear] [--space s] [--threads n] [--vtu out.vtu] [--layers]
-//                   [--inp deck.inp] [--blend mm] [--material svk|neo-hookean|neo-hookean-ccx]
-//                   [--calibration force|displacement] [--line-search] [--adaptive-steps] [--help]
+//                   [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--threads n] [--vtu out.vtu] [--layers]
+//                   [--inp deck.inp] [--blend mm] [--funnel-z f] [--material svk|neo-hookean|neo-hookean-ccx]
+//                   [--calibration force|displacement] [--line-search] [--adaptive-steps] [--plain-newton] [--help]
 // Builds the default rib cage (--layers: as one layer per tissue, joined as the filter's 'One layer per
 // tissue' input does), runs the analysis and prints one line of key=value figures, the mean displacement
 // of the sternal load patch's nodes and the tets' volume per tissue. --inp writes the same model at the
 // final force as a CalculiX deck (as the filter's BASE.inp), printing the sternal patch's nodes, which is
 // what bench/fe_vs_ccx.py --cases cage compares. --material: every tissue's large-displacement model;
 // --calibration: how --target is reached (a force search, or one displacement-controlled solve);
-// --line-search, --adaptive-steps: the Newton options of those names (fe/solver.h).
+// --line-search, --adaptive-steps: the Newton options of those names (fe/solver.h), on by default as in the
+// analysis; --plain-newton turns both off. --target chest
+// calibrates to the chest line depth (the FE filter's target 0); --chest-line prints the chest line and
+// the target the analysis would take, and stops before TetGen.
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -32,7 +35,7 @@ int main(int argc, char** argv) {
   nuss::Options o;
   o.targetElevation = 0;
   std::string vtu, inp;
-  bool layers = false;
+  bool layers = false, chestOnly = false;
   for (int i = 1; i < argc; ++i) {
     auto next = [&]() -> const char* {
       if (i + 1 >= argc) { std::fprintf(stderr, "missing value after %s\n", argv[i]); std::exit(2); }
@@ -45,7 +48,12 @@ int main(int argc, char** argv) {
     else if (a == "--order") o.mesh.order = std::atoi(next());
     else if (a == "--maxvol") o.mesh.maxVolume = std::atof(next());
     else if (a == "--quality") o.mesh.radiusEdgeRatio = std::atof(next());
-    else if (a == "--target") o.targetElevation = std::atof(next());
+    else if (a == "--target") {
+      const std::string v = next();
+      if (v == "chest") o.targetFromChestLine = true;
+      else o.targetElevation = std::atof(v.c_str());
+    }
+    else if (a == "--chest-line") chestOnly = true;
     else if (a == "--force") o.force = std::atof(next());
     else if (a == "--linear") o.nonlinear = false;
     else if (a == "--space") o.place.intercostalSpace = std::atoi(next());
@@ -53,6 +61,7 @@ int main(int argc, char** argv) {
     else if (a == "--layers") layers = true;
     else if (a == "--inp") inp = next();
     else if (a == "--blend") rp.blend = std::atof(next());
+    else if (a == "--funnel-z") rp.funnelCenterZ = std::atof(next());
     else if (a == "--material" || a == "--calibration") {
       const std::string v = next();
       try {
@@ -65,14 +74,16 @@ int main(int argc, char** argv) {
     }
     else if (a == "--line-search") o.newton.lineSearch = true;
     else if (a == "--adaptive-steps") o.newton.adaptiveSteps = true;
+    else if (a == "--plain-newton") o.newton.lineSearch = o.newton.adaptiveSteps = false;
     else if (a == "--help" || a == "-h") {
       std::printf(
           "pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]\n"
-          "                [--target mm | --force N] [--linear] [--space s] [--vtu out.vtu] [--layers] [--inp deck.inp]\n"
-          "                [--blend mm] [--material svk|neo-hookean|neo-hookean-ccx] [--calibration force|displacement]\n"
-          "                [--line-search] [--adaptive-steps]\n"
+          "                [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--vtu out.vtu] [--layers] [--inp deck.inp]\n"
+          "                [--blend mm] [--funnel-z f] [--material svk|neo-hookean|neo-hookean-ccx] [--calibration force|displacement]\n"
+          "                [--line-search] [--adaptive-steps] [--plain-newton]\n"
           "Builds the generator's rib cage, runs the Nuss FE analysis and prints key=value figures.\n"
-          "Defaults: St Venant-Kirchhoff, force search, plain Newton (the analysis' defaults).\n");
+          "Defaults: the analysis' (the FE filter's): neo-Hookean, displacement control, Newton with a line search\n"
+          "and adaptive load steps; --plain-newton turns both off.\n");
       return 0;
     }
     else { std::fprintf(stderr, "usage: see the header of tools/nuss_cli.cpp (unknown argument %s)\n", argv[i]); return 2; }
@@ -94,6 +105,12 @@ int main(int argc, char** argv) {
       surf = nuss::cageFromMesh(cage);
     }
     const double tCage = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+    if (chestOnly) {
+      const auto t = nuss::resolveTarget(surf, lms, o);
+      std::printf("chestDepth=%.3f reach=%.3f target=%.3f\ntarget %s\n", t.chest ? t.chest->depth : 0.0,
+                  t.chest ? t.chest->reach() : 0.0, t.elevation, t.describe().c_str());
+      return 0;
+    }
     const auto a = nuss::analyze(surf, lms, o);
     std::printf("faces=%zu tets=%d nodes=%d order=%d dofs=%d force=%.2f elevation=%.3f compliance=%.5f "
                 "maxStress=%.3f maxStrain=%.4f strainCart=%.4f strainBone=%.5f maxStressAll=%.3f nlSolves=%d newton=%d factor=%d "
@@ -103,6 +120,7 @@ int main(int argc, char** argv) {
                 a.maxStress, a.maxStrain, a.maxStrainCartilage, a.maxStrainBone, a.maxStressAll, a.nonlinearSolves,
                 a.newtonIterations, a.factorizations, tCage, a.secondsMesh, a.secondsSolve, fe::materialModelName(o.material),
                 nuss::calibrationMethodName(o.calibration));
+    std::printf("target %s\n", a.target.describe().c_str());
     std::printf("max stress at %s\nmax strain at %s\n", a.maxStressAt.describe().c_str(), a.maxStrainAt.describe().c_str());
     std::printf("fixed %zu, sternum %zu, supports", a.fixedNodes.size(), a.sternumNodes.size());
     for (size_t k = 0; k < a.supportNodes.size(); ++k) std::printf(" %s:%zu", a.supportNames[k].c_str(), a.supportNodes[k].size());
