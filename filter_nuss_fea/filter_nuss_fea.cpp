@@ -568,12 +568,12 @@ void FilterNussFeaPlugin::runBarPlanner(FilterContext& ctx) {
   ctx.doc().setCurrentMesh(res.id());
 
   const size_t n = plan.rows.size();
-  ctx.log("Target elevation " + plan.target.describe());
   ctx.log("Nuss bar planner: " + std::to_string(n) + " options, each calibrated to " + fmt(plan.target.elevation, 2) +
           " mm (" + (o.analysis.nonlinear ? "large displacement" : "small strain") + ", " + std::to_string(plan.tets) +
           (plan.order == 2 ? " TET10" : " TET4") + " elements meshed once in " + fmt(plan.secondsMesh, 1) + " s; reuse saved " +
           fmt(plan.secondsMesh * double(n - 1), 1) + " s of TetGen); before: slice " + fmt(plan.sliceBefore / 1000, 2) + " cm3, envelope " +
           fmt(plan.envelopeBefore / 1000, 2) + " cm3, Haller index " + fmt(plan.hallerBefore, 3));
+  ctx.log("Target elevation " + plan.target.describe());
   for (const auto& line : nuss::planTable(plan)) ctx.log("Planner | " + line);
   for (const auto& r : plan.rows)
     ctx.log("Planner option '" + r.option + "': Fe = " + fmt(r.force, 2) + " N, elevation " + fmt(r.elevation, 2) +

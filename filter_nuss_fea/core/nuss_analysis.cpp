@@ -513,8 +513,8 @@ Target resolveTarget(const CageSurface& cage, const std::vector<Landmark>& lms, 
   if (opt.targetFromChestLine) {
     t.chest = chestLine(cage, lms, opt.place);
     if (!(t.chest->depth > 1.0))
-      throw InputError("The target elevation is to come from the model, but the " + t.chest->describe() +
-                       ": there is no depression to correct. Give the target elevation (mm).");
+      throw InputError("The target elevation is to come from the model (the chest line), but there is no depression to "
+                       "correct: " + t.chest->describe() + ". Give the target elevation (mm).");
     t.elevation = t.chest->depth;
     t.fromChestLine = true;
     return t;
@@ -527,7 +527,7 @@ Target resolveTarget(const CageSurface& cage, const std::vector<Landmark>& lms, 
   }
   if (t.elevation > 0 && t.chest->depth > 1.0 && t.elevation > t.chest->reach()) {
     std::ostringstream s;
-    s << "The target elevation " << mm(t.elevation) << " mm lies beyond what the model reaches: the " << t.chest->describe()
+    s << "The target elevation " << mm(t.elevation) << " mm lies beyond what the model reaches: " << t.chest->describe()
       << ", so the reachable targets are (0, " << mm(t.chest->reach()) << "] mm (up to " << kMaxCorrection
       << " times the depth; 0 takes the chest line itself). Lower the target elevation.";
     throw InputError(s.str());
