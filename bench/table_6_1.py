@@ -1,0 +1,131 @@
+#!/usr/bin/python3
+"""The thesis' five patients (Table 6-1) built by the generator and calibrated with the FE filter's defaults,
+in one run, beside the thesis' columns: force, Newton iterations, solves and time, max stress and strain and
+where, the intrathoracic volume gain (slice method and Ferguson envelope) and the pectus index after.
+
+Each patient: 'Create Pectus Excavatum Rib Cage' (sex/age and pectus index of Table 6-1, --edge mm) ->
+'Nuss Procedure FE Analysis' with its defaults, calibrated to the patient's measured elevation of the
+lower sternum end -> both thoracic volume filters and the pectus index, before and after; one
+meshlabserver per patient and method. --methods adds other large-displacement settings, on the same TET10 mesh:
+
+  default  the filter's defaults: neo-Hookean, displacement control, line search, adaptive load steps
+  search   the same with the force search instead of displacement control
+  svk      St Venant-Kirchhoff, force search, plain Newton
+
+With --input exports, each patient's cage is first written as a messy CT segmentation export by
+pectus_ct_phantom (the generator's cage of that age and index on a 1 mm CT grid, TotalSegmentator-named STL
+files with the defects of real exports), then imported and prepared by 'Import CT Segmentation' and
+'Prepare Patient Rib Cage' (their defaults: 4 mm edges) in the same script before the analysis.
+
+    bench/table_6_1.py [--edge 5] [--cases 1,2,3,4,5] [--methods default] [--input generated|exports]
+                       [--out /tmp/pectus-table61]
+
+Needs the plugins and meshlabserver of build/prefix (scripts/setup.sh).
+"""
+import argparse
+import os
+import platform
+import subprocess
+import sys
+import time
+
+HERE = os.path.dirname(os.path.abspath(__file__))
+ROOT = os.path.dirname(HERE)
+sys.path.insert(0, os.path.join(ROOT, "python"))
+import pectus_filters as pf  # noqa: E402
+import pectus_mlx as mlx  # noqa: E402
+import pipeline  # noqa: E402
+from cohort import THESIS  # noqa: E402  (case, sex, age, index, elevation mm)
+
+# Table 6-1's simulation rows: force N, max stress MPa, max strain, volume gain %
+THESIS_RESULTS = {"case1": (140, 43.5, 0.93, 6.09), "case2": (120, 90.6, 1.20, 5.05), "case3": (190, 33.25, 1.04, 2.72),
+                  "case4": (80, 37.7, 0.65, 4.43), "case5": (70, 54.5, 0.59, 8.88)}
+METHODS = {"default": {},
+           "search": dict(calibration=0),
+           "svk": dict(material=0, calibration=0, lineSearch=False, adaptiveSteps=False)}
+CAGE, LANDMARKS = 0, 1
+PHANTOM = os.path.join(ROOT, "build", "filter_nuss_fea", "pectus_ct_phantom")
+
+
+def cage_filters(case, age, index, edge, source, out):
+    """the filters that make the patient's cage (current) and landmarks, and their layer numbers"""
+    if source == "generated":
+        return [pf.create_ribcage(age=age, hallerIndex=index, edgeLength=edge)], CAGE, LANDMARKS
+    folder = os.path.join(out, f"{case}_export")
+    subprocess.run([PHANTOM, folder, "--age", str(age), "--haller", str(index), "--only", "messy"], check=True,
+                   capture_output=True)
+    imp = pf.import_ct_segmentation(path=os.path.join(folder, "stl_messy"))
+    n = mlx.grab(mlx.run([], mlx.Script([imp])).log, r"Imported (\d+) structures", int)
+    return [imp, pf.prepare_patient_rib_cage()], n, n + 1  # the prepared cage and its landmarks follow the imports
+
+
+def run_case(case, sex, age, index, elevation, method, edge, out, source):
+    make, cage, landmarks = cage_filters(case, age, index, edge, source, out)
+    base = os.path.join(out, f"{case}_{source}_{method}")
+    fe = pf.nuss_fea(landmarkLayer=landmarks, targetElevation=elevation, resultBase=mlx.SaveFile(base + ".vtu", ".vtu"),
+                     **METHODS[method])
+    compare = dict(compare=True, beforeLayer=cage, landmarkLayer=landmarks)
+    volumes = [pipeline.example(k, n).set(**compare) for k, n in (("slice", "Thoracic Volume (Slice Method)"),
+                                                                  ("envelope", "Thoracic Volume (Ferguson Envelope)"),
+                                                                  ("index", "Pectus Index"))]
+    t0 = time.time()
+    res = mlx.run([], mlx.Script(make + [fe] + volumes), timeout=4 * 3600)
+    wall = time.time() - t0
+    with open(base + ".log", "w") as fh:
+        fh.write(res.stdout)
+    r = pipeline.parse(res.log)
+    r["newton"] = mlx.grab(res.log, r"([0-9]+) Newton iterations", int)
+    r["rc"], r["wall"] = res.rc, wall
+    r["error"] = next((l for l in res.log if "failed" in l.lower() or "no converged" in l.lower()), "")
+    return r
+
+
+def f(v, spec="{:.1f}"):
+    return "—" if v is None else spec.format(v)
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--edge", type=float, default=5.0)
+    ap.add_argument("--cases", default="1,2,3,4,5")
+    ap.add_argument("--methods", default="default")
+    ap.add_argument("--input", choices=("generated", "exports"), default="generated")
+    ap.add_argument("--out", default="/tmp/pectus-table61")
+    a = ap.parse_args()
+    os.makedirs(a.out, exist_ok=True)
+    cases = [THESIS[int(k) - 1] for k in a.cases.split(",")]
+    methods = a.methods.split(",")
+    rows = []
+    for case, sex, age, index, elevation in cases:
+        for m in methods:
+            r = run_case(case, sex, age, index, elevation, m, a.edge, a.out, a.input)
+            rows.append((case, sex, age, index, elevation, m, r))
+            print(f"{case} {m}: rc {r['rc']}, Fe {r['force']} N, {r['newton']} Newton iterations, {r['wall']:.0f} s"
+                  + (f"; {r['error']}" if r["rc"] else ""), flush=True)
+
+    what = f"generated cages ({a.edge:g} mm edges)" if a.input == "generated" else "their CT-like exports, prepared (4 mm edges)"
+    print(f"\nTable 6-1, {what}, TET10 as the FE filter meshes them by default; "
+          f"{platform.node()}, {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}")
+    print("| case | sex/age | index | target mm | method | tets | result | Fe N (thesis) | Newton it. | solves | wall s |"
+          " max stress MPa (thesis), where | max strain (thesis), where | volume gain % slice / envelope (thesis) |"
+          " index after |")
+    print("|---|---|---:|---:|---|---:|---|---:|---:|---:|---:|---|---|---|---:|")
+    for case, sex, age, index, elevation, m, r in rows:
+        tf, ts, te, tv = THESIS_RESULTS[case]
+        ok = r["rc"] == 0
+        hb, ha = (r["haller"] + [None, None])[:2]
+        print(f"| {case[-1]} | {sex}/{age} | {index} | {elevation} | {m} | {f(r['tets'], '{:,}')} | "
+              f"{'calibrated' if ok else 'stopped'} | {f(r['force'] if ok else None, '{:.2f}')} ({tf}) | {f(r['newton'], '{}')} | "
+              f"{f(r['solves'], '{}')} | {r['wall']:.0f} | "
+              f"{f(r['max_stress'] if ok else None)} ({ts}), {r['max_stress_where'] or '—'} | "
+              f"{f(r['max_strain'] if ok else None, '{:.3f}')} ({te}), {r['max_strain_where'] or '—'} | "
+              f"{f(r['slice_change_pct'] if ok else None, '{:.2f}')} / {f(r['envelope_change_pct'] if ok else None, '{:.2f}')} ({tv}) | "
+              f"{f(ha if ok else None, '{:.2f}')} |")
+    print("Published forces: 68 N (Fonkalsrud, 4 children under 11) to 250 N (instrumented bar); "
+          "Weber et al.: 181 ± 48 N, boys aged 5-17; the thesis: 70-190 N.")
+    failed = [r for *_, m, r in rows if m == "default" and r["rc"] != 0]
+    return 1 if failed else 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
