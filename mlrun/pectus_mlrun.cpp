@@ -19,6 +19,8 @@
 // not an abort, and a missing one takes the filter's default with a warning.
 #include <QApplication>
 #include <QDir>
+#include <QDomDocument>
+#include <QFile>
 #include <QFileInfo>
 #include <QPluginLoader>
 
@@ -31,6 +33,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <iostream>
+#include <map>
 #include <string>
 #include <vector>
 
@@ -166,13 +169,37 @@ bool loadDir(PluginManager& pm, const QString& dir, bool ours) {
   return ok;
 }
 
+/// The <Param> elements of each <filter> of a script, as written: name -> (type, value). MeshLab's
+/// FilterScript drops a parameter whose value does not parse as its type; this names it.
+using RawParams = std::vector<std::map<QString, std::pair<QString, QString>>>;
+RawParams rawParameters(const QString& path) {
+  RawParams out;
+  QFile f(path);
+  QDomDocument doc;
+  if (!f.open(QIODevice::ReadOnly) || !doc.setContent(&f)) return out;
+  for (QDomElement fe = doc.documentElement().firstChildElement("filter"); !fe.isNull();
+       fe = fe.nextSiblingElement("filter")) {
+    out.emplace_back();
+    for (QDomElement pe = fe.firstChildElement("Param"); !pe.isNull(); pe = pe.nextSiblingElement("Param"))
+      out.back()[pe.attribute("name")] = {pe.attribute("type"), pe.attribute("value")};
+  }
+  return out;
+}
+
 /// Every filter parameter of `defaults` takes the script's value of the same name and type. Returns the
 /// problems (empty: all well); a missing parameter keeps its default (a warning in `notes`).
 std::string mergeParameters(const QString& filter, RichParameterList& defaults, const RichParameterList& script,
-                            std::vector<std::string>& notes) {
+                            const std::map<QString, std::pair<QString, QString>>& raw, std::vector<std::string>& notes) {
   std::string problems;
   for (RichParameter& p : defaults) {
     auto it = script.findParameter(p.name());
+    auto r = raw.find(p.name());
+    if (it == script.end() && r != raw.end()) {
+      problems += "'" + filter.toStdString() + "': parameter '" + p.name().toStdString() + "' is written as " +
+                  r->second.first.toStdString() + " with the value '" + r->second.second.toStdString() +
+                  "', which does not read as one; the filter expects " + p.stringType().toStdString() + "\n";
+      continue;
+    }
     if (it == script.end()) {
       notes.push_back("'" + filter.toStdString() + "': parameter '" + p.name().toStdString() +
                       "' is not in the script; it keeps its default");
@@ -255,7 +282,12 @@ int main(int argc, char** argv) {
                 << " (missing, not MeshLab's .mlx XML, or a parameter whose value does not parse)\n";
       return 2;
     }
+    const RawParams raw = rawParameters(args.script);
+    int stepIndex = 0;
     for (const auto& step : script) {
+      static const std::map<QString, std::pair<QString, QString>> none;
+      const auto& rawStep = stepIndex < int(raw.size()) ? raw[stepIndex] : none;
+      ++stepIndex;
       const QString name = step.first;
       QAction* action = pm.filterAction(name);
       FilterPlugin* fp = action ? pm.getFilterPluginFromAction(action) : nullptr;
@@ -267,7 +299,7 @@ int main(int argc, char** argv) {
       fp->setLog(&md.Log);
       RichParameterList par = fp->initParameterList(action, md);
       std::vector<std::string> notes;
-      const std::string problems = mergeParameters(name, par, step.second, notes);
+      const std::string problems = mergeParameters(name, par, step.second, rawStep, notes);
       for (const auto& n : notes) md.Log.log(GLLogStream::WARNING, n);
       if (!problems.empty()) {
         std::cerr << "pectus-mlrun: the script's parameters do not fit the filter:\n" << problems;
