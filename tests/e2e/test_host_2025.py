@@ -3,8 +3,8 @@
 
 Both MeshLab builds are float. The layers each host saves must agree to float rounding: the same vertex and
 face counts, the same face quality, positions within a few float ulps of the model size; the Log figures
-the same to their printed digits. Where they cannot agree bit for bit the check names why (a different
-compiler and Eigen: g++ 12 + Eigen 3.4 against g++ 16 + Eigen 5.0, whose sums round differently).
+the same to their printed digits (g++ 12 + Eigen 3.4 against g++ 16 + Eigen 5.0 give bit-identical results
+here). The rib cage is the exception, named below: each host decimates it with its own vcglib.
 Then the failure paths on 2025.07: a refused input is a message and exit 255 with the layers unchanged,
 a parameter of the wrong type is a message and exit 2 (meshlabserver aborts there), a missing script too.
 """
@@ -85,10 +85,19 @@ script = mlx.Script([cage.set(edgeLength=8.0), quality, index.set(compare=False)
 res = {h: mlx.run([], script, [(out("cage", h), "fq fc sa", 0)], host=h, timeout=1200) for h in mlx.HOSTS}
 for h, r in res.items():
     check(r.rc == 0, f"rib cage + quality + pectus index on {h}: exit 0", r.stdout[-1500:])
-haller = {h: figures(r.log, r"Haller") for h, r in res.items()}
-check(haller["2020.09"] and haller["2020.09"] == haller["2025.07"], "pectus index: the same Log figures on both hosts",
-      str(haller))
-compare_layers("cage", tol_rel=1e-5, quality_tol=1e-4)
+# The cage is decimated by the host's own vcglib (TriEdgeCollapseQuadric in a LocalOptimization heap),
+# which changed between the vcglib of 2020.09 and of 2025.07: the two cages have the same vertex and face
+# counts but not the same vertices, so they are compared by what they measure, not vertex by vertex.
+a, b = (read_ply(out("cage", h)) for h in mlx.HOSTS)
+check(len(a["V"]) == len(b["V"]) and len(a["F"]) == len(b["F"]), "cage: same vertex and face counts on both hosts",
+      f"{len(a['V'])}/{len(a['F'])} vs {len(b['V'])}/{len(b['F'])}")
+labels = {h: sorted(set(np.round(read_ply(out("cage", h))["face"]["quality"]).astype(int))) for h in mlx.HOSTS}
+check(labels["2020.09"] == labels["2025.07"], "cage: the same tissue/part labels on both hosts", str(labels))
+index = {h: [float(x) for x in re.findall(r"Haller index (\d+\.\d+)", "\n".join(r.log))] for h, r in res.items()}
+ok = index["2020.09"] and index["2025.07"] and abs(index["2020.09"][0] - index["2025.07"][0]) <= 0.03 * index["2020.09"][0]
+check(bool(ok), "Pectus Index of the two cages within 3 %", str(index))
+print(f"     cage: Pectus Index {index}; generator's own line: " +
+      " | ".join(next((l for l in r.log if l.startswith("Rib cage:")), "")[:160] for r in res.values()))
 
 # 5. failures on 2025.07
 # a refused input: a mesh without faces; exit 255, the reason in the Log, the layer saved unchanged
