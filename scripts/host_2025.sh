@@ -86,9 +86,9 @@ fi
 
 # 2. MeshLab and the build dependencies (the same list as scripts/setup.sh's, less what only the
 #    bookworm benchmarks and docs need)
-PKGS=(meshlab g++ make cmake qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev libtet1.5-dev
+PKGS=(meshlab g++ make cmake qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev libtet-dev
       libsuitesparse-dev libomp-dev libgtest-dev libcgal-dev liblemon-dev libnifti2-dev zlib1g-dev
-      python3 xvfb xauth)
+      python3 xvfb xauth dpkg-dev file)
 if [ ! -f "$HOSTDIR/.complete-pkgs" ] || ! in_root dpkg-query -W "${PKGS[@]}" >/dev/null 2>&1; then
   t=$(date +%s)
   say "installing forky's meshlab and the build dependencies in the userland (about 2 min, +1.3 GB)"
