@@ -12,8 +12,12 @@ if [ "${PECTUS_HOST_2025:-1}" != 0 ]; then
   t=$(date +%s)
   "$ROOT/scripts/host_2025.sh"
   echo "[test] MeshLab 2025.07 userland + build took $(( $(date +%s) - t )) s"
-  # the unit tests of the cores and of the adapter, built against 2025.07's vcglib, Eigen 5 and libmeshlab-common
-  "$ROOT/scripts/host_2025.sh" run ctest --test-dir build-2025.07 -L unit -j"$(nproc)" --output-on-failure --timeout 1500
+  # the unit tests of the adapter and the cores built against 2025.07's vcglib, Eigen 5 and libmeshlab-common,
+  # less the suites that build whole rib cages (20 minutes on 2 cores; the bookworm run has them) and the two
+  # FE mesher tests that TetGen 1.6 in forky does not meet (docs/hosts.md)
+  "$ROOT/scripts/host_2025.sh" run ctest --test-dir build-2025.07 -L unit -j"$(nproc)" --output-on-failure --timeout 1500 \
+    -E '^(RibCage|RibCageCoarse|NussAnalysis|PatientPrepare|BarPlanner|TissueJoin)\.|^FeMesher\.Tetgen(BoxLabels|Assertion)'
+
 fi
 cd "$ROOT/build"
 # (e2e tests labelled host2025 skip themselves when the 2025.07 host was not made)
