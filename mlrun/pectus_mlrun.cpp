@@ -152,12 +152,16 @@ bool loadDir(PluginManager& pm, const QString& dir, bool ours) {
     } catch (const MLException& e) {
       std::string why = e.what();
       if (why.find("already loaded") != std::string::npos) continue;
-      if (why.find("different version") != std::string::npos || why.find("precision") != std::string::npos ||
+      const QString iid = QPluginLoader(path).metaData().value("IID").toString();
+      if (iid.contains("MeshFilterInterface"))
+        why = path.toStdString() + " is a plugin for MeshLab 2020.09 or earlier (interface " + iid.toStdString() +
+              "); this is " + thisMeshLab() + ": rebuild it against this MeshLab (scripts/host_2025.sh)";
+      else if (why.find("different version") != std::string::npos || why.find("precision") != std::string::npos ||
           why.find("scalar") != std::string::npos)
         why = path.toStdString() + " is " + builtFor(path) + "; this is " + thisMeshLab() +
               ": rebuild it against this MeshLab (scripts/host_2025.sh)";
       if (ours) {
-        std::cerr << "pectus-mlrun: cannot load " << why << "\n";
+        std::cerr << "pectus-mlrun: plugin not loaded: " << why << "\n";
         ok = false;
       } else {
         skipped << f;
