@@ -63,6 +63,7 @@ FilterC1SurfacePlugin::FilterC1SurfacePlugin() {
   pectus::ml::FilterSpec r;
   r.id = FP_C1_REFINE;
   r.name = "C1 Surface: Refine onto Goodman-Said Surface";
+  r.pythonName = "c1_surface_refine";
   r.info =
       "Builds the C1 surface of thesis chapter 3 on the current triangle mesh (Goodman-Said cubic Bezier "
       "triangular patches with the rational blend of eq. 3-16, vertex gradients by local estimation) and "
@@ -70,7 +71,7 @@ FilterC1SurfacePlugin::FilterC1SurfacePlugin() {
       "shared: the output is conforming (no T-junctions), the original vertices are kept. Vertex normals of "
       "the output are the patch normals. Non-manifold edges/vertices and NaN coordinates are refused with a "
       "message; zero-area triangles and isolated vertices are tolerated (isolated vertices are dropped).";
-  r.cls = MeshFilterInterface::Remeshing;
+  r.cls = pectus::ml::HostFilter::Remeshing;
   r.postCondition = MeshModel::MM_VERTCOORD | MeshModel::MM_VERTNORMAL | MeshModel::MM_FACENUMBER |
                     MeshModel::MM_VERTNUMBER;
   addFilter(this, r);
@@ -78,16 +79,17 @@ FilterC1SurfacePlugin::FilterC1SurfacePlugin() {
   pectus::ml::FilterSpec p;
   p.id = FP_C1_PROJECT;
   p.name = "C1 Surface: Project Layer onto Surface";
+  p.pythonName = "c1_surface_project_layer";
   p.info =
       "Moves every vertex of the current layer to its closest point on the C1 (Goodman-Said) surface built "
       "on another layer (the surface layer): a spatial grid on the patches and a Newton search per patch. "
       "Vertex normals become the surface normals there. The Log gives the mean and max displacement.";
-  p.cls = MeshFilterInterface::Smoothing;
+  p.cls = pectus::ml::HostFilter::Smoothing;
   p.postCondition = MeshModel::MM_VERTCOORD | MeshModel::MM_VERTNORMAL;
   addFilter(this, p);
 }
 
-void FilterC1SurfacePlugin::initParameters(int id, MeshDocument& md, RichParameterList& par) {
+void FilterC1SurfacePlugin::initParameters(int id, const MeshDocument& md, RichParameterList& par) {
   if (id == FP_C1_REFINE) {
     par.addParam(RichInt("subdivisions", 3, "Subdivisions k",
                          "Every triangle is split into k&times;k triangles (k from 1 to 32); k = 1 keeps the mesh. "
@@ -97,10 +99,10 @@ void FilterC1SurfacePlugin::initParameters(int id, MeshDocument& md, RichParamet
     par.addParam(RichBool("newLayer", true, "Result in a new layer",
                           "Put the refined mesh into a new layer (the input stays); off: replace the current layer."));
   } else if (id == FP_C1_PROJECT) {
-    MeshModel* def = md.mm();
-    for (MeshModel* m : md.meshList)
-      if (m != md.mm() && m->cm.fn > 0) { def = m; break; }
-    par.addParam(RichMesh("surfaceMesh", def, &md, "Surface layer",
+    MeshModel* def = pectus::ml::currentMesh(md);
+    for (MeshModel* m : pectus::ml::meshes(md))
+      if (m != pectus::ml::currentMesh(md) && m->cm.fn > 0) { def = m; break; }
+    par.addParam(pectus::ml::richMesh("surfaceMesh", def, md, "Surface layer",
                           "The triangle mesh whose C1 surface the current layer's vertices are projected onto "
                           "(it may be the current layer itself: then vertices stay where they are)."));
     par.addParam(RichEnum("gradientMethod", 0, kGradient, "Gradient estimation", kGradientHelp));

@@ -5,8 +5,7 @@
 
 class FilterC1SurfacePlugin : public QObject, public pectus::ml::FilterPluginBase {
   Q_OBJECT
-  MESHLAB_PLUGIN_IID_EXPORTER(MESH_FILTER_INTERFACE_IID)
-  Q_INTERFACES(MeshFilterInterface)
+  PECTUS_FILTER_PLUGIN_METADATA
 
  public:
   enum { FP_C1_REFINE, FP_C1_PROJECT };
@@ -14,7 +13,7 @@ class FilterC1SurfacePlugin : public QObject, public pectus::ml::FilterPluginBas
   QString pluginName() const override { return "FilterPectusC1Surface"; }
 
  protected:
-  void initParameters(int id, MeshDocument& md, RichParameterList& par) override;
+  void initParameters(int id, const MeshDocument& md, RichParameterList& par) override;
   void run(int id, pectus::ml::FilterContext& ctx) override;
 
  private:

@@ -35,6 +35,7 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
   pectus::ml::FilterSpec q;
   q.id = FP_ELEMENT_QUALITY;
   q.name = "Compute Element Quality (Triangle Alpha / Quad Beta)";
+  q.pythonName = "compute_element_quality";
   q.info =
       "Shape quality of every element of the current layer, written to per-face quality and shown "
       "with MeshLab's quality colours (red = 0, poor; blue = 1, ideal).<br>"
@@ -47,13 +48,14 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
       "The Log gets min / mean / max and a 10-bin histogram. Empty layers, point clouds and NaN "
       "coordinates are refused with a message; asking for quads on a layer without faux edges is "
       "refused too (run a tri-to-quad conversion first).";
-  q.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Quality | MeshFilterInterface::Measure);
+  q.cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Quality | pectus::ml::HostFilter::Measure);
   q.postCondition = MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
   addFilter(this, q);
 
   pectus::ml::FilterSpec s;
   s.id = FP_MGA_SMOOTH;
   s.name = "MGA Surface Mesh Smoothing";
+  s.pythonName = "mga_surface_mesh_smoothing";
   s.info =
       "Improves the shape of the elements of a triangle or quad surface mesh without changing its "
       "connectivity, by moving every free node on the surface (thesis chapter 4.2).<br>"
@@ -71,7 +73,7 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
       "Afterwards the element quality is written to per-face quality and colours (red = 0, blue = 1), and the "
       "Log gives worst/mean quality before and after, nodes moved, sweeps and time. Non-manifold meshes, NaN "
       "coordinates, a mesh with no free node, and quads asked of a triangle mesh are refused with a message.";
-  s.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Smoothing | MeshFilterInterface::Quality);
+  s.cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Smoothing | pectus::ml::HostFilter::Quality);
   s.postCondition = MeshModel::MM_VERTCOORD | MeshModel::MM_VERTNORMAL | MeshModel::MM_FACENORMAL |
                     MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
   addFilter(this, s);
@@ -79,6 +81,7 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
   pectus::ml::FilterSpec g;
   g.id = FP_GRADIENT_SMOOTH;
   g.name = "Gradient Surface Mesh Smoothing (Baseline)";
+  g.pythonName = "gradient_surface_mesh_smoothing";
   g.info =
       "The conjugate gradient baseline the thesis compares MGA smoothing with (Table 4-1, after Garimella et "
       "al.): the same fitness (sum of alpha or beta of the node's elements), the same C1 surface of the input, "
@@ -95,7 +98,7 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
   addFilter(this, g);
 }
 
-void FilterMgaSmoothPlugin::initParameters(int id, MeshDocument&, RichParameterList& par) {
+void FilterMgaSmoothPlugin::initParameters(int id, const MeshDocument&, RichParameterList& par) {
   if (id == FP_ELEMENT_QUALITY) {
     par.addParam(RichEnum("elementType", 0, QStringList() << "Auto" << "Triangles (alpha)" << "Quads (beta)",
                           "Element type",

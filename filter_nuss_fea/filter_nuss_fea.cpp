@@ -23,6 +23,7 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
   pectus::ml::FilterSpec s;
   s.id = FP_CREATE_RIBCAGE;
   s.name = "Create Pectus Excavatum Rib Cage";
+  s.pythonName = "create_pectus_excavatum_rib_cage";
   s.info =
       "A parametric child's rib cage with pectus excavatum (thesis ch. 6, Table 6-1): 10-12 rib pairs "
       "(elliptic sections, sloping down from the costovertebral joints, widest at ribs 6-8), costal "
@@ -39,8 +40,8 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
       "501 deepest funnel point, 502 jugular notch, 503 vertebra at the deepest level, "
       "600+10*side+s bar exits at the mid-axillary line in intercostal space s = 4, 5, "
       "700 diaphragm dome height, 701 lung apex height).";
-  s.cls = MeshFilterInterface::MeshCreation;
-  s.arity = MeshFilterInterface::NONE;
+  s.cls = pectus::ml::HostFilter::MeshCreation;
+  s.arity = pectus::ml::HostFilter::NONE;
   s.needsCurrentMesh = false;
   s.postCondition = MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY;
   addFilter(this, s);
@@ -48,6 +49,7 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
   pectus::ml::FilterSpec n;
   n.id = FP_NUSS_FEA;
   n.name = "Nuss Procedure FE Analysis";
+  n.pythonName = "nuss_procedure_fe_analysis";
   n.info =
       "Finite element analysis of a Nuss pectus excavatum repair on the current layer (thesis 6.1, 6.2, 6.4.1): a "
       "closed rib cage surface whose faces carry tissue and part labels (as 'Create Pectus Excavatum Rib Cage' writes "
@@ -66,13 +68,14 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
       "stress in MPa or equivalent strain), a layer 'nuss landmarks after' (landmarks moved with the cage), a Log "
       "summary like Table 6-1 and, with a result file base, BASE.vtu (ParaView), BASE.inp (CalculiX deck of the same "
       "model), BASE_force_displacement.csv/.png (Fig. 6-14) and BASE_rib_strain.csv (strain along a rib, Fig. 6-18).";
-  n.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Measure | MeshFilterInterface::Remeshing);
-  n.arity = MeshFilterInterface::VARIABLE;
+  n.cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Measure | pectus::ml::HostFilter::Remeshing);
+  n.arity = pectus::ml::HostFilter::VARIABLE;
   n.postCondition = MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR;
   addFilter(this, n);
 
   n.id = FP_BAR_PLANNER;  // same class, arity and post-conditions
   n.name = "Nuss Bar Planner";
+  n.pythonName = "nuss_bar_planner";
   n.info =
       "Compares Nuss bar options before surgery (the thesis' conclusion): runs the calibrated 'Nuss Procedure FE Analysis' "
       "on the current layer (the labelled rib cage) for every listed bar level (intercostal space) with one bar and/or "
@@ -95,7 +98,7 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
   addPatientFilters();
 }
 
-void FilterNussFeaPlugin::initParameters(int id, MeshDocument& md, RichParameterList& par) {
+void FilterNussFeaPlugin::initParameters(int id, const MeshDocument& md, RichParameterList& par) {
   if (id == FP_CREATE_RIBCAGE) initCreateRibCage(par);
   if (id == FP_NUSS_FEA) initNussFea(md, par);
   if (id == FP_BAR_PLANNER) initBarPlanner(md, par);
@@ -243,8 +246,8 @@ Eigen::Vector3d toE(const Point3m& p) { return Eigen::Vector3d(p[0], p[1], p[2])
 
 namespace {
 // parameter groups shared by 'Nuss Procedure FE Analysis' and 'Nuss Bar Planner' (same names, defaults, help)
-void addLandmarkParam(MeshDocument& md, RichParameterList& par) {
-  par.addParam(RichMesh("landmarkLayer", pectus::ml::defaultLandmarkLayer(md), &md, "Landmark layer",
+void addLandmarkParam(const MeshDocument& md, RichParameterList& par) {
+  par.addParam(pectus::ml::richMesh("landmarkLayer", pectus::ml::defaultLandmarkLayer(md), md, "Landmark layer",
                         "Point layer of landmarks (vertex quality = code, labels.h) as the rib cage generator writes it: "
                         "costovertebral joints 100*side+rib (fixed), 500 lower sternum end (Fe), bar exits "
                         "600+10*side+s (Fsr; without one, the exit is placed between the ribs' lateral-most points). "
@@ -368,7 +371,7 @@ MeshModel& addDeformedLayer(FilterContext& ctx, CMeshO& surface, const pectus::n
 }
 }  // namespace
 
-void FilterNussFeaPlugin::initNussFea(MeshDocument& md, RichParameterList& par) {
+void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList& par) {
   par.addParam(RichEnum("input", 0, QStringList() << "Current layer (one labelled surface)" << "One layer per tissue (visible layers)",
                         "Model input",
                         "Current layer: one closed surface whose faces carry tissue and part labels (as 'Create Pectus "
@@ -441,7 +444,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
     if (!perTissue) return nuss::cageFromMesh(cur.cm);
     std::vector<nuss::TissueLayer> layers;
     const MeshModel* lmLayer = &ctx.mesh("landmarkLayer");
-    for (MeshModel* m : ctx.doc().meshList)
+    for (MeshModel* m : pectus::ml::meshes(ctx.doc()))
       if (m != lmLayer && m->isVisible() && m->cm.fn > 0) layers.push_back({m->label().toStdString(), &m->cm});
     if (layers.empty())
       throw pectus::InputError("No visible layer with faces besides the landmark layer: load one closed surface per tissue.");
@@ -518,7 +521,7 @@ QStringList barSets() { return QStringList() << "One and two bars" << "One bar" 
 QStringList bestBy() { return QStringList() << "Lowest force" << "Lowest max stress"; }
 }  // namespace
 
-void FilterNussFeaPlugin::initBarPlanner(MeshDocument& md, RichParameterList& par) {
+void FilterNussFeaPlugin::initBarPlanner(const MeshDocument& md, RichParameterList& par) {
   addLandmarkParam(md, par);
   par.addParam(RichString("levels", "3,4,5", "Bar levels (intercostal spaces)",
                           "Intercostal spaces of the (first) bar to compare, as a list '3,4,5' or a range '3-5'; space s lies "

@@ -6,8 +6,7 @@
 
 class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase {
   Q_OBJECT
-  MESHLAB_PLUGIN_IID_EXPORTER(MESH_FILTER_INTERFACE_IID)
-  Q_INTERFACES(MeshFilterInterface)
+  PECTUS_FILTER_PLUGIN_METADATA
 
  public:
   enum { FP_CREATE_RIBCAGE, FP_NUSS_FEA, FP_BAR_PLANNER, FP_IMPORT_CT, FP_PREPARE_PATIENT };
@@ -15,15 +14,15 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   QString pluginName() const override { return "FilterPectusNussFea"; }
 
  protected:
-  void initParameters(int id, MeshDocument& md, RichParameterList& par) override;
+  void initParameters(int id, const MeshDocument& md, RichParameterList& par) override;
   void run(int id, pectus::ml::FilterContext& ctx) override;
 
  private:
   void initCreateRibCage(RichParameterList& par);
   void runCreateRibCage(pectus::ml::FilterContext& ctx);
-  void initNussFea(MeshDocument& md, RichParameterList& par);
+  void initNussFea(const MeshDocument& md, RichParameterList& par);
   void runNussFea(pectus::ml::FilterContext& ctx);
-  void initBarPlanner(MeshDocument& md, RichParameterList& par);
+  void initBarPlanner(const MeshDocument& md, RichParameterList& par);
   void runBarPlanner(pectus::ml::FilterContext& ctx);
   // a patient's CT segmentation (filter_patient.cpp)
   void addPatientFilters();

@@ -19,6 +19,7 @@ void FilterNussFeaPlugin::addPatientFilters() {
   pectus::ml::FilterSpec c;
   c.id = FP_IMPORT_CT;
   c.name = "Import CT Segmentation";
+  c.pythonName = "import_ct_segmentation";
   c.info =
       "Reads a patient's CT segmentation as segmentation tools export it (3D Slicer, ITK-SNAP, TotalSegmentator, "
       "InVesalius, Mimics) and adds one layer per structure, named after it.<br>"
@@ -39,14 +40,15 @@ void FilterNussFeaPlugin::addPatientFilters() {
       "<b>Result.</b> The first structure's layer becomes the current layer. The Log has one summary line and "
       "one line per structure: faces, vertices, connected components, source file (and label), size of the "
       "bounding box; for labels the voxel count and spacing. If anything cannot be read, no layer is added.";
-  c.cls = MeshFilterInterface::MeshCreation;
-  c.arity = MeshFilterInterface::NONE;
+  c.cls = pectus::ml::HostFilter::MeshCreation;
+  c.arity = pectus::ml::HostFilter::NONE;
   c.needsCurrentMesh = false;
   addFilter(this, c);
 
   pectus::ml::FilterSpec s;
   s.id = FP_PREPARE_PATIENT;
   s.name = "Prepare Patient Rib Cage";
+  s.pythonName = "prepare_patient_rib_cage";
   s.info =
       "Makes a patient's CT segmentation (the visible layers, e.g. from 'Import CT Segmentation') into the labelled "
       "rib cage and landmarks that 'Nuss Procedure FE Analysis', the thoracic volume filters, the pectus index and the bar "
@@ -77,8 +79,8 @@ void FilterNussFeaPlugin::addPatientFilters() {
       "<b>Output.</b> Two new layers: 'patient rib cage' (current; face colour = tissue, face quality = tissue*1000 + "
       "part, in the project frame: mm, +x patient's left, +y anterior, +z superior) and 'patient landmarks' (vertex "
       "quality = code). The Log gives the transform from the input layers to the result.";
-  s.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Remeshing | MeshFilterInterface::Cleaning);
-  s.arity = MeshFilterInterface::VARIABLE;
+  s.cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Remeshing | pectus::ml::HostFilter::Cleaning);
+  s.arity = pectus::ml::HostFilter::VARIABLE;
   s.needsCurrentMesh = false;
   s.postCondition = MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY;
   addFilter(this, s);
@@ -143,7 +145,7 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
             (skipped ? " (" + std::to_string(skipped) + " points without a code or inactive, skipped)" : std::string()));
   }
   std::vector<pectus::patient::InputLayer> layers;
-  for (MeshModel* m : ctx.doc().meshList) {
+  for (MeshModel* m : pectus::ml::meshes(ctx.doc())) {
     if (!m->isVisible()) continue;
     const std::string name = m->label().toStdString();
     if (m->cm.fn == 0) {

@@ -56,10 +56,11 @@ void requireManifold(const MeshModel& mm) {
 }  // namespace
 
 FilterQuadConvertPlugin::FilterQuadConvertPlugin() {
-  const auto cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Polygonal | MeshFilterInterface::Remeshing);
+  const auto cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Polygonal | pectus::ml::HostFilter::Remeshing);
   pectus::ml::FilterSpec c;
   c.id = FP_TRI_TO_QUAD;
   c.name = "Convert Triangles to Quads";
+  c.pythonName = "convert_triangles_to_quads";
   c.info =
       "Merges pairs of adjacent triangles into quads (thesis 4.1.2), in the current layer: the result replaces "
       "the triangles (like MeshLab's own tri-to-quad filters), quads stored the MeshLab way as two triangles "
@@ -87,6 +88,7 @@ FilterQuadConvertPlugin::FilterQuadConvertPlugin() {
   pectus::ml::FilterSpec s;
   s.id = FP_STRUCTURE;
   s.name = "Mesh Structure Improvement";
+  s.pythonName = "mesh_structure_improvement";
   s.info =
       "The mesh structure modification operators of thesis 4.1.3 on the current layer, for a triangle mesh or a "
       "quad (quad-dominant) mesh: <b>edge swapping</b> toward the ideal number of elements around a node (6 "
@@ -107,16 +109,17 @@ FilterQuadConvertPlugin::FilterQuadConvertPlugin() {
   pectus::ml::FilterSpec w;
   w.id = FP_SAVE_POLY;
   w.name = "Save Polygonal Mesh";
+  w.pythonName = "save_polygonal_mesh";
   w.info =
       "Writes the current layer with real quads (faux-edge triangle pairs) and its remaining triangles to a "
       "file: Wavefront OBJ, OFF or legacy VTK polydata (ASCII). MeshLab 2020.09 cannot save quads from "
       "meshlabserver (its OBJ and PLY exporters write triangles, its OFF exporter writes wrong indices).<br>"
       "The layer is not changed. An unwritable path is refused with a message.";
-  w.cls = MeshFilterInterface::Polygonal;
+  w.cls = pectus::ml::HostFilter::Polygonal;
   addFilter(this, w);
 }
 
-void FilterQuadConvertPlugin::initParameters(int id, MeshDocument&, RichParameterList& par) {
+void FilterQuadConvertPlugin::initParameters(int id, const MeshDocument&, RichParameterList& par) {
   if (id == FP_TRI_TO_QUAD) {
     par.addParam(RichEnum("pairing", 0, QStringList() << "Optimal (maximum-weight matching)" << "Greedy (by quad quality)",
                           "Pairing",

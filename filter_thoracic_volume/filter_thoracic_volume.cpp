@@ -31,17 +31,17 @@ QStringList lowerLimits() {
   return QStringList() << "700 dome of the diaphragm" << "500 lower end of the sternum";
 }
 
-void addCommon(MeshDocument& md, RichParameterList& par, int lowerDefault) {
+void addCommon(const MeshDocument& md, RichParameterList& par, int lowerDefault) {
   par.addParam(RichBool("compare", false, "Compare with a before layer",
                         "Also measure the 'Before layer' and log the change (current minus before) in cm3 and % of "
                         "the before value. The current layer is the after state (e.g. the FE-corrected cage)."));
-  par.addParam(RichMesh("beforeLayer", md.mm(), &md, "Before layer",
+  par.addParam(pectus::ml::richMesh("beforeLayer", pectus::ml::currentMesh(md), md, "Before layer",
                         "The layer measured as the before state when 'Compare with a before layer' is on; the same "
                         "mesh as the current layer (same vertex count, same frame). Ignored otherwise."));
   par.addParam(RichEnum("rangeSource", 0, rangeSources(), "Range from",
                         "Landmarks: the lower and upper heights come from the landmark layer (codes 700/500 and "
                         "701 of labels.h). Given heights: 'Lower height' and 'Upper height' below."));
-  par.addParam(RichMesh("landmarkLayer", defaultLandmarkLayer(md), &md, "Landmark layer",
+  par.addParam(pectus::ml::richMesh("landmarkLayer", defaultLandmarkLayer(md), md, "Landmark layer",
                         "Point layer of landmarks (vertex quality = landmark code, labels.h), as written by the rib "
                         "cage generator; by default the layer whose label ends in 'landmarks'. Used when the range "
                         "comes from landmarks."));
@@ -132,7 +132,7 @@ void addSoupLayer(FilterContext& ctx, const QString& label, const vol::Soup& s) 
     for (int k = 0; k < 3; ++k) fi->V(k) = &m.vert[f[k]];
     ++fi;
   }
-  mm.UpdateBoxAndNormals();
+  pectus::ml::updateBoxAndNormals(mm);
 }
 
 }  // namespace
@@ -141,6 +141,7 @@ FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
   pectus::ml::FilterSpec s;
   s.id = FP_SLICE_VOLUME;
   s.name = "Thoracic Volume (Slice Method)";
+  s.pythonName = "compute_thoracic_volume_slice";
   s.info = QString(
       "Intrathoracic volume of the rib cage in the current layer by the intersection method of thesis 6.3.1: parallel "
       "planes across the long axis z every 'Spacing' mm (adjusted so that equal layers fill the range, planes at the "
@@ -155,11 +156,12 @@ FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
       "with a region below and above, and rasterised like the others. Empty slices beyond the last slice with a "
       "region at either end of the range have nothing to interpolate and count as zero; the Log gives both "
       "numbers.") + kRangeHelp + kCompareHelp;
-  s.cls = MeshFilterInterface::Measure;
+  s.cls = pectus::ml::HostFilter::Measure;
   addFilter(this, s);
 
   s.id = FP_ENVELOPE_VOLUME;
   s.name = "Thoracic Volume (Ferguson Envelope)";
+  s.pythonName = "compute_thoracic_volume_envelope";
   s.info = QString(
       "Thoracic volume by the surface approximation method of thesis 6.3.2: a cylinder of n x m C1 Ferguson bicubic "
       "patches around the long axis z (through the centre of the cage's bounding box in the range) is shrunk onto "
@@ -172,11 +174,12 @@ FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
       "tessellated; the measured layer stays current); its triangle-mesh volume is logged too (compare with "
       "'Compute Geometric Measures' after 'Change the current layer').") +
       kRangeHelp + kCompareHelp;
-  s.cls = MeshFilterInterface::FilterClass(MeshFilterInterface::Measure | MeshFilterInterface::MeshCreation);
+  s.cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Measure | pectus::ml::HostFilter::MeshCreation);
   addFilter(this, s);
 
   s.id = FP_PECTUS_INDEX;
   s.name = "Pectus Index";
+  s.pythonName = "compute_pectus_index";
   s.info = QString(
       "Haller index (inner transverse diameter / smallest sternum-to-vertebra distance) and correction index "
       "((max - min) anterior-posterior distance / max x 100 %) measured on the slice of the model at the deepest "
@@ -185,11 +188,11 @@ FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
       "heights (midline at the slice centroid, vertebra measured on the slice). The inner boundary of the slice is "
       "the automatic intrathoracic region of the slice method. Logged, and compared with a before layer.") +
       kCompareHelp;
-  s.cls = MeshFilterInterface::Measure;
+  s.cls = pectus::ml::HostFilter::Measure;
   addFilter(this, s);
 }
 
-void FilterThoracicVolumePlugin::initParameters(int id, MeshDocument& md, RichParameterList& par) {
+void FilterThoracicVolumePlugin::initParameters(int id, const MeshDocument& md, RichParameterList& par) {
   if (id == FP_SLICE_VOLUME) {
     addCommon(md, par, 0);
     par.addParam(RichFloat("spacing", 2.6f, "Spacing (mm)",
@@ -221,14 +224,14 @@ void FilterThoracicVolumePlugin::initParameters(int id, MeshDocument& md, RichPa
   } else if (id == FP_PECTUS_INDEX) {
     par.addParam(RichBool("compare", false, "Compare with a before layer",
                           "Also measure the 'Before layer' and log both indices side by side."));
-    par.addParam(RichMesh("beforeLayer", md.mm(), &md, "Before layer",
+    par.addParam(pectus::ml::richMesh("beforeLayer", pectus::ml::currentMesh(md), md, "Before layer",
                           "The before state (same mesh, same frame) when 'Compare with a before layer' is on."));
     par.addParam(RichEnum("levelSource", 0, QStringList() << "Landmarks 501/503" << "Automatic (deepest slice)",
                           "Level from",
                           "Landmarks: the slice at the height of landmark 501 (deepest funnel point; its x is the "
                           "midline), vertebra at landmark 503. Automatic: the slice between the given heights with the "
                           "largest correction index."));
-    par.addParam(RichMesh("landmarkLayer", defaultLandmarkLayer(md), &md, "Landmark layer",
+    par.addParam(pectus::ml::richMesh("landmarkLayer", defaultLandmarkLayer(md), md, "Landmark layer",
                           "Point layer of landmarks (vertex quality = code); by default the layer whose label ends in "
                           "'landmarks'."));
     par.addParam(RichFloat("zLow", 0.0f, "Lower height (mm)", "Automatic level: lower end of the search along z."));

@@ -10,8 +10,7 @@ struct Range;
 
 class FilterThoracicVolumePlugin : public QObject, public pectus::ml::FilterPluginBase {
   Q_OBJECT
-  MESHLAB_PLUGIN_IID_EXPORTER(MESH_FILTER_INTERFACE_IID)
-  Q_INTERFACES(MeshFilterInterface)
+  PECTUS_FILTER_PLUGIN_METADATA
 
  public:
   enum { FP_SLICE_VOLUME, FP_ENVELOPE_VOLUME, FP_PECTUS_INDEX };
@@ -19,7 +18,7 @@ class FilterThoracicVolumePlugin : public QObject, public pectus::ml::FilterPlug
   QString pluginName() const override { return "FilterPectusThoracicVolume"; }
 
  protected:
-  void initParameters(int id, MeshDocument& md, RichParameterList& par) override;
+  void initParameters(int id, const MeshDocument& md, RichParameterList& par) override;
   void run(int id, pectus::ml::FilterContext& ctx) override;
 
  private:

@@ -1,6 +1,9 @@
-"""Build complete MeshLab 2020.09 filter scripts (.mlx) and run them with meshlabserver.
+"""Build complete MeshLab filter scripts (.mlx) and run them headless on either MeshLab host.
 
-Standard library only (pymeshlab wraps a newer MeshLab and does not work with Debian's 2020.09).
+Standard library only. Two hosts run the scripts (`run(..., host=...)`, default $PECTUS_MESHLAB_HOST or
+2020.09):
+  - "2020.09": Debian bookworm's meshlabserver from the private prefix, under xvfb-run;
+  - "2025.07": pectus-mlrun in the Debian forky userland, through scripts/mlrun.sh.
 meshlabserver aborts when a parameter is missing or mistyped, so every parameter is given a type:
 
     from pectus_mlx import Filter, Float, Int, Bool, Enum, Script, run
@@ -223,16 +226,40 @@ def find_meshlabserver(prefix: str | None = None) -> str:
 XVFB_CLEANUP_ERROR = "xvfb-run: error: problem while cleaning up temporary directory"
 
 
+HOSTS = ("2020.09", "2025.07")
+
+
+def default_host() -> str:
+    """$PECTUS_MESHLAB_HOST, else 2020.09"""
+    h = os.environ.get("PECTUS_MESHLAB_HOST", "2020.09")
+    if h not in HOSTS:
+        raise ValueError(f"PECTUS_MESHLAB_HOST={h}: one of {', '.join(HOSTS)}")
+    return h
+
+
+def mlrun_script() -> str:
+    """scripts/mlrun.sh of this checkout"""
+    return os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts", "mlrun.sh")
+
+
 def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tuple] = (),
-        prefix: str | None = None, timeout: float = 3600, cwd: str | None = None, env: dict | None = None) -> Result:
-    """Run meshlabserver under xvfb-run. outputs: (path, "vc fq ...", layer_index or None); env: variables
-    to set on top of the current environment (e.g. OMP_NUM_THREADS).
+        prefix: str | None = None, timeout: float = 3600, cwd: str | None = None, env: dict | None = None,
+        host: str | None = None) -> Result:
+    """Run a script headless: meshlabserver under xvfb-run (host 2020.09) or pectus-mlrun in the forky
+    userland (host 2025.07; see default_host). outputs: (path, "vc fq ...", layer_index or None); env:
+    variables to set on top of the current environment (e.g. OMP_NUM_THREADS).
     Returns the exit code and everything printed (stdout + stderr); subprocess.TimeoutExpired on a timeout."""
-    exe = find_meshlabserver(prefix)
-    # e.g. libasan.so for plugins built with AddressSanitizer (scripts/sanitize.sh e2e): meshlabserver only
-    preload = os.environ.get("PECTUS_MESHLAB_PRELOAD")
-    launcher = ["env", "LD_PRELOAD=" + preload] if preload else []
-    cmd = ["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", *launcher, exe]
+    host = host or default_host()
+    if host == "2025.07":
+        cmd = [mlrun_script(), "--host", "2025.07"]
+    elif host == "2020.09":
+        exe = find_meshlabserver(prefix)
+        # e.g. libasan.so for plugins built with AddressSanitizer (scripts/sanitize.sh e2e): meshlabserver only
+        preload = os.environ.get("PECTUS_MESHLAB_PRELOAD")
+        launcher = ["env", "LD_PRELOAD=" + preload] if preload else []
+        cmd = ["xvfb-run", "-a", "-s", "-screen 0 1024x768x24", *launcher, exe]
+    else:
+        raise ValueError(f"unknown MeshLab host {host!r}: one of {', '.join(HOSTS)}")
     for i in inputs:
         cmd += ["-i", i]
     tmp = None

@@ -131,7 +131,7 @@ void FilterContext::commit() { done_ = true; }
 
 void FilterContext::rollback() {
   done_ = true;
-  for (auto it = added_.rbegin(); it != added_.rend(); ++it) md_.delMesh(*it);
+  for (auto it = added_.rbegin(); it != added_.rend(); ++it) removeLayer(md_, *it);
   added_.clear();
   for (auto& s : snapshots_) {
     MeshModel& m = *s->model;
@@ -188,7 +188,7 @@ int FilterContext::enumIn(const QString& name, int count) const {
 }
 
 MeshModel& FilterContext::mesh(const QString& name) const {
-  MeshModel* m = par_.getMesh(name);
+  MeshModel* m = meshParam(par_, md_, name);
   if (m == nullptr) throw InputError("parameter '" + q(name) + "' does not name an existing layer");
   return *m;
 }
@@ -202,8 +202,8 @@ FilterPluginBase::~FilterPluginBase() {
 
 void FilterPluginBase::addFilter(QObject* owner, const FilterSpec& spec) {
   specs_.push_back(spec);
-  typeList << spec.id;
-  actionList << new QAction(spec.name, owner);
+  typeList.push_back(spec.id);
+  actionList.push_back(new QAction(spec.name, owner));
 }
 
 const FilterSpec& FilterPluginBase::spec(int id) const {
@@ -213,27 +213,30 @@ const FilterSpec& FilterPluginBase::spec(int id) const {
   return none;
 }
 
-QString FilterPluginBase::filterName(FilterIDType id) const { return spec(id).name; }
-QString FilterPluginBase::filterInfo(FilterIDType id) const { return spec(id).info; }
-MeshFilterInterface::FilterClass FilterPluginBase::getClass(QAction* a) { return spec(ID(a)).cls; }
-MeshFilterInterface::FILTER_ARITY FilterPluginBase::filterArity(QAction* a) const { return spec(ID(a)).arity; }
-int FilterPluginBase::getRequirements(QAction* a) { return spec(ID(a)).requirements; }
-int FilterPluginBase::postCondition(QAction* a) const { return spec(ID(a)).postCondition; }
+QString FilterPluginBase::filterName(int id) const { return spec(id).name; }
+QString FilterPluginBase::filterInfo(int id) const { return spec(id).info; }
+FilterArity FilterPluginBase::filterArity(ActionPtr a) const { return spec(ID(a)).arity; }
+int FilterPluginBase::getRequirements(ActionPtr a) { return spec(ID(a)).requirements; }
+int FilterPluginBase::postCondition(ActionPtr a) const { return spec(ID(a)).postCondition; }
 
-void FilterPluginBase::initParameterSet(QAction* a, MeshModel&, RichParameterList&) { (void)a; }
-
-void FilterPluginBase::initParameterSet(QAction* a, MeshDocument& md, RichParameterList& par) {
-  try {
-    initParameters(ID(a), md, par);
-  } catch (const std::exception& e) {
-    Log(GLLogStream::WARNING, (filterName(ID(a)) + ": " + e.what()).toUtf8().constData());
-  }
+QString FilterPluginBase::pythonName(int id) const {
+  const FilterSpec& s = spec(id);
+  if (!s.pythonName.isEmpty()) return s.pythonName;
+  // MeshLab's default (FilterPlugin::pythonFilterName): lower case, every other character as '_'
+  QString n = s.name.toLower();
+  for (QChar& c : n)
+    if (!c.isLetterOrNumber()) c = '_';
+  return n;
 }
 
-bool FilterPluginBase::applyFilter(QAction* a, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) {
-  const int id = ID(a);
+// Runs filter `id`; on failure rolls every layer back and returns the logged message.
+std::string FilterPluginBase::runFilter(int id, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) {
   const QString name = filterName(id);
+#if PECTUS_MESHLAB_API >= 2021
+  auto logger = [this](const std::string& s) { log(GLLogStream::FILTER, s); };
+#else
   auto logger = [this](const std::string& s) { Log(GLLogStream::FILTER, s.c_str()); };
+#endif
   std::string failure;
   {
     FilterContext ctx(md, par, cb, logger, name);
@@ -242,7 +245,7 @@ bool FilterPluginBase::applyFilter(QAction* a, MeshDocument& md, const RichParam
       run(id, ctx);
       ctx.commit();
       ctx.progress(100, "done");
-      return true;
+      return {};
     } catch (const InputError& e) {
       failure = e.what();
     } catch (const std::bad_alloc&) {
@@ -255,10 +258,97 @@ bool FilterPluginBase::applyFilter(QAction* a, MeshDocument& md, const RichParam
     ctx.rollback();
   }
   const std::string msg = name.toStdString() + " failed: " + failure + " (the layers are unchanged)";
+#if PECTUS_MESHLAB_API >= 2021
+  log(GLLogStream::WARNING, msg);
+#else
   Log(GLLogStream::WARNING, msg.c_str());
-  errorMessage = QString::fromStdString(msg);
+#endif
+  return msg;
+}
+
+#if PECTUS_MESHLAB_API >= 2021
+
+FilterClass FilterPluginBase::getClass(const QAction* a) const { return spec(ID(a)).cls; }
+QString FilterPluginBase::pythonFilterName(int id) const { return pythonName(id); }
+
+RichParameterList FilterPluginBase::initParameterList(const QAction* a, const MeshDocument& md) {
+  RichParameterList par;
+  try {
+    initParameters(ID(a), md, par);
+  } catch (const std::exception& e) {
+    log(GLLogStream::WARNING, (filterName(ID(a)) + ": " + e.what()).toStdString());
+  }
+  return par;
+}
+
+std::map<std::string, QVariant> FilterPluginBase::applyFilter(const QAction* a, const RichParameterList& par,
+                                                              MeshDocument& md, unsigned int&,
+                                                              vcg::CallBackPos* cb) {
+  const std::string failure = runFilter(ID(a), md, par, cb);
+  if (!failure.empty()) throw MLException(QString::fromStdString(failure));
+  return {};
+}
+
+#else
+
+FilterClass FilterPluginBase::getClass(QAction* a) { return spec(ID(a)).cls; }
+
+void FilterPluginBase::initParameterSet(QAction* a, MeshModel&, RichParameterList&) { (void)a; }
+
+void FilterPluginBase::initParameterSet(QAction* a, MeshDocument& md, RichParameterList& par) {
+  try {
+    initParameters(ID(a), md, par);
+  } catch (const std::exception& e) {
+    Log(GLLogStream::WARNING, (filterName(ID(a)) + ": " + e.what()).toUtf8().constData());
+  }
+}
+
+bool FilterPluginBase::applyFilter(QAction* a, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) {
+  const std::string failure = runFilter(ID(a), md, par, cb);
+  if (failure.empty()) return true;
+  errorMessage = QString::fromStdString(failure);
   return false;
 }
+
+#endif
+
+// ---------------------------------------------------------------------------------------------
+// the document, across both APIs
+
+#if PECTUS_MESHLAB_API >= 2021
+const char* hostVersion() { return meshlab_xstr(MESHLAB_VERSION); }
+
+std::vector<MeshModel*> meshes(const MeshDocument& md) {
+  std::vector<MeshModel*> out;
+  for (const MeshModel& m : md.meshIterator()) out.push_back(const_cast<MeshModel*>(&m));
+  return out;
+}
+MeshModel* currentMesh(const MeshDocument& md) { return const_cast<MeshModel*>(md.mm()); }
+void removeLayer(MeshDocument& md, MeshModel* m) { md.delMesh(m->id()); }
+RichMesh richMesh(const QString& name, MeshModel* def, const MeshDocument& md, const QString& desc,
+                  const QString& help) {
+  if (def == nullptr && md.meshNumber() > 0) def = meshes(md).front();
+  return RichMesh(name, def ? unsigned(def->id()) : 0u, &md, desc, help);
+}
+MeshModel* meshParam(const RichParameterList& par, MeshDocument& md, const QString& name) {
+  return md.getMesh(par.getMeshId(name));
+}
+void updateBoxAndNormals(MeshModel& m) { m.updateBoxAndNormals(); }
+#else
+const char* hostVersion() { return "2020.09"; }
+
+std::vector<MeshModel*> meshes(const MeshDocument& md) {
+  return std::vector<MeshModel*>(md.meshList.begin(), md.meshList.end());
+}
+MeshModel* currentMesh(const MeshDocument& md) { return const_cast<MeshDocument&>(md).mm(); }
+void removeLayer(MeshDocument& md, MeshModel* m) { md.delMesh(m); }
+RichMesh richMesh(const QString& name, MeshModel* def, const MeshDocument& md, const QString& desc,
+                  const QString& help) {
+  return RichMesh(name, def, &const_cast<MeshDocument&>(md), desc, help);
+}
+MeshModel* meshParam(const RichParameterList& par, MeshDocument&, const QString& name) { return par.getMesh(name); }
+void updateBoxAndNormals(MeshModel& m) { m.UpdateBoxAndNormals(); }
+#endif
 
 std::string formatHistogram(const std::vector<std::size_t>& h) {
   std::ostringstream s;
@@ -274,14 +364,14 @@ std::string fmt(double v, int precision) {
   return s.str();
 }
 
-MeshModel* defaultLandmarkLayer(MeshDocument& md) {
-  for (MeshModel* m : md.meshList) {
+MeshModel* defaultLandmarkLayer(const MeshDocument& md) {
+  for (MeshModel* m : meshes(md)) {
     QString l = m->label().toLower();
     const int dot = l.lastIndexOf('.');
     if (dot > 0) l = l.left(dot);
     if (l.endsWith("landmarks")) return m;
   }
-  return md.mm();
+  return currentMesh(md);
 }
 
 }  // namespace pectus::ml

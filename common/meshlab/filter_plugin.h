@@ -1,14 +1,16 @@
 // The adapter contract every pectus-meshlab filter follows (written once, used by every plugin):
-//  - applyFilter catches every exception; on failure it Log()s the reason (meshlabserver prints only
-//    "Problem with filter" on its own), sets errorMessage, returns false, and leaves every layer
-//    exactly as it was (modified layers are restored from a snapshot, added layers are removed);
+//  - applyFilter catches every exception; on failure it logs the reason and leaves every layer
+//    exactly as it was (modified layers are restored from a snapshot, added layers are removed); then,
+//    in MeshLab 2020.09, it sets errorMessage and returns false (meshlabserver prints only "Problem with
+//    filter" on its own, hence the log line), and in 2021.05 and later it throws MLException, the one
+//    exception MeshLab's GUI, pymeshlab and pectus-mlrun report as a filter failure;
 //  - progress goes through MeshLab's callback;
 //  - parameters are read through checked accessors that name the parameter and its valid range.
-// A plugin derives from FilterPluginBase (and QObject), registers FilterSpecs in its constructor,
-// and implements initParameters() and run().
+// A plugin derives from FilterPluginBase (and QObject), declares PECTUS_FILTER_PLUGIN_METADATA after
+// Q_OBJECT, registers FilterSpecs in its constructor, and implements initParameters() and run().
+// The two MeshLab APIs differ only here and in ml_compat.h.
 #pragma once
-#include <QObject>
-#include <common/interfaces.h>
+#include "ml_compat.h"
 
 #include <functional>
 #include <memory>
@@ -21,8 +23,11 @@ struct FilterSpec {
   int id = 0;
   QString name;
   QString info;  ///< shown as the filter's help in the GUI dialog
-  MeshFilterInterface::FilterClass cls = MeshFilterInterface::Measure;
-  MeshFilterInterface::FILTER_ARITY arity = MeshFilterInterface::SINGLE_MESH;
+  /// the function name in pymeshlab (MeshSet.<pythonName>(...)); empty: MeshLab's default, the name
+  /// lower-cased with every other character as '_'
+  QString pythonName;
+  FilterClass cls = HostFilter::Measure;
+  FilterArity arity = HostFilter::SINGLE_MESH;
   int requirements = MeshModel::MM_NONE;
   int postCondition = MeshModel::MM_NONE;
   bool needsCurrentMesh = true;  ///< refuse to run with no current layer
@@ -74,33 +79,48 @@ class FilterContext {
   bool done_ = false;
 };
 
-class FilterPluginBase : public MeshFilterInterface {
+class FilterPluginBase : public HostFilter {
  public:
   ~FilterPluginBase() override;
-  QString filterName(FilterIDType id) const override;
-  QString filterInfo(FilterIDType id) const override;
+  QString filterName(int id) const override;
+  QString filterInfo(int id) const override;
+  FilterArity filterArity(ActionPtr a) const override;
+  int getRequirements(ActionPtr a) override;
+  int postCondition(ActionPtr a) const override;
+#if PECTUS_MESHLAB_API >= 2021
+  FilterClass getClass(const QAction* a) const override;
+  using FilterPlugin::filterInfo;
+  using FilterPlugin::filterName;
+  using FilterPlugin::pythonFilterName;
+  QString pythonFilterName(int id) const override;
+  RichParameterList initParameterList(const QAction* a, const MeshDocument& md) override;
+  std::map<std::string, QVariant> applyFilter(const QAction* a, const RichParameterList& par, MeshDocument& md,
+                                              unsigned int& postConditionMask, vcg::CallBackPos* cb) final;
+#else
   FilterClass getClass(QAction* a) override;
-  FILTER_ARITY filterArity(QAction* a) const override;
-  int getRequirements(QAction* a) override;
-  int postCondition(QAction* a) const override;
   void initParameterSet(QAction* a, MeshModel& m, RichParameterList& par) override;
   void initParameterSet(QAction* a, MeshDocument& md, RichParameterList& par) override;
   bool applyFilter(QAction* a, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) final;
+#endif
+  /// the pymeshlab name of a filter (also on 2020.09, for the docs and tests)
+  QString pythonName(int id) const;
 
  protected:
   /// call from the derived constructor with `this` (MeshLab finds the plugin as the action's parent)
   void addFilter(QObject* owner, const FilterSpec& spec);
-  virtual void initParameters(int id, MeshDocument& md, RichParameterList& par) = 0;
+  virtual void initParameters(int id, const MeshDocument& md, RichParameterList& par) = 0;
   virtual void run(int id, FilterContext& ctx) = 0;
   const FilterSpec& spec(int id) const;
 
  private:
   std::vector<FilterSpec> specs_;
+  /// the outcome of a run: empty on success, else the message (already logged)
+  std::string runFilter(int id, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb);
 };
 
 /// The first layer whose label (without extension) ends in "landmarks" (labels.h), else the current one:
 /// the default of every "Landmark layer" parameter.
-MeshModel* defaultLandmarkLayer(MeshDocument& md);
+MeshModel* defaultLandmarkLayer(const MeshDocument& md);
 
 /// "a b c" for a histogram, and a fixed-format number, for Log lines
 std::string formatHistogram(const std::vector<std::size_t>& h);

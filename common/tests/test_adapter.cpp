@@ -1,5 +1,6 @@
 // The adapter contract on a real MeshDocument (Debian's libmeshlab-common): a filter that modifies a
-// layer, adds one, and then fails must leave the document exactly as it was, log why, return false.
+// layer, adds one, and then fails must leave the document exactly as it was, log why, and report the
+// failure the host's way (2020.09: false + errorMessage; 2021.05+: MLException).
 #include <gtest/gtest.h>
 
 #include <vcg/complex/algorithms/create/platonic.h>
@@ -21,7 +22,13 @@ class FakePlugin : public QObject, public pectus::ml::FilterPluginBase {
     s.id = FP_CRASH; s.name = "Crash"; addFilter(this, s);
   }
   QString pluginName() const override { return "Fake"; }
-  void initParameters(int, MeshDocument&, RichParameterList& par) override {
+#if PECTUS_MESHLAB_API >= 2021
+  // what MESHLAB_PLUGIN_IID_EXPORTER adds to a real plugin
+  std::pair<std::string, bool> getMLVersion() const override {
+    return {meshlab::meshlabVersion(), meshlab::builtWithDoublePrecision()};
+  }
+#endif
+  void initParameters(int, const MeshDocument&, RichParameterList& par) override {
     par.addParam(RichFloat("x", 1.0f, "x", "x"));
   }
   void run(int id, pectus::ml::FilterContext& ctx) override {
@@ -29,6 +36,35 @@ class FakePlugin : public QObject, public pectus::ml::FilterPluginBase {
     body(ctx);
   }
 };
+
+QAction* action(FakePlugin& p, int i) { return *std::next(p.actions().begin(), i); }
+
+RichParameterList params(FakePlugin& p, int i, MeshDocument& md) {
+#if PECTUS_MESHLAB_API >= 2021
+  return p.initParameterList(action(p, i), md);
+#else
+  RichParameterList par;
+  p.initParameterSet(action(p, i), md, par);
+  return par;
+#endif
+}
+
+/// applies filter i as MeshLab does; the failure message, empty on success
+QString apply(FakePlugin& p, int i, MeshDocument& md, const RichParameterList& par) {
+#if PECTUS_MESHLAB_API >= 2021
+  unsigned int mask = 0;
+  try {
+    p.applyFilter(action(p, i), par, md, mask, nullptr);
+    return {};
+  } catch (const MLException& e) {
+    return QString(e.what()).isEmpty() ? QString("?") : QString(e.what());
+  }
+#else
+  return p.applyFilter(action(p, i), md, par, nullptr) ? QString() : p.errorMsg();
+#endif
+}
+
+std::size_t layers(const MeshDocument& md) { return pectus::ml::meshes(md).size(); }
 
 std::vector<float> coords(const CMeshO& m) {
   std::vector<float> c;
@@ -59,10 +95,9 @@ TEST(Adapter, FailedFilterRollsBackEveryLayer) {
     ctx.addLayer("new");
     throw pectus::InputError("parameter 'x' is wrong");
   };
-  RichParameterList par;
-  p.initParameterSet(p.actions()[0], md, par);
-  EXPECT_FALSE(p.applyFilter(p.actions()[0], md, par, nullptr));
-  EXPECT_EQ(md.size(), 1);
+  const RichParameterList par = params(p, 0, md);
+  const QString err = apply(p, 0, md, par);
+  EXPECT_EQ(layers(md), 1u);
   EXPECT_EQ(md.mm(), a);
   EXPECT_EQ(coords(a->cm), before);
   EXPECT_EQ(a->cm.fn, fn);
@@ -72,8 +107,8 @@ TEST(Adapter, FailedFilterRollsBackEveryLayer) {
   ASSERT_TRUE(labels.has_value());
   EXPECT_EQ(labels->tissue[3], 2);
   EXPECT_EQ(labels->part[3], 107);
-  EXPECT_NE(p.errorMsg().indexOf("parameter 'x' is wrong"), -1);
-  EXPECT_NE(p.errorMsg().indexOf("unchanged"), -1);
+  EXPECT_NE(err.indexOf("parameter 'x' is wrong"), -1);
+  EXPECT_NE(err.indexOf("unchanged"), -1);
 }
 
 TEST(Adapter, ExceptionsNeverEscapeAndSuccessCommits) {
@@ -81,17 +116,15 @@ TEST(Adapter, ExceptionsNeverEscapeAndSuccessCommits) {
   MeshModel* a = md.addNewMesh("", "a");
   vcg::tri::Tetrahedron(a->cm);
   FakePlugin p;
-  RichParameterList par;
-  p.initParameterSet(p.actions()[2], md, par);
-  EXPECT_FALSE(p.applyFilter(p.actions()[2], md, par, nullptr));
-  EXPECT_NE(p.errorMsg().indexOf("internal error: boom"), -1);
+  const RichParameterList par = params(p, 2, md);
+  EXPECT_NE(apply(p, 2, md, par).indexOf("internal error: boom"), -1);
 
   p.body = [&](pectus::ml::FilterContext& ctx) {
     for (auto& v : ctx.modify(ctx.current()).vert) v.P() *= 3.0f;
     ctx.addLayer("kept");
   };
-  EXPECT_TRUE(p.applyFilter(p.actions()[1], md, par, nullptr));
-  EXPECT_EQ(md.size(), 2);
+  EXPECT_TRUE(apply(p, 1, md, par).isEmpty());
+  EXPECT_EQ(layers(md), 2u);
   EXPECT_FLOAT_EQ(std::abs(a->cm.vert[0].P()[0]), 3.0f);
 }
 
@@ -116,6 +149,5 @@ TEST(Adapter, NoCurrentLayerIsAMessage) {
   p.body = [](pectus::ml::FilterContext&) {};
   RichParameterList par;
   par.addParam(RichFloat("x", 1.0f, "x", "x"));
-  EXPECT_FALSE(p.applyFilter(p.actions()[1], md, par, nullptr));
-  EXPECT_NE(p.errorMsg().indexOf("no current layer"), -1);
+  EXPECT_NE(apply(p, 1, md, par).indexOf("no current layer"), -1);
 }

@@ -452,9 +452,9 @@ int dropTinyShells(CMeshO& m, double minVolume) {
     if (!f.IsD() && vol[find(idx(f, 0))] < minVolume) vcg::tri::Allocator<CMeshO>::DeleteFace(m, f);
   for (auto& v : m.vert)
     if (!v.IsD()) v.ClearV();
-  for (const auto& f : m.face)
+  for (auto& f : m.face)
     if (!f.IsD())
-      for (int k = 0; k < 3; ++k) f.cV(k)->SetV();
+      for (int k = 0; k < 3; ++k) f.V(k)->SetV();
   for (auto& v : m.vert)
     if (!v.IsD() && !v.IsV()) vcg::tri::Allocator<CMeshO>::DeleteVertex(m, v);
   return dropped;

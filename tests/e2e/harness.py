@@ -19,6 +19,23 @@ _failures: list[str] = []
 _passed = 0
 
 
+def host_2025_ready() -> bool:
+    """the forky userland and the 2025.07 build exist (scripts/host_2025.sh made them)"""
+    return (os.path.exists(os.path.join(SOURCE, ".hosts", "forky", ".complete-pkgs"))
+            and os.path.exists(os.path.join(SOURCE, "build-2025.07", "bin", "pectus-mlrun")))
+
+
+def need_host_2025():
+    """exit 77 (ctest: skipped) when the MeshLab 2025.07 host is not made"""
+    if not host_2025_ready():
+        print("skipped: the MeshLab 2025.07 host is not made (scripts/host_2025.sh)")
+        sys.exit(77)
+
+
+if mlx.default_host() == "2025.07":
+    need_host_2025()
+
+
 def workdir(name: str) -> str:
     d = tempfile.mkdtemp(prefix=f"pectus-{name}-")
     return d

@@ -9,7 +9,7 @@ from docs_pages import SOURCE
 from harness import check, finish
 
 PATTERN = re.compile(r"session [0-9]|sessions? [0-9]|issue #?[0-9]", re.I)
-SKIP_DIRS = {".git", "third_party", "corpus", "out", "__pycache__"}
+SKIP_DIRS = {".git", ".hosts", "third_party", "corpus", "out", "__pycache__"}
 TEXT = (".md", ".cpp", ".h", ".hpp", ".py", ".sh", ".txt", ".cmake", ".json", ".mlx", ".in")
 
 

@@ -2,9 +2,13 @@
 // work on it directly so that the adapters pass `MeshModel::cm` through without copies.
 #pragma once
 #ifndef MESHLAB_SCALAR
-#error "MESHLAB_SCALAR must be defined (float, the ABI of Debian's MeshLab 2020.09); link pectus::vcg"
+#error "MESHLAB_SCALAR must be defined (float, the ABI of Debian's MeshLab); link pectus::vcg"
 #endif
-#include <common/ml_mesh_type.h>
+#if __has_include(<common/ml_mesh_type.h>)
+#include <common/ml_mesh_type.h>  // MeshLab 2020.09
+#else
+#include <common/ml_document/cmesh.h>  // MeshLab 2021.05 and later
+#endif
 
 #include <Eigen/Dense>
 #include <vector>
