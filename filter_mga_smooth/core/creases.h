@@ -7,9 +7,9 @@
 // are flat and the creases are bent by 20 to 90 degrees. A crease is told from noise by three properties,
 // tested in this order:
 //   1. sharp across: the edge's dihedral angle (between its two faces' normals) is at least minDihedral
-//      and at least edgeProminence times the dihedral of the faces' other edges (the "wings": the mean of
-//      those wings that are not sharp themselves; the surface is smooth on both sides of a crease and its
-//      curvature concentrated on the edge);
+//      and at least edgeProminence times the median dihedral of the faces' four other edges (its "wings";
+//      those bent less than minDihedral, if any): the surface is smooth on both sides of a crease, its
+//      curvature concentrated on the edge;
 //   2. a chain: two sharp edges through a node are linked if each is the other's straightest
 //      continuation there, with dihedral angles that differ by at most the factor linkRatio and a turn
 //      of at most maxTurn (a spur of noise at a crease node does not break the crease; three creases
