@@ -196,9 +196,10 @@ Creases detectCreases(const std::vector<Vec3>& V, const std::vector<std::array<i
     structural[c] = int(chains[c].size()) >= opt.minChainEdges || cornerToCorner;
     crease[c] = consistent[c] && structural[c];
   }
-  // short consistent chains that continue a crease (meet one of its ends) are creases too; one pass, so
-  // that noise cannot grow from a crease
-  {
+  // short consistent chains that continue a crease (meet one of its ends) are creases too, and so on along
+  // a crease that fades out in steps
+  for (bool grew = true; grew;) {
+    grew = false;
     std::vector<char> end(nv, 0);
     for (std::size_t c = 0; c < chains.size(); ++c)
       if (crease[c])
@@ -210,6 +211,7 @@ Creases detectCreases(const std::vector<Vec3>& V, const std::vector<std::array<i
       for (int i : chains[c])
         if (end[std::size_t(E[std::size_t(i)].a)] || end[std::size_t(E[std::size_t(i)].b)]) {
           grown[c] = 1;
+          grew = true;
           break;
         }
     }

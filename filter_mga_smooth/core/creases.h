@@ -39,7 +39,7 @@ struct CreaseOptions {
   double linkRatio = 1.25;       ///< largest ratio of the dihedral angles of two linked edges
   double maxTurnDeg = 60;        ///< largest turn of a chain at a node
   int minChainEdges = 4;         ///< a chain that does not run from corner to corner needs this many edges
-  double maxVariation = 0.25;    ///< largest standard deviation over mean of a chain's dihedral angles
+  double maxVariation = 0.4;     ///< largest standard deviation over mean of a chain's dihedral angles
   double chainProminence = 6;    ///< smallest mean dihedral over mean wing of a chain
 };
 
