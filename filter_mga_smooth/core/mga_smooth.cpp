@@ -699,10 +699,12 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
                      " on feature edges, " + std::to_string(res.singularNodes) + " singular, " +
                      std::to_string(res.userFixedNodes) +
                      " by the selection)" +
-                     (opt.features == FeatureDetection::Creases
+                     (opt.features == FeatureDetection::Angles
+                          ? std::string("; raise the feature or singular angle or change the selection mode")
+                      : res.featureNodes + res.singularNodes > 0
                           ? "; feature detection found " + res.featureSummary +
-                                "; fix features by angles instead, or change the selection mode"
-                          : std::string("; raise the feature or singular angle or change the selection mode")));
+                                "; choose feature detection by angles, or change the selection mode"
+                          : std::string("; change the selection mode")));
 
   res.before = stats(M);
 
