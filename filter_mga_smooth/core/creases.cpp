@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <numeric>
 #include <unordered_map>
 
@@ -23,12 +24,14 @@ std::size_t Creases::cornerNodes() const { return std::size_t(std::count(corner.
 
 std::string Creases::summary() const {
   const std::size_t rejectedEdges = sharpEdges - creaseEdges;
+  char noise[32];
+  std::snprintf(noise, sizeof noise, "; median dihedral %.1f deg", noiseDeg);
   if (chains.empty())
     return "no crease: " + std::to_string(sharpEdges) + " sharp edges, " +
-           (sharpEdges ? "all taken for noise" : std::string("none")) + " (no node fixed as a feature)";
+           (sharpEdges ? "all taken for noise" : std::string("none")) + " (no node fixed as a feature)" + noise;
   return std::to_string(chains.size()) + " crease chains (" + std::to_string(creaseEdges) + " edges, " +
          std::to_string(creaseNodes()) + " nodes, " + std::to_string(cornerNodes()) + " corners); " +
-         std::to_string(rejectedEdges) + " of " + std::to_string(sharpEdges) + " sharp edges taken for noise";
+         std::to_string(rejectedEdges) + " of " + std::to_string(sharpEdges) + " sharp edges taken for noise" + noise;
 }
 
 Creases detectCreases(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& F,
@@ -111,6 +114,20 @@ Creases detectCreases(const std::vector<Vec3>& V, const std::vector<std::array<i
   }
   out.sharpEdges = std::size_t(std::count(sharp.begin(), sharp.end(), char(1)));
 
+  // the mesh's noise level: the median dihedral angle of its inner edges that are not sharp (a CAD part:
+  // about 0; a scan: a few degrees; a CT surface: up to 20)
+  double noise = 0;
+  {
+    std::vector<double> d;
+    for (const auto& e : E)
+      if (e.faces == 2 && !isIgnored(e) && !sharp[std::size_t(&e - E.data())]) d.push_back(e.dihedral);
+    if (!d.empty()) {
+      std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
+      noise = d[d.size() / 2];
+    }
+  }
+  out.noiseDeg = noise;
+
   // 2. chains: link two sharp edges through a node where exactly two meet, of similar dihedral, turning little
   std::vector<std::vector<int>> nodeSharp(nv);
   for (std::size_t i = 0; i < E.size(); ++i)
@@ -174,7 +191,8 @@ Creases detectCreases(const std::vector<Vec3>& V, const std::vector<std::array<i
     }
     const double n = double(ch.size()), mean = sum / n;
     const double sd = std::sqrt(std::max(0.0, sum2 / n - mean * mean));
-    consistent[c] = sd <= opt.maxVariation * mean && mean >= opt.chainProminence * (w / n);
+    consistent[c] = sd <= opt.maxVariation * mean && mean >= opt.chainProminence * (w / n) &&
+                    mean >= opt.noiseProminence * noise;
   }
   // a corner: a node where three or more consistent chains end
   std::vector<int> consistentEnds(nv, 0);

@@ -16,7 +16,8 @@
 //      meeting at a corner turn too much to link);
 //   3. a consistent chain: its dihedral varies little along it (standard deviation over mean at most
 //      maxVariation), it is sharper than its wings as a whole (mean dihedral over the mean of the wings
-//      that are not sharp at least chainProminence), and it is long (at least minChainEdges edges, closed
+//      that are not sharp at least chainProminence) and than the mesh's noise (mean dihedral over the
+//      median dihedral of the edges that are not sharp at least noiseProminence), and it is long (at least minChainEdges edges, closed
 //      or not), runs from corner to corner (three or more consistent chains and no other sharp edge end
 //      at each of its ends), or continues a crease (meets an end of a chain that is a crease by the
 //      other rules: the short sides of a CAD part).
@@ -41,6 +42,7 @@ struct CreaseOptions {
   int minChainEdges = 4;         ///< a chain that does not run from corner to corner needs this many edges
   double maxVariation = 0.4;     ///< largest standard deviation over mean of a chain's dihedral angles
   double chainProminence = 6;    ///< smallest mean dihedral over mean wing of a chain
+  double noiseProminence = 12;   ///< smallest mean dihedral of a chain over the mesh's noise (noiseDeg)
 };
 
 struct Creases {
@@ -50,6 +52,7 @@ struct Creases {
   std::size_t sharpEdges = 0;     ///< edges that passed step 1
   std::size_t creaseEdges = 0;    ///< edges of the crease chains
   std::size_t rejectedChains = 0; ///< chains of sharp edges taken for noise
+  double noiseDeg = 0;            ///< the median dihedral angle of the mesh's inner edges that are not sharp, degrees
   std::size_t creaseNodes() const;
   std::size_t cornerNodes() const;
   /// one line for the Log, e.g. "12 crease chains (192 edges, 186 nodes, 8 corners); 0 of 192 sharp
