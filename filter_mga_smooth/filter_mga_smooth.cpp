@@ -162,8 +162,9 @@ void FilterMgaSmoothPlugin::initParameters(int id, MeshDocument&, RichParameterL
                           "Feature detection",
                           "Which nodes stay fixed as features. Crease chains (for CAD parts and scans alike): the "
                           "nodes of chains of edges that are sharp across (bent at least 20 degrees and at least "
-                          "twice the edges beside them), consistent along (similar dihedral, turning little) and long "
-                          "(4 edges, or corner to corner); the isolated sharp edges of a noisy scan or CT surface "
+                          "twice the edges beside them), consistent along (similar dihedral, turning little), far "
+                          "sharper than the mesh's noise (12 times its median dihedral) and long (4 edges, or "
+                          "corner to corner); the isolated sharp edges of a noisy scan or CT surface "
                           "stay free; where chains meet or end are the singular nodes. The two angles below are "
                           "not used. Feature and singular angles: every node on an edge bent more than the feature "
                           "angle, and every node whose normal cone is wider than the singular angle."));
