@@ -114,8 +114,8 @@ Creases detectCreases(const std::vector<Vec3>& V, const std::vector<std::array<i
   }
   out.sharpEdges = std::size_t(std::count(sharp.begin(), sharp.end(), char(1)));
 
-  // the mesh's noise level: the median dihedral angle of its inner edges that are not sharp (a CAD part:
-  // about 0; a scan: a few degrees; a CT surface: up to 20)
+  // the mesh's noise level: the median dihedral angle of its inner edges that are not sharp (the fandisk:
+  // 0 degrees; the bunny: 3; the CT femur: 9)
   double noise = 0;
   {
     std::vector<double> d;
