@@ -2,7 +2,7 @@
 // profiling MGA and the gradient baseline (e.g. on libcgal-demo's femur and bunny, as bench/mga_smooth.py uses them).
 //
 //   bench_mga_core in.off [key=value ...] [out=path.off]
-//     method=mga|cg  sweeps=10  tol=1e-4  acc=1e-3  gens=20  restarts=4  pop=5  feature=60  singular=90
+//     method=mga|cg  sweeps=10  tol=1e-4  acc=1e-3  gens=20  restarts=4  pop=5  feature=60  singular=90 (either: features by angles, else crease chains)  features=creases|angles
 //     guard=0.35  pass=0  active=1  all=1 (0: guided element search)  local=0 (1: guided local, implies all=0)  seed=1  cgits=10  quads=0 (faces with 4 nodes stay quads)
 //
 // Prints one line: "mean_before min_before mean_after min_after sweeps searches evaluations wall_s cpu_s"
@@ -55,6 +55,8 @@ int main(int argc, char** argv) try {
   o.generations = int(num("gens", o.generations));
   o.restarts = int(num("restarts", o.restarts));
   o.population = int(num("pop", o.population));
+  if (kv.count("feature") || kv.count("singular") || (kv.count("features") && kv["features"] == "angles"))
+    o.features = sm::FeatureDetection::Angles;
   o.featureAngleDeg = num("feature", o.featureAngleDeg);
   o.singularAngleDeg = num("singular", o.singularAngleDeg);
   o.worstGuard = num("guard", o.worstGuard);
@@ -102,6 +104,7 @@ int main(int argc, char** argv) try {
   const double cpu = cpuSeconds() - c0;
   std::printf("fixed: %zu boundary, %zu feature, %zu singular; free %zu; threads %d\n", r.boundaryNodes, r.featureNodes,
               r.singularNodes, r.freeNodes, omp_get_max_threads());
+  if (o.features == sm::FeatureDetection::Creases) std::printf("features: %s\n", r.featureSummary.c_str());
   std::printf("mean %.5f -> %.5f  min %.4f -> %.4f  folded %zu -> %zu  sweeps %d+%d  searches %zu  evaluations %zu  "
               "wall %.2f s (setup %.2f)  cpu %.2f s\n",
               r.before.mean, r.after.mean, r.before.min, r.after.min, r.foldedBefore, r.foldedAfter, r.sweeps,

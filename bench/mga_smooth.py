@@ -7,13 +7,17 @@ angle_and_area_smoothing (Delaunay flips off, projection on).
 
 Inputs: the jittered saddle z = x^2/10 - y^2/4 on [-5,5]^2 (611 nodes, triangles; the lattice of the unit
 test), a jittered 25x25 quad grid on the same saddle (576 quads; triangle-only peers smooth its
-triangulation, the quads are measured), femur.off and bunny00.off from Debian's libcgal-demo.
+triangulation, the quads are measured); from Debian's libcgal-demo the organic (CT and scanned) meshes
+femur.off, bunny00.off, elephant.off and hand.off, and the CAD parts fandisk.off, anchor_dense.off and
+cube-meshed.off.
 Columns: element quality (alpha for triangles, Knupp's beta for quads, the project's own code for every
 row), max deviation from the exact saddle (|z - saddle(x, y)|) or, for the CGAL meshes, max distance to the
-input surface over its bbox diagonal, and wall time of the smoothing (meshlabserver rows: wall time minus
-a no-op meshlabserver run on the same file; CGAL: the call alone; OpenMesh: the process).
+input surface over its bbox diagonal, wall time of the smoothing (meshlabserver rows: wall time minus
+a no-op meshlabserver run on the same file; CGAL: the call alone; OpenMesh: the process), and on the CAD
+parts the largest change of the dihedral angle of a crease edge (an edge of the input bent by 20 degrees or
+more; these parts have no noise) and how many crease nodes moved.
 
-    bench/mga_smooth.py [--build build-mga] [--only saddle,quad,femur,bunny] [--mga-sweeps-large 3]
+    bench/mga_smooth.py [--build build-mga] [--only saddle,quad,femur,bunny,elephant,hand,fandisk,anchor,cube]
 
 Needs the targets filter_mga_smooth, prefix and bench_mga_smooth built in --build, and the packages
 libopenmesh-apps and libcgal-demo.
@@ -132,10 +136,18 @@ ENUM3 = ["Auto", "Triangles (alpha)", "Quads (beta)"]
 SEARCH = ["Every adjacent element (thesis)", "Guided (faster)", "Guided, local (fastest)"]
 
 
-def ours(mga, sweeps, guard=0.35, min_pass=0.0, feature=60.0, singular=90.0, guided=False, search=None, generations=20):
-    """search: 0 every element, 1 guided, 2 guided local (default: guided -> 1, else 0)"""
+FEATURES = ["Crease chains", "Feature and singular angles"]
+
+
+def ours(mga, sweeps, guard=0.35, min_pass=0.0, feature=None, singular=None, guided=False, search=None, generations=20):
+    """search: 0 every element, 1 guided, 2 guided local (default: guided -> 1, else 0); feature, singular:
+    angles (feature detection by angles), None: crease chains (the default)"""
+    angles = feature is not None or singular is not None
+    feature = 60.0 if feature is None else feature
+    singular = 90.0 if singular is None else singular
     common = dict(elementType=mlx.Enum(0, ENUM3), maxSweeps=mlx.Int(sweeps), tolerance=mlx.Float(1e-4))
-    tail = dict(worstGuard=mlx.Float(guard), minPassBelow=mlx.Float(min_pass), featureAngle=mlx.Float(feature),
+    tail = dict(worstGuard=mlx.Float(guard), minPassBelow=mlx.Float(min_pass),
+                featureDetection=mlx.Enum(int(angles), FEATURES), featureAngle=mlx.Float(feature),
                 singularAngle=mlx.Float(singular),
                 selectionMode=mlx.Enum(0, ["None", "Smooth only selected vertices", "Keep selected vertices fixed"]))
     if mga:
@@ -150,11 +162,40 @@ def ours(mga, sweeps, guard=0.35, min_pass=0.0, feature=60.0, singular=90.0, gui
     return [mlx.Filter("Gradient Surface Mesh Smoothing (Baseline)", **common, cgIterations=mlx.Int(10), **tail)]
 
 
+CREASE_DEG = 20.0  # a CAD part's edge bent at least this much is a crease edge
+
+
+def dihedrals(V, F):
+    """per undirected edge with two triangles: (a, b) -> dihedral angle in degrees"""
+    V = np.asarray(V, float)
+    T = np.array(triangulate(F))
+    n = np.cross(V[T[:, 1]] - V[T[:, 0]], V[T[:, 2]] - V[T[:, 0]])
+    n /= np.maximum(np.linalg.norm(n, axis=1), 1e-300)[:, None]
+    faces = {}
+    for fi, t in enumerate(T):
+        for k in range(3):
+            a, b = int(t[k]), int(t[(k + 1) % 3])
+            faces.setdefault((min(a, b), max(a, b)), []).append(fi)
+    return {e: float(np.degrees(np.arccos(np.clip(n[f[0]] @ n[f[1]], -1, 1)))) for e, f in faces.items() if len(f) == 2}
+
+
+def crease_change(V, W, F, creases):
+    """largest change of a crease edge's dihedral angle (degrees), and how many crease nodes moved
+    (more than 1e-6 of the bbox diagonal) from V to W"""
+    after = dihedrals(W, F)
+    change = max(abs(after[e] - d) for e, d in creases.items())
+    nodes = sorted({v for e in creases for v in e})
+    diag = float(np.linalg.norm(np.ptp(np.asarray(V, float), axis=0)))
+    moved = int(np.sum(np.linalg.norm(np.asarray(W, float)[nodes] - np.asarray(V, float)[nodes], axis=1) > 1e-6 * diag))
+    return change, moved
+
+
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--build", default=os.path.join(ROOT, "build-mga"))
-    ap.add_argument("--only", default="saddle,quad,femur,bunny")
-    ap.add_argument("--mga-sweeps-large", type=int, default=3, help="MGA/CG default-row sweeps on meshes over 10k nodes")
+    ap.add_argument("--only", default="saddle,quad,femur,bunny,elephant,hand,fandisk,anchor,cube")
+    ap.add_argument("--mga-sweeps-large", type=int, default=10,
+                    help="MGA/CG default-row sweeps on meshes over 10k nodes (10: MGA's default; the gradient's is 15)")
     args = ap.parse_args()
     work = tempfile.mkdtemp(prefix="mga_bench_")
     b = Bench(os.path.abspath(args.build), work)
@@ -170,25 +211,19 @@ def main():
         V, F = saddle_quads()
         inputs.append(("saddle, quads", V, F, True))
     data = "/usr/share/doc/libcgal-dev/data.tar.gz"
-    for name in ("femur", "bunny00"):
-        if name.rstrip("0") not in args.only:
+    cgal = [("femur", "femur", False), ("bunny", "bunny00", False), ("elephant", "elephant", False),
+            ("hand", "hand", False), ("fandisk", "fandisk", True), ("anchor", "anchor_dense", True),
+            ("cube", "cube-meshed", True)]
+    for key, name, cad in cgal:
+        if key not in args.only.split(","):
             continue
         if not os.path.exists(data):
             print(f"({name}: install libcgal-demo)")
             continue
         with tarfile.open(data) as tf:
             tf.extract(f"data/meshes/{name}.off", work)
-        path = os.path.join(work, "data", "meshes", f"{name}.off")
-        toks = open(path).read().split()
-        nv, nf = int(toks[1]), int(toks[2])
-        V = np.array(toks[4:4 + 3 * nv], float).reshape(nv, 3)
-        idx = toks[4 + 3 * nv:]
-        F, p = [], 0
-        for _ in range(nf):
-            k = int(idx[p])
-            F.append([int(x) for x in idx[p + 1:p + 1 + k]])
-            p += 1 + k
-        inputs.append((name, V, F, False))
+        V, F = read_off(os.path.join(work, "data", "meshes", f"{name}.off"))
+        inputs.append((name + (" (CAD)" if cad else ""), V, F, False))
 
     rows, folded_input = [], {}  # folded_input: the input's folded elements, from our first row's Log
     load0 = os.getloadavg()
@@ -199,17 +234,23 @@ def main():
         large = len(V) > 10000
         sweeps_mga = args.mga_sweeps_large if large else 10
         sweeps_cg = args.mga_sweeps_large if large else 15
+        cad = label.endswith("(CAD)")
+        creases = {e: d for e, d in dihedrals(V, F).items() if d >= CREASE_DEG} if cad else None
+        short = f" ({sweeps_mga} sweeps)" if sweeps_mga != 10 else ""
+        short_cg = f" ({sweeps_cg} sweeps)" if sweeps_cg != 15 else ""
         runs = [("input", None)]
         runs += [("MeshLab Laplacian (3 steps, cotangent)", ("ml", tris, laplacian())),
                  ("MeshLab Taubin (10 steps)", ("ml", tris, taubin())),
                  ("OpenMesh-Smoothing (tangential, 10 its)", ("om", tris)),
                  ("CGAL tangential_relaxation (10 its, projected)", ("cgal", tris, "tangential")),
                  ("CGAL angle_and_area_smoothing (10 its)", ("cgal", tris, "angle_area")),
-                 (f"ours: Gradient baseline, defaults{' (3 sweeps)' if large else ''}", ("ml", elems, ours(False, sweeps_cg))),
-                 (f"ours: MGA, defaults{' (3 sweeps)' if large else ''}", ("ml", elems, ours(True, sweeps_mga))),
-                 (f"ours: MGA, guided search{' (3 sweeps)' if large else ''}",
-                  ("ml", elems, ours(True, sweeps_mga, guided=True))),
+                 (f"ours: Gradient baseline, defaults{short_cg}", ("ml", elems, ours(False, sweeps_cg))),
+                 (f"ours: MGA, defaults{short}", ("ml", elems, ours(True, sweeps_mga))),
+                 (f"ours: MGA, guided search{short}", ("ml", elems, ours(True, sweeps_mga, guided=True))),
                  ("ours: MGA, guided local, 6 sw x 8 gens", ("ml", elems, ours(True, 6, search=2, generations=8)))]
+        if not is_saddle:
+            # the other feature rule: every node on an edge bent over 60 degrees, or with a normal cone over 90
+            runs += [("ours: MGA, features by angles 60/90", ("ml", elems, ours(True, sweeps_mga, feature=60, singular=90)))]
         # settings beyond the defaults, the same for both methods where both are run (named in the row)
         if label == "saddle, triangles":
             runs += [("ours: Gradient, 30 sw, guard .3, pass .32", ("ml", elems, ours(False, 30, 0.3, 0.32))),
@@ -224,8 +265,6 @@ def main():
                      ("ours: MGA, no feature, guard 0, pass .2", ("ml", elems, ours(True, 30, 0.0, 0.2, 180, 180))),
                      ("ours: MGA guided, no feature, guard 0, pass .2",
                       ("ml", elems, ours(True, 30, 0.0, 0.2, 180, 180, guided=True)))]
-        elif large:
-            runs += [("ours: Gradient, to convergence (40 sw max)", ("ml", elems, ours(False, 40)))]
         for name, how in runs:
             out = base + "_" + re.sub(r"\W+", "_", name) + ".off"
             secs, folded = 0.0, "-"
@@ -256,26 +295,33 @@ def main():
                     dev = float(np.max(np.abs(W[:, 2] - saddle(W[:, 0], W[:, 1]))))
                 else:
                     dev = float(b.tool_out("distance", elems, out).split()[1])
-                rows.append((label, name, qmin, qmean, dev, secs, len(V), len(F), folded))
+                crease = "-"
+                if creases:
+                    change, moved = crease_change(V, W, F, creases)
+                    crease = f"{change:.2f} / {moved}"
+                rows.append((label, name, qmin, qmean, dev, secs, len(V), len(F), folded, crease))
             except Exception as e:  # noqa: BLE001  (a failed peer is a row, not the end of the table)
-                rows.append((label, name, None, None, None, None, len(V), len(F), "-", str(e)[:90]))
+                msg = str(e).splitlines()[-1] if str(e) else repr(e)
+                rows.append((label, name, None, None, None, None, len(V), len(F), "-", "-", msg[:120]))
             print(f"  {label:18s} {name:46s} done", file=sys.stderr, flush=True)
 
     print(f"load average before/after the run: {load0[0]:.1f} / {os.getloadavg()[0]:.1f} ({os.cpu_count()} cores; "
           "other jobs on the machine inflate the times)")
-    print(f"{'method':48s} {'q min':>7s} {'q mean':>7s} {'max dev':>9s} {'time s':>8s} {'folded':>6s}")
+    print(f"{'method':48s} {'q min':>7s} {'q mean':>7s} {'max dev':>9s} {'time s':>8s} {'folded':>6s} {'crease':>11s}")
     last = None
     for r in rows:
         if r[0] != last:
             print(f"{r[0]} ({r[6]} nodes, {r[7]} {'quads, beta' if 'quads' in r[0] else 'triangles, alpha'})")
         last = r[0]
         if r[2] is None:
-            print(f"  {r[1]:46s} failed: {r[9]}")
+            print(f"  {r[1]:46s} failed: {r[10]}")
         else:
             folded = folded_input.get(r[0], "-") if r[1] == "input" else r[8]
-            print(f"  {r[1]:46s} {r[2]:7.4f} {r[3]:7.4f} {r[4]:9.2e} {r[5]:8.2f} {folded:>6s}")
-    print("max dev: saddle rows |z - saddle(x, y)|; femur/bunny rows distance to the input surface / bbox diagonal")
+            print(f"  {r[1]:46s} {r[2]:7.4f} {r[3]:7.4f} {r[4]:9.2e} {r[5]:8.2f} {folded:>6s} {r[9]:>11s}")
+    print("max dev: saddle rows |z - saddle(x, y)|; libcgal-demo rows distance to the input surface / bbox diagonal")
     print("folded: input and our rows, elements folded against the C1 surface normal at one of their nodes (our Log)")
+    print(f"crease (CAD parts): largest change of a crease edge's dihedral angle in degrees (crease edges: bent "
+          f"{CREASE_DEG:g} degrees or more in the input) / crease nodes moved")
     for r in rows:
         if r[1].startswith("ours: MGA, defaults") and r[5]:
             print(f"MGA time per element on {r[0]}: {1e3 * r[5] / r[7]:.3f} ms (thesis: 150 s / 51354 triangles "

@@ -26,10 +26,11 @@ void writeFaceQuality(MeshModel& mm, const std::vector<double>& perFace, bool co
 }  // namespace
 
 #define FIXED_NODES_INFO                                                                                         \
-  "<b>Fixed nodes</b>: boundary nodes; every node on a sharp edge (dihedral angle between the two faces' "       \
-  "normals above the feature angle; faux edges inside quads do not count); singular nodes of large curvature "   \
-  "variation (the normal cone of the node's faces, i.e. the largest angle between two of its face normals, "      \
-  "above the singular angle: cone tips, spikes); and the vertex selection as chosen. "
+  "<b>Fixed nodes</b>: boundary nodes; feature nodes, by default the nodes of crease chains (sharp edges "       \
+  "linked into chains of consistent dihedral angle; the isolated sharp edges of a noisy scan stay free), or "     \
+  "every node on an edge bent more than the feature angle (faux edges inside quads do not count); singular "      \
+  "nodes of large curvature variation (where crease chains meet or end, or a normal cone wider than the "         \
+  "singular angle: cone tips, spikes); and the vertex selection as chosen. "
 
 FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
   pectus::ml::FilterSpec q;
@@ -160,14 +161,24 @@ void FilterMgaSmoothPlugin::initParameters(int id, const MeshDocument&, RichPara
                            "After the sweeps, up to three more sweeps over the nodes whose worst element is below "
                            "this, maximising that worst element (up to this value, then the sum). In [0, 1]; 0 = off "
                            "(the thesis' algorithm)."));
+    par.addParam(RichEnum("featureDetection", 0, QStringList() << "Crease chains" << "Feature and singular angles",
+                          "Feature detection",
+                          "Which nodes stay fixed as features. Crease chains (for CAD parts and scans alike): the "
+                          "nodes of chains of edges that are sharp across (bent at least 20 degrees and at least "
+                          "twice the edges beside them), consistent along (similar dihedral, turning little), far "
+                          "sharper than the mesh's noise (12 times its median dihedral) and long (4 edges, or "
+                          "corner to corner); the isolated sharp edges of a noisy scan or CT surface "
+                          "stay free; where chains meet or end are the singular nodes. The two angles below are "
+                          "not used. Feature and singular angles: every node on an edge bent more than the feature "
+                          "angle, and every node whose normal cone is wider than the singular angle."));
     par.addParam(RichFloat("featureAngle", 60.0f, "Feature angle (degrees)",
-                           "An edge whose dihedral angle (angle between the normals of its two faces) exceeds "
-                           "this is sharp, and every node on a sharp edge stays fixed so creases are kept. "
-                           "In (0, 180]; 180 disables feature detection."));
+                           "With 'Feature and singular angles': an edge whose dihedral angle (angle between the "
+                           "normals of its two faces) exceeds this is sharp, and every node on a sharp edge stays "
+                           "fixed. In (0, 180]; 180 disables it."));
     par.addParam(RichFloat("singularAngle", 90.0f, "Singular angle (degrees)",
-                           "A node whose faces' normals spread by more than this (the largest angle between two "
-                           "face normals around the node) is a singular node of large curvature variation (a cone "
-                           "tip, a spike) and stays fixed. In (0, 180]; 180 disables it."));
+                           "With 'Feature and singular angles': a node whose faces' normals spread by more than this "
+                           "(the largest angle between two face normals around the node) is a singular node of large "
+                           "curvature variation (a cone tip, a spike) and stays fixed. In (0, 180]; 180 disables it."));
     par.addParam(RichEnum("selectionMode", 0,
                           QStringList() << "None" << "Smooth only selected vertices" << "Keep selected vertices fixed",
                           "Vertex selection",
@@ -244,6 +255,8 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
   }
   o.worstGuard = ctx.floatIn("worstGuard", 0, 1);
   o.minPassBelow = ctx.floatIn("minPassBelow", 0, 1);
+  o.features = ctx.enumIn("featureDetection", 2) == 1 ? pectus::smooth::FeatureDetection::Angles
+                                                      : pectus::smooth::FeatureDetection::Creases;
   o.featureAngleDeg = ctx.floatIn("featureAngle", 0, 180, true, false);
   o.singularAngleDeg = ctx.floatIn("singularAngle", 0, 180, true, false);
   const int selMode = ctx.enumIn("selectionMode", 3);
@@ -304,6 +317,7 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
           std::to_string(r.userFixedNodes) + " by the selection; " + std::to_string(r.colours) + " colours; " +
           std::to_string(r.evaluations) + " fitness evaluations; elements folded against a node's surface normal " +
           std::to_string(r.foldedBefore) + " -> " + std::to_string(r.foldedAfter));
+  if (o.features == pectus::smooth::FeatureDetection::Creases) ctx.log(what + ": features: " + r.featureSummary);
 }
 
 MESHLAB_PLUGIN_NAME_EXPORTER(FilterMgaSmoothPlugin)

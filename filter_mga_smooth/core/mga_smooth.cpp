@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <numeric>
 
+#include "creases.h"
 #include "pectus/c1_cmesh.h"
 #include "pectus/c1_surface.h"
 #include "pectus/element_quality.h"
@@ -623,7 +624,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
     std::vector<Vec3> fn(tm.F.size());
     for (std::size_t f = 0; f < tm.F.size(); ++f) fn[f] = normal(int(f));
     // faux edges inside quads are not feature edges
-    auto key = [](int a, int b) { return (std::uint64_t(std::uint32_t(std::min(a, b))) << 32) | std::uint32_t(std::max(a, b)); };
+    auto key = [](int a, int b) { return edgeKey(a, b); };
     std::vector<std::uint64_t> fauxInside;
     for (const auto& e : M.E)
       if (e.nv == 4) {
@@ -631,19 +632,30 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
         fauxInside.push_back(key(e.v[1], e.v[3]));
       }
     std::sort(fauxInside.begin(), fauxInside.end());
-    const double cosLim = std::cos(opt.featureAngleDeg * M_PI / 180.0);
-    for (const auto& e : S.edges()) {
-      if (e.f1 < 0) {
-        boundary[std::size_t(e.a)] = boundary[std::size_t(e.b)] = 1;
-      } else if (opt.featureAngleDeg < 180 && !std::binary_search(fauxInside.begin(), fauxInside.end(), key(e.a, e.b))) {
-        const Vec3& a = fn[std::size_t(e.f0)];
-        const Vec3& b = fn[std::size_t(e.f1)];
-        if (a.squaredNorm() > 0 && b.squaredNorm() > 0 && a.dot(b) < cosLim)
-          feature[std::size_t(e.a)] = feature[std::size_t(e.b)] = 1;
+    for (const auto& e : S.edges())
+      if (e.f1 < 0) boundary[std::size_t(e.a)] = boundary[std::size_t(e.b)] = 1;
+    if (opt.features == FeatureDetection::Creases) {
+      // crease chains told from noise (creases.h); their corners are the singular points
+      const Creases cr = detectCreases(tm.V, tm.F, fauxInside);
+      for (std::size_t i = 0; i < nv; ++i) {
+        feature[i] = cr.node[i] && !cr.corner[i];
+        singular[i] = cr.corner[i];
+      }
+      res.creaseChains = cr.chains.size();
+      res.featureSummary = cr.summary();
+    } else {
+      const double cosLim = std::cos(opt.featureAngleDeg * M_PI / 180.0);
+      for (const auto& e : S.edges()) {
+        if (e.f1 >= 0 && opt.featureAngleDeg < 180 && !std::binary_search(fauxInside.begin(), fauxInside.end(), key(e.a, e.b))) {
+          const Vec3& a = fn[std::size_t(e.f0)];
+          const Vec3& b = fn[std::size_t(e.f1)];
+          if (a.squaredNorm() > 0 && b.squaredNorm() > 0 && a.dot(b) < cosLim)
+            feature[std::size_t(e.a)] = feature[std::size_t(e.b)] = 1;
+        }
       }
     }
     // singular nodes: the normal cone of the node's faces is wider than the singular angle
-    if (opt.singularAngleDeg < 180) {
+    if (opt.features == FeatureDetection::Angles && opt.singularAngleDeg < 180) {
       std::vector<int> start(nv + 1, 0), vf(3 * tm.F.size());
       for (const auto& F : tm.F)
         for (int k = 0; k < 3; ++k) ++start[std::size_t(F[std::size_t(k)]) + 1];
@@ -686,7 +698,13 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
                      std::to_string(res.boundaryNodes) + " boundary, " + std::to_string(res.featureNodes) +
                      " on feature edges, " + std::to_string(res.singularNodes) + " singular, " +
                      std::to_string(res.userFixedNodes) +
-                     " by the selection); raise the feature or singular angle or change the selection mode");
+                     " by the selection)" +
+                     (opt.features == FeatureDetection::Angles
+                          ? std::string("; raise the feature or singular angle or change the selection mode")
+                      : res.featureNodes + res.singularNodes > 0
+                          ? "; feature detection found " + res.featureSummary +
+                                "; choose feature detection by angles, or change the selection mode"
+                          : std::string("; change the selection mode")));
 
   res.before = stats(M);
 

@@ -25,13 +25,17 @@
 // broken by the sum), with the same search, projection and fold rules.
 // Sweeps repeat until the mean quality improves by less than the tolerance or the sweep cap is reached.
 //
-// Fixed nodes: boundary nodes; feature nodes (every node on a sharp edge, i.e. an edge whose dihedral
+// Fixed nodes: boundary nodes; feature and singular nodes, by one of two rules (Options::features):
+//  - Creases (the default): the nodes of the crease chains of creases.h - chains of edges sharp across,
+//    consistent along, told from the isolated sharp edges of a noisy scan - are feature nodes, and the
+//    chains' corners (three or more crease edges meet, or an open chain ends) are the singular nodes;
+//  - Angles: feature nodes (every node on a sharp edge, i.e. an edge whose dihedral
 // angle - the angle between the two faces' normals - exceeds the feature angle; faux edges inside quads
 // are not feature edges); singular nodes of large curvature variation (thesis 4.3: "singular points ...
 // which contain large curvature variation need be identified and fixed"): the normal cone of the node's
 // faces - the largest angle between the normals of any two faces around the node - exceeds the singular
 // angle, e.g. the apex of a cone or a spike, where no single edge is sharp but the surface turns a lot
-// within one ring; nodes not in any element; and the user's fixed set.
+// within one ring. Then nodes not in any element, and the user's fixed set.
 //
 // Method::ConjugateGradient (the baseline of thesis Table 4-1, after Garimella et al.): the same node
 // loop, fixed nodes, colouring, projection and fitness, but each node is moved by Polak-Ribiere conjugate
@@ -72,6 +76,12 @@ enum class ElementSearch {
   GuidedLocal,
 };
 
+/// which nodes are fixed as features (see above)
+enum class FeatureDetection {
+  Creases,  ///< crease chains (creases.h); featureAngleDeg and singularAngleDeg are not used
+  Angles,   ///< every node on an edge bent more than featureAngleDeg, or with a normal cone over singularAngleDeg
+};
+
 enum class Method {
   MicroGA,            ///< thesis ch. 4.2: micro-GA inside every adjacent element
   ConjugateGradient,  ///< baseline of thesis Table 4-1: Polak-Ribiere CG in the node's tangent plane
@@ -87,11 +97,12 @@ struct Options {
   int restarts = 4;             ///< micro-GA restarts per adjacent element
   int population = 5;
   mga::Selection selection = mga::Selection::Roulette;
-  double featureAngleDeg = 60;  ///< dihedral angle above which an edge is sharp (180: no feature edges)
+  FeatureDetection features = FeatureDetection::Creases;
+  double featureAngleDeg = 60;  ///< Angles: dihedral angle above which an edge is sharp (180: no feature edges)
   double worstGuard = kMinQualityGuard;  ///< see above; 0 = the thesis' plain sum
   double minPassBelow = 0;      ///< final max-min pass for nodes whose worst element is below this (0: off)
   int minPassSweeps = 3;        ///< at most this many final max-min sweeps (stops when the minimum stalls)
-  double singularAngleDeg = 90; ///< normal-cone angle of a node's faces above which it is singular (180: none)
+  double singularAngleDeg = 90; ///< Angles: normal-cone angle of a node's faces above which it is singular (180: none)
   bool activeSet = true;         ///< after the first sweep, search only nodes whose star still gains (see above)
   ElementSearch elementSearch = ElementSearch::Every;  ///< MicroGA only
   int cgIterations = 10;        ///< ConjugateGradient: CG iterations per node and sweep
@@ -108,6 +119,8 @@ struct Result {
   /// elements folded against the C1 surface normal at one of their nodes, before and after
   std::size_t foldedBefore = 0, foldedAfter = 0;
   std::size_t freeNodes = 0, boundaryNodes = 0, featureNodes = 0, singularNodes = 0, userFixedNodes = 0;
+  std::size_t creaseChains = 0;      ///< FeatureDetection::Creases: crease chains found
+  std::string featureSummary;        ///< FeatureDetection::Creases: Creases::summary()
   std::size_t evaluations = 0;       ///< fitness evaluations (both methods)
   std::size_t nodesMoved = 0;
   std::size_t searches = 0;          ///< node searches over all sweeps (the active set skips converged nodes)

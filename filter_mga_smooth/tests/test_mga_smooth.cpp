@@ -284,8 +284,10 @@ TEST(MgaSmooth, UserFixedAndFeatureNodesStay) {
     if (std::abs(t.V[i].x() - 5) < 1e-12 && t.V[i].z() == 0) EXPECT_EQ(r.positions[i], in[i]) << i;
   EXPECT_GT(r.after.mean, r.before.mean);
 
-  // a feature angle of 180 degrees: no feature node
+  // the same by the feature angle (60 degrees); at 180 degrees: no feature node
   sm::Options o = fastOptions();
+  o.features = sm::FeatureDetection::Angles;
+  EXPECT_EQ(sm::smoothMesh(m, o).featureNodes, 9u);
   o.featureAngleDeg = 180;
   EXPECT_EQ(sm::smoothMesh(m, o).featureNodes, 0u);
 }
@@ -502,6 +504,7 @@ TEST(MgaSmooth, SingularNodesStay) {
   for (auto method : {sm::Method::MicroGA, sm::Method::ConjugateGradient}) {
     sm::Options o = fastOptions();
     o.method = method;
+    o.features = sm::FeatureDetection::Angles;
     o.singularAngleDeg = 50;
     const auto r = sm::smoothMesh(m, o);
     EXPECT_EQ(r.singularNodes, 1u);
@@ -515,10 +518,13 @@ TEST(MgaSmooth, SingularNodesStay) {
     EXPECT_EQ(r2.singularNodes, 0u);
     EXPECT_EQ(r2.freeNodes, 10u);
     EXPECT_GT((r2.positions[0] - in[0]).norm(), 1e-3);
-    // the default (90 degrees) keeps this gentle cone free, and fixes a steep one (normal cone ~ 127)
-    EXPECT_EQ(sm::smoothMesh(m, fastOptions()).singularNodes, 0u);
+    // the default singular angle (90 degrees) keeps this gentle cone free, and fixes a steep one (normal
+    // cone ~ 127)
+    sm::Options a = fastOptions();
+    a.features = sm::FeatureDetection::Angles;
+    EXPECT_EQ(sm::smoothMesh(m, a).singularNodes, 0u);
     const auto steep = toMesh(cone(2.0));
-    sm::Options d = fastOptions();
+    sm::Options d = a;
     d.featureAngleDeg = 180;
     EXPECT_EQ(sm::smoothMesh(*steep, d).singularNodes, 1u);
   }

@@ -20,6 +20,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   o.restarts = r.range(0, 1);
   o.population = r.range(3, 4);
   o.selection = static_cast<mga::Selection>(r.u8() % 2);
+  o.features = r.flag() ? smooth::FeatureDetection::Creases : smooth::FeatureDetection::Angles;
   o.featureAngleDeg = r.real(0, 180);
   o.singularAngleDeg = r.real(0, 180);
   o.worstGuard = r.flag() ? 0.0 : r.real(0, 1);
