@@ -114,7 +114,7 @@ def main():
         tf, ts, te, tv = THESIS_RESULTS[case]
         ok = r["rc"] == 0
         hb, ha = (r["haller"] + [None, None])[:2]
-        print(f"| {case[-1]} | {sex}/{age} | {index} | {elevation} | {m} | {f(r['tets'], '{:,}')} | "
+        print(f"| {case[-1]} | {sex}/{age} | {index} | {elevation} | {m} | {f(r['tets'] and int(r['tets']), '{:,}')} | "
               f"{'calibrated' if ok else 'stopped'} | {f(r['force'] if ok else None, '{:.2f}')} ({tf}) | {f(r['newton'], '{}')} | "
               f"{f(r['solves'], '{}')} | {r['wall']:.0f} | "
               f"{f(r['max_stress'] if ok else None)} ({ts}), {r['max_stress_where'] or '—'} | "

@@ -46,14 +46,15 @@ check_range(r, "tri_to_quad.mlx", r"Quads: ([0-9.]+)% quads", 95, 100, "% quads"
 check_range(r, "tri_to_quad.mlx", r"invalid quads \(beta <= 0\): ([0-9]+)", 0, 0, "invalid quads")
 r = run("structure.mlx", [saddle])
 check_range(r, "structure.mlx", r"Mesh Structure Improvement .* mean alpha [0-9.]+ -> ([0-9.]+)", alpha0 or 0, 1, "mean alpha after")
-# the two saving examples write quads.obj into the working directory
-for name in ("save_polygonal.mlx", "tri_to_quad_and_save.mlx"):
+# the two saving examples write quads.obj and quads.off into the working directory
+for name, saved in (("save_polygonal.mlx", "quads.obj"), ("tri_to_quad_and_save.mlx", "quads.off")):
     d = os.path.join(W, name[:-4])
     os.makedirs(d)
     r = run(name, [saddle], cwd=d)
     n = number(r, r"Save Polygonal Mesh: wrote ([0-9]+) vertices")
-    check(n is not None and 625 <= n < 800 and os.path.getsize(os.path.join(d, "quads.obj")) > 10000,
-          f"{name}: quads.obj with {n} vertices")
+    path = os.path.join(d, saved)
+    check(n is not None and 625 <= n < 800 and os.path.exists(path) and os.path.getsize(path) > 10000,
+          f"{name}: {saved} with {n} vertices")
 
 # --- the rib cage, the FE analysis of thesis patient 1 and the volumes of its result
 r = run("create_ribcage.mlx")
