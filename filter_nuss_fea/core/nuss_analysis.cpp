@@ -209,6 +209,13 @@ Vector3d barExit(const CageSurface& cage, const std::vector<Landmark>& lms, int 
 
 namespace {
 
+// the user's sternum point, else landmark 500; `why` ends the message when there is neither
+Vector3d lowerSternumEnd(const std::vector<Landmark>& lms, const Placement& pl, const std::string& why) {
+  if (pl.sternumPoint) return *pl.sternumPoint;
+  if (auto p = findLandmark(lms, kSternumLowerEnd)) return *p;
+  throw InputError("No lower sternum end landmark (code 500) and no sternum point given: " + why + ".");
+}
+
 // the fixed nodes, the Fe nodes and the four Fsr patches, into s (s.mesh: the tet mesh of cage)
 void checkRadii(const Placement& pl) {
   if (!(pl.jointRadius > 0 && pl.sternumLoadRadius > 0 && pl.ribSupportRadius > 0))
@@ -255,11 +262,7 @@ void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Plac
 // the Fe patch(es) on the sternum and the Fsr patches on the ribs (surface nodes only)
 void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl, Analysis& s) {
   auto sternumFace = [&](size_t f) { return cage.surface.faceTissue[f] == int(Tissue::Sternum); };
-  Vector3d sp;
-  if (pl.sternumPoint) sp = *pl.sternumPoint;
-  else if (auto p = findLandmark(lms, kSternumLowerEnd)) sp = *p;
-  else
-    throw InputError("No lower sternum end landmark (code 500) and no sternum point given: the elevating force goes there.");
+  const Vector3d sp = lowerSternumEnd(lms, pl, "the elevating force goes there");
   bool anySternum = false;
   for (size_t f = 0; f < cage.surface.faces.size() && !anySternum; ++f) anySternum = sternumFace(f);
   if (!anySternum) throw InputError("The cage has no sternum faces (tissue code 3): the elevating force acts on the sternum.");
@@ -461,10 +464,7 @@ std::string ChestLine::describe() const {
 
 ChestLine chestLine(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl) {
   checkRadii(pl);
-  Vector3d end;
-  if (pl.sternumPoint) end = *pl.sternumPoint;
-  else if (auto p = findLandmark(lms, kSternumLowerEnd)) end = *p;
-  else throw InputError("No lower sternum end landmark (code 500) and no sternum point given: the chest line is measured there.");
+  const Vector3d end = lowerSternumEnd(lms, pl, "the chest line is measured there");
   const Vector3d dir = pl.direction.normalized();
   const auto& V = cage.surface.vertices;
   // 1. the sternum's anterior surface near its lower end

@@ -3,6 +3,7 @@ Tests are plain scripts (run by ctest): call check(...) for each assertion, fini
 from __future__ import annotations
 
 import os
+import re
 import struct
 import sys
 import tempfile
@@ -39,6 +40,17 @@ if mlx.default_host() == "2025.07":
 def workdir(name: str) -> str:
     d = tempfile.mkdtemp(prefix=f"pectus-{name}-")
     return d
+
+
+def example_script(example: str, folder: str, name: str, **values) -> str:
+    """folder/name.mlx: the example script `example` with some parameter values replaced (each exactly once)"""
+    text = open(example).read()
+    for k, v in values.items():
+        text, n = re.subn(f'(name="{k}" type="\\w+" value=")[^"]*"', f'\\g<1>{v}"', text)
+        assert n == 1, k
+    path = os.path.join(folder, name + ".mlx")
+    open(path, "w").write(text)
+    return path
 
 
 def run(inputs, script, outputs=(), timeout=1800):

@@ -14,7 +14,7 @@ import tarfile
 import numpy as np
 
 from pectus_meshes import alpha, read_off, write_off
-from harness import SOURCE, check, finish, read_ply, run, workdir
+from harness import SOURCE, check, example_script, finish, read_ply, run, workdir
 
 DATA = "/usr/share/doc/libcgal-dev/data.tar.gz"
 if not os.path.exists(DATA):
@@ -30,13 +30,7 @@ EXAMPLE = os.path.join(SOURCE, "filter_mga_smooth", "examples", "mga_smooth.mlx"
 
 
 def script(name, **values):
-    text = open(EXAMPLE).read()
-    for k, v in values.items():
-        text, n = re.subn(f'(name="{k}" type="\\w+" value=")[^"]*"', f'\\g<1>{v}"', text)
-        assert n == 1, k
-    path = os.path.join(d, name + ".mlx")
-    open(path, "w").write(text)
-    return path
+    return example_script(EXAMPLE, d, name, **values)
 
 
 def smooth(inp, name, **values):

@@ -6,7 +6,7 @@ import re
 import numpy as np
 
 from pectus_meshes import alpha
-from harness import SOURCE, check, check_refused, finish, grid, read_ply, run, workdir, write_off, write_ply
+from harness import SOURCE, check, check_refused, example_script, finish, grid, read_ply, run, workdir, write_off, write_ply
 
 EXAMPLES = {"MGA": os.path.join(SOURCE, "filter_mga_smooth", "examples", "mga_smooth.mlx"),
             "Gradient": os.path.join(SOURCE, "filter_mga_smooth", "examples", "gradient_smooth.mlx")}
@@ -15,13 +15,7 @@ d = workdir("mga")
 
 def script(name: str, example: str = "MGA", **values) -> str:
     """an example script with some parameter values replaced"""
-    text = open(EXAMPLES[example]).read()
-    for k, v in values.items():
-        text, n = re.subn(f'(name="{k}" type="\\w+" value=")[^"]*"', f'\\g<1>{v}"', text)
-        assert n == 1, k
-    path = os.path.join(d, name + ".mlx")
-    open(path, "w").write(text)
-    return path
+    return example_script(EXAMPLES[example], d, name, **values)
 
 
 
