@@ -43,7 +43,7 @@ TIMEOUT = 60.0 * float(os.environ.get("PECTUS_TIMEOUT_SCALE", "1"))  # scripts/s
 BUILD = os.environ.get("PECTUS_BUILD", os.path.join(SOURCE, "build"))
 LAYER_CHECK = os.environ.get("PECTUS_LAYER_CHECK", os.path.join(BUILD, "bin", "pectus_layer_check"))
 PLUGINS = os.environ.get("PECTUS_PLUGINS", os.path.join(BUILD, "plugins"))
-TIMING = re.compile(r"[0-9.]+(e[-+]?[0-9]+)? ?(s|ms|seconds?)\b")  # masked in Log lines
+TIMING = re.compile(r"(?<![A-Za-z0-9_])[0-9.]+(e[-+]?[0-9]+)? ?(s|ms|seconds?)\b")  # masked in Log lines
 _NONFINITE = re.compile(rb"(?<![A-Za-z_])-?(nan|inf|infinity)(?![A-Za-z_])", re.I)
 
 # ---------------------------------------------------------------------------------------------

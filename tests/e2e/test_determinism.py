@@ -46,7 +46,7 @@ def outputs_of(key: str, threads: int):
     layers = [(os.path.join(d, f"layer{i}.ply"), bim.MASK, i) for i in range(len(inputs) + 3)]
     r = runner.run(inputs, mlx.Script([f]), layers, env={"OMP_NUM_THREADS": str(threads)}, timeout=300)
     files = {os.path.basename(p): masked(p, open(p, "rb").read()) for p in sorted(glob.glob(os.path.join(d, "*")))}
-    log = [bim.TIMING.sub("<t>", l).replace(d, "<dir>") for l in r.log]
+    log = [bim.TIMING.sub("<t>", l.replace(d, "<dir>")) for l in r.log]  # the folder first: its random name may look like a time
     return r.rc, files, log
 
 
