@@ -12,17 +12,24 @@ meshlabserver per patient and method. --methods adds other large-displacement se
   search   the same with the force search instead of displacement control
   svk      St Venant-Kirchhoff, force search, plain Newton
 
+--cartilage-e runs each method at each costal cartilage modulus of a list (MPa; the thesis' 12.25 by default):
+the sensitivity of the force to the one soft tissue. A row at another modulus than the thesis' names it in
+its method column ("default, E 24.5"). With --input exports, --spine keep (or cut,keep) has 'Prepare Patient
+Rib Cage' keep the vertebral column as the fixed support instead of cutting the ribs at the costovertebral
+joints ("default, spine kept").
+
 With --input exports, each patient's cage is first written as a messy CT segmentation export by
 pectus_ct_phantom (the generator's cage of that age and index on a 1 mm CT grid, TotalSegmentator-named STL
 files with the defects of real exports), then imported and prepared by 'Import CT Segmentation' and
 'Prepare Patient Rib Cage' (their defaults: 4 mm edges) in the same script before the analysis.
 
     bench/table_6_1.py [--edge 5] [--cases 1,2,3,4,5] [--methods default] [--input generated|exports]
-                       [--out /tmp/pectus-table61]
+                       [--cartilage-e 12.25[,24.5,...]] [--spine cut[,keep]] [--out /tmp/pectus-table61]
 
 Needs the plugins and meshlabserver of build/prefix (scripts/setup.sh).
 """
 import argparse
+import itertools
 import os
 import platform
 import subprocess
@@ -43,11 +50,13 @@ THESIS_RESULTS = {"case1": (140, 43.5, 0.93, 6.09), "case2": (120, 90.6, 1.20, 5
 METHODS = {"default": {},
            "search": dict(calibration=0),
            "svk": dict(material=0, calibration=0, lineSearch=False, adaptiveSteps=False)}
+THESIS_CARTILAGE_E = pf.NUSS_MODEL["cartilageModulus"][1]  # MPa
+SPINE = ("cut", "keep")  # 'Prepare Patient Rib Cage': the vertebral column cut at the joints or kept, fixed
 CAGE, LANDMARKS = 0, 1
 PHANTOM = os.path.join(ROOT, "build", "filter_nuss_fea", "pectus_ct_phantom")
 
 
-def cage_filters(case, age, index, edge, source, out):
+def cage_filters(case, age, index, edge, source, out, spine="cut"):
     """the filters that make the patient's cage (current) and landmarks, and their layer numbers"""
     if source == "generated":
         return [pf.create_ribcage(age=age, hallerIndex=index, edgeLength=edge)], CAGE, LANDMARKS
@@ -56,14 +65,14 @@ def cage_filters(case, age, index, edge, source, out):
                    capture_output=True)
     imp = pf.import_ct_segmentation(path=os.path.join(folder, "stl_messy"))
     n = mlx.grab(mlx.run([], mlx.Script([imp])).log, r"Imported (\d+) structures", int)
-    return [imp, pf.prepare_patient_rib_cage()], n, n + 1  # the prepared cage and its landmarks follow the imports
+    return [imp, pf.prepare_patient_rib_cage(spine=SPINE.index(spine))], n, n + 1  # the prepared cage and its landmarks follow the imports
 
 
-def run_case(case, sex, age, index, elevation, method, edge, out, source):
-    make, cage, landmarks = cage_filters(case, age, index, edge, source, out)
-    base = os.path.join(out, f"{case}_{source}_{method}")
+def run_case(case, sex, age, index, elevation, method, edge, out, source, cartilage_e, spine):
+    make, cage, landmarks = cage_filters(case, age, index, edge, source, out, spine)
+    base = os.path.join(out, f"{case}_{source}_{method}_E{cartilage_e:g}_{spine}")
     fe = pf.nuss_fea(landmarkLayer=landmarks, targetElevation=elevation, resultBase=mlx.SaveFile(base + ".vtu", ".vtu"),
-                     **METHODS[method])
+                     cartilageModulus=cartilage_e, **METHODS[method])
     compare = dict(compare=True, beforeLayer=cage, landmarkLayer=landmarks)
     volumes = [pipeline.example(k, n).set(**compare) for k, n in (("slice", "Thoracic Volume (Slice Method)"),
                                                                   ("envelope", "Thoracic Volume (Ferguson Envelope)"),
@@ -90,18 +99,24 @@ def main():
     ap.add_argument("--cases", default="1,2,3,4,5")
     ap.add_argument("--methods", default="default")
     ap.add_argument("--input", choices=("generated", "exports"), default="generated")
+    ap.add_argument("--cartilage-e", default=f"{THESIS_CARTILAGE_E:g}", help="costal cartilage moduli, MPa")
+    ap.add_argument("--spine", default="cut", help="with --input exports: cut, keep or cut,keep")
     ap.add_argument("--out", default="/tmp/pectus-table61")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     cases = [THESIS[int(k) - 1] for k in a.cases.split(",")]
     methods = a.methods.split(",")
     rows = []
-    for case, sex, age, index, elevation in cases:
-        for m in methods:
-            r = run_case(case, sex, age, index, elevation, m, a.edge, a.out, a.input)
-            rows.append((case, sex, age, index, elevation, m, r))
-            print(f"{case} {m}: rc {r['rc']}, Fe {r['force']} N, {r['newton']} Newton iterations, {r['wall']:.0f} s"
-                  + (f"; {r['error']}" if r["rc"] else ""), flush=True)
+    moduli = [float(e) for e in a.cartilage_e.split(",")]
+    spines = a.spine.split(",")
+    if any(sp not in SPINE for sp in spines) or (a.input == "generated" and spines != ["cut"]):
+        ap.error("--spine takes cut and keep, with --input exports (the generated cage has no vertebral column)")
+    for (case, sex, age, index, elevation), method, e, spine in itertools.product(cases, methods, moduli, spines):
+        r = run_case(case, sex, age, index, elevation, method, a.edge, a.out, a.input, e, spine)
+        m = method + ("" if e == THESIS_CARTILAGE_E else f", E {e:g}") + (", spine kept" if spine == "keep" else "")
+        rows.append((case, sex, age, index, elevation, m, r))
+        print(f"{case} {m}: rc {r['rc']}, Fe {r['force']} N, {r['newton']} Newton iterations, {r['wall']:.0f} s"
+              + (f"; {r['error']}" if r["rc"] else ""), flush=True)
 
     what = f"generated cages ({a.edge:g} mm edges)" if a.input == "generated" else "their CT-like exports, prepared (4 mm edges)"
     print(f"\nTable 6-1, {what}, TET10 as the FE filter meshes them by default; "
@@ -123,7 +138,7 @@ def main():
               f"{f(ha if ok else None, '{:.2f}')} |")
     print("Published forces: 68 N (Fonkalsrud, 4 children under 11) to 250 N (instrumented bar); "
           "Weber et al.: 181 ± 48 N, boys aged 5-17; the thesis: 70-190 N.")
-    failed = [r for *_, m, r in rows if m == "default" and r["rc"] != 0]
+    failed = [r for *_, m, r in rows if m.startswith("default") and r["rc"] != 0]
     return 1 if failed else 0
 
 

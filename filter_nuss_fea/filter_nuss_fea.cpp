@@ -55,7 +55,7 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
       "closed rib cage surface whose faces carry tissue and part labels (as 'Create Pectus Excavatum Rib Cage' writes "
       "them) plus a landmark layer.<br>"
       "<b>Model.</b> TetGen tetrahedralises the surface (quality and maximum volume below); each tet takes the tissue "
-      "of the nearest surface face. Bone and sternum E = 11.5 GPa, pectus costal cartilage E = 12.25 MPa (thesis). "
+      "of the nearest surface face. Bone and sternum E = 11.5 GPa, pectus costal cartilage E = 12.25 MPa (the thesis' moduli, the defaults below). "
       "<b>Boundary conditions</b> (Fig. 6-4): every node within the joint radius of a costovertebral joint landmark "
       "is fixed. <b>Loads</b> (Fig. 6-3): the elevating force Fe, anterior, spread over the sternum surface nodes "
       "near the lower sternum end (landmark 500); four rib support forces Fsr = Fe/4, posterior, on the ribs above "
@@ -289,6 +289,12 @@ void addModelParams(RichParameterList& par) {
   par.addParam(RichFloat("tetQuality", 2.0f, "Tet quality (radius-edge ratio)",
                          "TetGen -q bound, >= 1.2 (smaller: better tets, more of them); 0 = no refinement."));
   par.addParam(RichFloat("maxTetVolume", 0.0f, "Max tet volume (mm^3)", "TetGen -a bound; 0 = no limit."));
+  par.addParam(RichFloat("boneModulus", float(d.eBone), "Young's modulus, bone (MPa)",
+                         "Ribs and sternum (thesis 11500 MPa)."));
+  par.addParam(RichFloat("cartilageModulus", float(d.eCartilage), "Young's modulus, cartilage (MPa)",
+                         "Costal cartilage. The thesis' 12.25 MPa is half of normal cartilage; published values: "
+                         "indentation 11.1-14.6 MPa, compression 32.9 +- 17.9 MPa. The calibrated force grows about in "
+                         "proportion to it."));
   par.addParam(RichFloat("nuBone", 0.3f, "Poisson ratio, bone", "Ribs and sternum (cortical bone literature value 0.3)."));
   par.addParam(RichFloat("nuCartilage", 0.4f, "Poisson ratio, cartilage",
                          "Costal cartilage (hydrated, nearly incompressible tissue; literature 0.4-0.45)."));
@@ -331,6 +337,8 @@ void readModelParams(FilterContext& ctx, pectus::nuss::Options& o) {
     throw pectus::InputError("parameter 'tetQuality' must be 0 or at least 1.2 (TetGen does not terminate below), got " +
                              fmt(o.mesh.radiusEdgeRatio));
   o.mesh.maxVolume = ctx.floatIn("maxTetVolume", 0, 1e9);
+  o.eBone = ctx.floatIn("boneModulus", 0, 1e6, true);
+  o.eCartilage = ctx.floatIn("cartilageModulus", 0, 1e6, true);
   o.nuBone = ctx.floatIn("nuBone", -1, 0.5, true, true);
   o.nuCartilage = ctx.floatIn("nuCartilage", -1, 0.5, true, true);
 }
@@ -497,6 +505,9 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
           a.supportNames[2] + "/" + a.supportNames[3] + (cage.weldedFaces ? "; welded " + std::to_string(cage.weldedFaces) + " sliver faces" : "") +
           (cage.unreferencedVertices ? "; dropped " + std::to_string(cage.unreferencedVertices) + " vertices of no face" : "") +
           joinText);
+  ctx.log("Tissues (" + std::string(o.nonlinear ? pectus::fe::materialModelName(o.material) : "linear elastic") +
+          "): bone E = " + fmt(o.eBone, 2) + " MPa, nu = " + fmt(o.nuBone, 2) + "; cartilage E = " + fmt(o.eCartilage, 2) +
+          " MPa, nu = " + fmt(o.nuCartilage, 2));
   if (a.fixedOnColumn > 0)
     ctx.log("fixed: " + std::to_string(a.fixedAtJoints) + " nodes at the costovertebral joints, " + std::to_string(a.fixedOnColumn) +
             " on the vertebral column (part " + std::to_string(pectus::kVertebralColumn) + ", kept as the fixed support)");

@@ -73,7 +73,8 @@ NUSS_CALIBRATION = {"targetElevation": (Float, 44.7), "maxForce": (Float, 1000.0
                     "calibration": (Enum, 1, NUSS_CALIBRATION_METHOD)}
 NUSS_MODEL = {"analysis": (Enum, 0, NUSS_ANALYSIS), "material": (Enum, 1, NUSS_MATERIAL), "lineSearch": (Bool, True),
               "adaptiveSteps": (Bool, True), "order": (Enum, 0, NUSS_ORDER), "tetQuality": (Float, 2.0),
-              "maxTetVolume": (Float, 0.0), "nuBone": (Float, 0.3), "nuCartilage": (Float, 0.4)}
+              "maxTetVolume": (Float, 0.0), "boneModulus": (Float, 11500.0), "cartilageModulus": (Float, 12.25),
+              "nuBone": (Float, 0.3), "nuCartilage": (Float, 0.4)}
 NUSS_PATCHES = {"jointRadius": (Float, 6.0), "sternumLoadRadius": (Float, 8.0), "ribSupportRadius": (Float, 6.0)}
 
 

@@ -433,7 +433,7 @@ CalibrationMethod parseCalibrationMethod(const std::string& name) {
 fe::Problem problemAt(const Analysis& a, const Options& opt, double force) {
   fe::Problem p;
   p.mesh = &a.mesh;
-  p.materials = fe::thesisMaterials(opt.nuBone, opt.nuCartilage, opt.material);
+  p.materials = fe::thesisMaterials(opt.nuBone, opt.nuCartilage, opt.material, opt.eBone, opt.eCartilage);
   for (int n : a.fixedNodes) p.fixNode(n);
   addLoads(p, a, opt.place.direction.normalized(), force);
   return p;
@@ -539,6 +539,8 @@ namespace {
 void checkOptions(const Options& opt) {
   if (!(opt.nuBone > -1 && opt.nuBone < 0.5) || !(opt.nuCartilage > -1 && opt.nuCartilage < 0.5))
     throw InputError("Poisson's ratios must lie in (-1, 0.5).");
+  if (!(opt.eBone > 0 && std::isfinite(opt.eBone)) || !(opt.eCartilage > 0 && std::isfinite(opt.eCartilage)))
+    throw InputError("Young's moduli must be positive (MPa): bone about 11500, costal cartilage 11-50.");
   if (opt.targetElevation <= 0 && !(opt.force > 0)) throw InputError("The elevating force must be positive (N).");
   if (!(opt.curveStep > 0)) throw InputError("The force-displacement curve step must be positive (N).");
   if (!(opt.maxForce > 0) || !(opt.tolerance > 0)) throw InputError("The maximum force and the calibration tolerance must be positive.");

@@ -3,7 +3,8 @@
 //
 // Model: the closed, labelled cage surface (labels.h: tissue + part per face) is tetrahedralised by
 // TetGen; each tet takes the tissue and part of the surface face nearest to its centroid. Materials:
-// bone and sternum E = 11.5 GPa, pectus costal cartilage E = 12.25 MPa (thesis), Poisson ratios given.
+// bone and sternum E = 11.5 GPa, pectus costal cartilage E = 12.25 MPa (thesis' defaults; Options sets
+// both moduli and both Poisson ratios).
 // Boundary conditions (Fig. 6-4): every node within `jointRadius` of a costovertebral joint landmark is
 // fixed (head and tubercle rigid); a vertebral column in the model (part kVertebralColumn, as 'Prepare
 // Patient Rib Cage' keeps it) is the fixed support: every node of its tets is fixed too. Loads (Fig. 6-3, Fe = 2 Fs = 4 Fsr): the elevating force Fe along
@@ -122,6 +123,9 @@ CalibrationMethod parseCalibrationMethod(const std::string& name);
 struct Options {
   fe::TetgenOptions mesh;           ///< quality, max volume, order (1 TET4, 2 TET10)
   double nuBone = 0.3, nuCartilage = 0.4;
+  /// Young's moduli (MPa), the thesis' by default; the published cartilage range (Weber et al. 2021:
+  /// indentation 11.1-14.6 MPa, compression 32.9 +- 17.9 MPa) moves the calibrated force about in proportion
+  double eBone = fe::kThesisBoneE, eCartilage = fe::kThesisCartilageE;
   bool nonlinear = true;            ///< large displacement (total Lagrangian, `material`)
   /// every tissue's large-displacement model: neo-Hookean resists the compression of a thin cartilage that
   /// inverts a St Venant-Kirchhoff tet on the way to a child's measured elevation

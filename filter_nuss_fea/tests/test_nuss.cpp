@@ -3,6 +3,7 @@
 // and the bad-input messages (missing labels/landmarks, a part without a joint, unreachable target).
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <numeric>
 
 #include "nuss_analysis.h"
@@ -111,6 +112,29 @@ TEST(NussAnalysis, LinearModelLoadsSupportsCalibrationAndBadInput) {
   auto badNu = coarse();
   badNu.nuCartilage = 0.5;
   EXPECT_NE(errorOf([&] { nuss::analyze(surf, lms, badNu); }).find("Poisson"), std::string::npos);
+}
+
+// The tissues' moduli: linear elasticity scales the compliance by 1/k when both moduli scale by k; the
+// cartilage carries most of the deformation, so doubling its modulus alone nearly halves the compliance.
+TEST(NussAnalysis, TissueModuliScaleTheCompliance) {
+  const auto surf = nuss::cageFromMesh(cage().mesh);
+  const auto& lms = cage().lms;
+  const nuss::Model model = nuss::buildModel(surf, coarse().mesh);
+  const double c0 = nuss::analyze(surf, model, lms, coarse()).linearCompliance;
+  auto both = coarse();
+  both.eBone *= 2, both.eCartilage *= 2;
+  const double cBoth = nuss::analyze(surf, model, lms, both).linearCompliance;
+  auto cart = coarse();
+  cart.eCartilage *= 2;
+  const double cCart = nuss::analyze(surf, model, lms, cart).linearCompliance;
+  std::printf("compliance %.5f mm/N; both moduli x2: %.5f; cartilage x2: %.5f (ratio %.3f)\n", c0, cBoth, cCart,
+              cCart / c0);
+  EXPECT_NEAR(cBoth, 0.5 * c0, 1e-6 * c0);
+  EXPECT_GT(cCart / c0, 0.5);   // the bone bends a little too
+  EXPECT_LT(cCart / c0, 0.6);   // but the cartilage carries most of the deformation
+  auto bad = coarse();
+  bad.eCartilage = 0;
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, model, lms, bad); }).find("Young's moduli"), std::string::npos);
 }
 
 TEST(NussAnalysis, UnlabelledOrEmptyLayersAreRefused) {

@@ -2,7 +2,8 @@
 //   pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]
 //                   [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--threads n] [--vtu out.vtu] [--layers]
 //                   [--inp deck.inp] [--blend mm] [--funnel-z f] [--material svk|neo-hookean|neo-hookean-ccx]
-//                   [--calibration force|displacement] [--line-search] [--adaptive-steps] [--plain-newton] [--help]
+//                   [--calibration force|displacement] [--line-search] [--adaptive-steps] [--plain-newton]
+//                   [--bone-e MPa] [--cartilage-e MPa] [--help]
 // Builds the default rib cage (--layers: as one layer per tissue, joined as the filter's 'One layer per
 // tissue' input does), runs the analysis and prints one line of key=value figures, the mean displacement
 // of the sternal load patch's nodes and the tets' volume per tissue. --inp writes the same model at the
@@ -10,7 +11,8 @@
 // what bench/fe_vs_ccx.py --cases cage compares. --material: every tissue's large-displacement model;
 // --calibration: how --target is reached (a force search, or one displacement-controlled solve);
 // --line-search, --adaptive-steps: the Newton options of those names (fe/solver.h), on by default as in the
-// analysis; --plain-newton turns both off. --target chest
+// analysis; --plain-newton turns both off. --bone-e, --cartilage-e: the tissues' Young's moduli (default
+// the thesis': 11500 and 12.25 MPa). --target chest
 // calibrates to the chest line depth (the FE filter's target 0); --chest-line prints the chest line and
 // the target the analysis would take, and stops before TetGen.
 #include <algorithm>
@@ -75,12 +77,14 @@ int main(int argc, char** argv) {
     else if (a == "--line-search") o.newton.lineSearch = true;
     else if (a == "--adaptive-steps") o.newton.adaptiveSteps = true;
     else if (a == "--plain-newton") o.newton.lineSearch = o.newton.adaptiveSteps = false;
+    else if (a == "--bone-e") o.eBone = std::atof(next());
+    else if (a == "--cartilage-e") o.eCartilage = std::atof(next());
     else if (a == "--help" || a == "-h") {
       std::printf(
           "pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]\n"
           "                [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--vtu out.vtu] [--layers] [--inp deck.inp]\n"
           "                [--blend mm] [--funnel-z f] [--material svk|neo-hookean|neo-hookean-ccx] [--calibration force|displacement]\n"
-          "                [--line-search] [--adaptive-steps] [--plain-newton]\n"
+          "                [--line-search] [--adaptive-steps] [--plain-newton] [--bone-e MPa] [--cartilage-e MPa]\n"
           "Builds the generator's rib cage, runs the Nuss FE analysis and prints key=value figures.\n"
           "Defaults: the analysis' (the FE filter's): neo-Hookean, displacement control, Newton with a line search\n"
           "and adaptive load steps; --plain-newton turns both off.\n");
@@ -114,12 +118,12 @@ int main(int argc, char** argv) {
     const auto a = nuss::analyze(surf, lms, o);
     std::printf("faces=%zu tets=%d nodes=%d order=%d dofs=%d force=%.2f elevation=%.3f compliance=%.5f "
                 "maxStress=%.3f maxStrain=%.4f strainCart=%.4f strainBone=%.5f maxStressAll=%.3f nlSolves=%d newton=%d factor=%d "
-                "tCage=%.2f tMesh=%.2f tSolve=%.2f material=%s calibration=%s\n",
+                "tCage=%.2f tMesh=%.2f tSolve=%.2f material=%s calibration=%s eBone=%.1f eCartilage=%.3f\n",
                 surf.surface.faces.size(), a.mesh.numTets(), a.mesh.numNodes(), a.mesh.order,
                 3 * a.mesh.numNodes() - 3 * int(a.fixedNodes.size()), a.force, a.elevation, a.linearCompliance,
                 a.maxStress, a.maxStrain, a.maxStrainCartilage, a.maxStrainBone, a.maxStressAll, a.nonlinearSolves,
                 a.newtonIterations, a.factorizations, tCage, a.secondsMesh, a.secondsSolve, fe::materialModelName(o.material),
-                nuss::calibrationMethodName(o.calibration));
+                nuss::calibrationMethodName(o.calibration), o.eBone, o.eCartilage);
     std::printf("target %s\n", a.target.describe().c_str());
     std::printf("max stress at %s\nmax strain at %s\n", a.maxStressAt.describe().c_str(), a.maxStrainAt.describe().c_str());
     std::printf("fixed %zu, sternum %zu, supports", a.fixedNodes.size(), a.sternumNodes.size());

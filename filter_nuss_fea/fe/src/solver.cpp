@@ -31,8 +31,9 @@ constexpr int kChunkTets = 256;  // the assembly's unit of work: consecutive tet
 void setMinParallelTets(int tets) { gMinParallelTets = std::max(1, tets); }
 int minParallelTets() { return gMinParallelTets; }
 
-std::map<int, Material> thesisMaterials(double nuBone, double nuCartilage, MaterialModel model) {
-  return {{1, {11500.0, nuBone, model}}, {2, {12.25, nuCartilage, model}}, {3, {11500.0, nuBone, model}}};
+std::map<int, Material> thesisMaterials(double nuBone, double nuCartilage, MaterialModel model, double eBone,
+                                        double eCartilage) {
+  return {{1, {eBone, nuBone, model}}, {2, {eCartilage, nuCartilage, model}}, {3, {eBone, nuBone, model}}};
 }
 
 const char* materialModelName(MaterialModel m) {

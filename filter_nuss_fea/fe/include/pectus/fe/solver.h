@@ -46,11 +46,16 @@ struct Material {
 /// it is not positive S and D are NaN for the hyperelastic models (their energy is infinite there).
 double materialResponse(const Material& m, const Eigen::Matrix3d& F, Eigen::Matrix3d& S, Eigen::Matrix<double, 6, 6>& D);
 
-/// Materials of the thesis (6.2): bone (ribs and sternum) E = 11.5 GPa, pectus costal cartilage
-/// E = 12.25 MPa (half of normal cartilage, Feng et al.). Poisson ratios are literature defaults:
-/// 0.3 for cortical bone, 0.4 for costal cartilage (nearly incompressible hydrated tissue).
+/// Young's moduli of the thesis (6.2), MPa: bone (ribs and sternum) 11.5 GPa; pectus costal cartilage
+/// 12.25 MPa, half of normal cartilage (Feng et al.)
+constexpr double kThesisBoneE = 11500.0, kThesisCartilageE = 12.25;
+
+/// The tissues' materials by label (1 bone, 2 cartilage, 3 sternum, which is bone). The defaults are the
+/// thesis' moduli; the Poisson ratios are literature defaults: 0.3 for cortical bone, 0.4 for costal
+/// cartilage (nearly incompressible hydrated tissue).
 std::map<int, Material> thesisMaterials(double nuBone = 0.3, double nuCartilage = 0.4,
-                                        MaterialModel model = MaterialModel::StVenantKirchhoff);
+                                        MaterialModel model = MaterialModel::StVenantKirchhoff,
+                                        double eBone = kThesisBoneE, double eCartilage = kThesisCartilageE);
 
 struct Dirichlet { int node; int dof; double value; };  ///< dof 0..2 = x,y,z; value in mm
 
