@@ -332,10 +332,7 @@ void readModelParams(FilterContext& ctx, pectus::nuss::Options& o) {
   o.newton.lineSearch = ctx.boolean("lineSearch");
   o.newton.adaptiveSteps = ctx.boolean("adaptiveSteps");
   o.mesh.order = ctx.enumIn("order", 2) == 0 ? 2 : 1;
-  o.mesh.radiusEdgeRatio = ctx.floatIn("tetQuality", 0, 100);
-  if (o.mesh.radiusEdgeRatio > 0 && o.mesh.radiusEdgeRatio < 1.2)
-    throw pectus::InputError("parameter 'tetQuality' must be 0 or at least 1.2 (TetGen does not terminate below), got " +
-                             fmt(o.mesh.radiusEdgeRatio));
+  o.mesh.radiusEdgeRatio = ctx.floatIn("tetQuality", 0, 100);  // (0, 1.2) is refused by the core (fe::validate)
   o.mesh.maxVolume = ctx.floatIn("maxTetVolume", 0, 1e9);
   o.eBone = ctx.floatIn("boneModulus", 0, 1e6, true);
   o.eCartilage = ctx.floatIn("cartilageModulus", 0, 1e6, true);

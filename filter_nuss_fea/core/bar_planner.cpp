@@ -94,6 +94,7 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
     if (opt.progress) opt.progress(pc, w);
   };
   const auto tAll = Clock::now();
+  validate(opt.analysis);
   if (!(opt.analysis.targetElevation > 0) && !opt.analysis.targetFromChestLine)
     throw InputError("The bar planner calibrates every option to the sternal elevation: give a positive target elevation (mm), "
                      "or take it from the chest line.");

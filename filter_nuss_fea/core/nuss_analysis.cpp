@@ -535,8 +535,8 @@ Target resolveTarget(const CageSurface& cage, const std::vector<Landmark>& lms, 
   return t;
 }
 
-namespace {
-void checkOptions(const Options& opt) {
+void validate(const Options& opt) {
+  fe::validate(opt.mesh);
   if (!(opt.nuBone > -1 && opt.nuBone < 0.5) || !(opt.nuCartilage > -1 && opt.nuCartilage < 0.5))
     throw InputError("Poisson's ratios must lie in (-1, 0.5).");
   if (!(opt.eBone > 0 && std::isfinite(opt.eBone)) || !(opt.eCartilage > 0 && std::isfinite(opt.eCartilage)))
@@ -547,19 +547,21 @@ void checkOptions(const Options& opt) {
   if (!std::isfinite(opt.targetElevation)) throw InputError("The target elevation must be a finite number (mm).");
 }
 
+namespace {
+
 Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<Landmark>& lms, const Options& given,
                       const Target& target);
 }  // namespace
 
 Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& lms, const Options& opt) {
-  checkOptions(opt);
+  validate(opt);
   const Target target = resolveTarget(cage, lms, opt);
   if (opt.progress) opt.progress(5, "TetGen (after checking the surface)");
   return analyzeModel(cage, buildModel(cage, opt.mesh), lms, opt, target);
 }
 
 Analysis analyze(const CageSurface& cage, const Model& model, const std::vector<Landmark>& lms, const Options& opt) {
-  checkOptions(opt);
+  validate(opt);
   return analyzeModel(cage, model, lms, opt, resolveTarget(cage, lms, opt));
 }
 

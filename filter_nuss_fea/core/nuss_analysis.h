@@ -156,6 +156,11 @@ struct Target {
 };
 Target resolveTarget(const CageSurface& cage, const std::vector<Landmark>& lms, const Options& opt);
 
+/// Throws InputError naming what to change for options no analysis can run with: the mesh options
+/// (fe::validate), Poisson's ratios outside (-1, 0.5), moduli that are not positive, a force, curve step,
+/// maximum force or tolerance that is not positive, a target that is not a number. analyze() calls it first.
+void validate(const Options& opt);
+
 /// Where a value sits: the tet, its centroid, tissue and anatomical part, and whether it lies near the
 /// spine (within kNearSpine mm of the costovertebral joint of its rib).
 constexpr double kNearSpine = 35.0;

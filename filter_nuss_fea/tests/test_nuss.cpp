@@ -112,6 +112,9 @@ TEST(NussAnalysis, LinearModelLoadsSupportsCalibrationAndBadInput) {
   auto badNu = coarse();
   badNu.nuCartilage = 0.5;
   EXPECT_NE(errorOf([&] { nuss::analyze(surf, lms, badNu); }).find("Poisson"), std::string::npos);
+  auto badQuality = coarse();  // TetGen's refinement would not terminate: refused before TetGen runs
+  badQuality.mesh.radiusEdgeRatio = 1.0;
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, lms, badQuality); }).find("at least 1.2"), std::string::npos);
 }
 
 // The tissues' moduli: linear elasticity scales the compliance by 1/k when both moduli scale by k; the

@@ -484,9 +484,20 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
 }
 }  // namespace
 
-TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<int>* tetFace) {
-  checkSurfaceForTetgen(s);
+void validate(const TetgenOptions& opt) {
   if (opt.order != 1 && opt.order != 2) throw InputError("Element order must be 1 (TET4) or 2 (TET10).");
+  if (!std::isfinite(opt.radiusEdgeRatio) || (opt.radiusEdgeRatio > 0 && opt.radiusEdgeRatio < kMinRadiusEdgeRatio)) {
+    std::ostringstream s;
+    s << "The tet quality (TetGen's radius-edge bound) must be 0 (no refinement) or at least " << kMinRadiusEdgeRatio
+      << ": TetGen does not terminate below; got " << opt.radiusEdgeRatio << ".";
+    throw InputError(s.str());
+  }
+  if (!std::isfinite(opt.maxVolume)) throw InputError("The maximum tet volume must be a number (mm^3; 0: no limit).");
+}
+
+TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<int>* tetFace) {
+  validate(opt);
+  checkSurfaceForTetgen(s);
   try {
     return tetgenMesh(s, opt, tetFace);
   } catch (const InputError& e) {  // TetGen failed: say where the surface's features are tiny, if they are

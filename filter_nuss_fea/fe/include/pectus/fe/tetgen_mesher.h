@@ -53,6 +53,12 @@ void checkSurfaceForTetgen(const SurfaceMesh& s);
 /// under 1e-3 of the median edge (smallestFeature), which is where such failures come from.
 TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt = {}, std::vector<int>* tetFace = nullptr);
 
+/// TetGen's quality refinement does not terminate for a radius-edge bound below this (its manual)
+constexpr double kMinRadiusEdgeRatio = 1.2;
+/// Throws InputError for options TetGen cannot run: an order other than 1 or 2, a radius-edge bound in
+/// (0, kMinRadiusEdgeRatio) or not finite, a maximum volume not finite. tetrahedralize calls it first.
+void validate(const TetgenOptions& opt);
+
 /// The surface's smallest feature: its shortest edge, or the smallest distance from a vertex to a face it
 /// is not a corner of (two sheets that nearly touch, a vertex nearly on another face, a sliver), whichever
 /// is smaller, beside the median edge length. A feature far below the edges (near-duplicate vertices, a
