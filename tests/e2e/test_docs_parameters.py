@@ -1,6 +1,8 @@
 """Every filter has a page in docs/filters whose parameter table lists exactly the parameters the plugin
 declares (the plugins loaded in-process by pectus_layer_check --params), in the declared order, with the
-same type and default; the README links every page; no relative link of the README or docs/ is broken."""
+same type and default; the README links every page; no relative link of the README or docs/ is broken.
+Every filter python/pectus_filters.py defines has the plugin's parameters, in order, with the same types,
+defaults and enum labels."""
 from __future__ import annotations
 
 import os
@@ -9,6 +11,8 @@ import subprocess
 import xml.etree.ElementTree as ET
 
 import glob
+import inspect
+import sys
 
 from docs_pages import FILTER_PAGES, PARAM_COLUMNS, SOURCE, broken_links, parameter_table, read
 from harness import check, finish
@@ -65,8 +69,43 @@ def default_matches(kind: str, doc: str, code: str, labels: list) -> bool:
     return (doc == "(empty)" and code == "") or doc.strip("`") == code
 
 
+def check_python_filters(filters: dict):
+    """python/pectus_filters.py: each filter function's defaults are the plugin's declaration"""
+    sys.path.insert(0, os.path.join(SOURCE, "python"))
+    import pectus_filters
+    functions = [f for n, f in inspect.getmembers(pectus_filters, inspect.isfunction)
+                 if not n.startswith("_") and f.__module__ == pectus_filters.__name__]
+    check(len(functions) >= 5, f"python/pectus_filters.py defines {len(functions)} filters")
+    for fn in functions:
+        f = fn()
+        where = f"python/pectus_filters.py {fn.__name__}()"
+        if not check(f.name in filters, f"{where}: '{f.name}' is a filter's name"):
+            continue
+        plugin = filters[f.name]
+        check(list(f.params) == [p[0] for p in plugin], f"{where}: the parameters as declared, in order",
+              f"\n  python: {list(f.params)}\n  plugin: {[p[0] for p in plugin]}")
+        for name, kind, value, labels in plugin:
+            if name not in f.params:
+                continue
+            a = ET.fromstring(f.params[name].xml(name)).attrib
+            mine = a["type"][len("Rich"):]
+            check(mine == kind, f"{where}: {name} is {kind}", f"python says {mine}")
+            if kind == "Enum":
+                mine_labels = [a[f"enum_val{i}"] for i in range(int(a.get("enum_cardinality", 0)))]
+                check(mine_labels == labels and a["value"] == value, f"{where}: {name}'s labels and default as declared",
+                      f"python: {a['value']} of {mine_labels}; plugin: {value} of {labels}")
+            elif kind in ("Float", "Int", "Point3f"):
+                mine_value = f"{a['x']}, {a['y']}, {a['z']}" if kind == "Point3f" else a["value"]
+                check(all(same_number(m, v) for m, v in zip(mine_value.split(","), value.split(","))),
+                      f"{where}: {name} defaults to {value}", f"python says {mine_value}")
+            elif kind != "Mesh":
+                check(a.get("value", "").lower() == value.lower(), f"{where}: {name} defaults to {value!r}",
+                      f"python says {a.get('value')!r}")
+
+
 def main():
     filters = declared()
+    check_python_filters(filters)
     check(len(filters) >= 14, f"the plugins declare {len(filters)} filters")
     pages = {}
     for path in FILTER_PAGES:
