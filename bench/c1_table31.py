@@ -6,7 +6,7 @@ Max and mean |error| on the 25x25 grid of the unit square (grid points outside t
 point set are left out for every method; the count is printed). Then the ellipsoid volume and the
 refinement timing of the C++ core.
 
-    bench/c1_table31.py [--bench build-c1/common/c1_bench] [--check]
+    bench/c1_table31.py [--bench build-c1/bench/c1_bench] [--check]
 
 --check exits 1 if a target is missed: thesis-mode C1/C0 max-error ratio in [0.55, 0.65] on the
 36-point set (both functions), robust C1 no worse than Clough-Tocher (max and mean, every set and function),
@@ -89,8 +89,8 @@ def main():
     ap.add_argument("--check", action="store_true")
     a = ap.parse_args()
     bench = a.bench or next((p for p in [os.environ.get("C1_BENCH", ""),
-                                         os.path.join(ROOT, "build-c1", "common", "c1_bench"),
-                                         os.path.join(ROOT, "build", "common", "c1_bench")] if p and os.path.exists(p)), None)
+                                         os.path.join(ROOT, "build-c1", "bench", "c1_bench"),
+                                         os.path.join(ROOT, "build", "bench", "c1_bench")] if p and os.path.exists(p)), None)
     if not bench:
         sys.exit("c1_bench not found: build the target c1_bench and pass --bench")
 

@@ -96,7 +96,7 @@ def triangulate(F):
 
 class Bench:
     def __init__(self, build, work):
-        self.tool = os.path.join(build, "filter_mga_smooth", "bench_mga_smooth")
+        self.tool = os.path.join(build, "bench", "bench_mga_smooth")
         self.prefix = os.path.join(build, "prefix")
         self.work = work
 

@@ -5,4 +5,4 @@ set -e
 here=$(cd "$(dirname "$0")/.." && pwd)
 build=${1:-$here/build}
 cmake --build "$build" -j2 --target bench_thoracic_volume
-"$build/filter_thoracic_volume/bench_thoracic_volume"
+"$build/bench/bench_thoracic_volume"

@@ -7,8 +7,8 @@
 #include <cstdio>
 #include <cstdlib>
 
-#include "../filter_thoracic_volume/tests/analytic_cages.h"
-#include "thoracic_volume.h"
+#include "../common/tests/analytic_cages.h"
+#include "pectus/thoracic_volume.h"
 
 #ifdef PECTUS_HAVE_CGAL
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

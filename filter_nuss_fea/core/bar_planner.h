@@ -18,7 +18,7 @@
 #include <vector>
 
 #include "nuss_analysis.h"
-#include "thoracic_volume.h"
+#include "pectus/thoracic_volume.h"
 
 namespace pectus::nuss {
 

@@ -30,7 +30,7 @@ struct RibCageParams {
   double funnelCenterZ = 0.8; ///< funnel centre along the sternum: 0 jugular notch, 1 xiphisternal junction
   double funnelWidth = 80;    ///< transverse extent of the depression (mm), <= chest width
   double funnelHeight = 70;   ///< vertical extent of the depression (mm)
-  double edgeLength = 2.0;    ///< target edge length (mm), [0.3, 15]
+  double edgeLength = 2.0;    ///< target edge length (mm), [0.4, 8]
   /// smooth-union (fillet) radius between the tubes (mm), [0, 10]: between each rib's curve and the sternum
   /// and between neighbouring ribs/cartilages (a rib's bone and cartilage are one tube, no fillet there);
   /// 0: plain union (sharp junctions); negative: automatic, clamp(0.45 x rib thickness, 1.2, 3) mm

@@ -5,7 +5,7 @@
 
 #include "fuzz_mesh.h"
 #include "pectus/errors.h"
-#include "thoracic_volume.h"
+#include "pectus/thoracic_volume.h"
 
 using namespace pectus;
 

@@ -13,9 +13,9 @@
 #include "label_volume.h"
 #include "nuss_analysis.h"
 #include "pectus/errors.h"
+#include "pectus/thoracic_volume.h"
 #include "prepare.h"
 #include "soup.h"
-#include "thoracic_volume.h"
 
 using namespace pectus;
 using namespace pectus::patient;

@@ -7,7 +7,7 @@
 
 #include "pectus/errors.h"
 #include "pectus/grid_cell.h"
-#include "thoracic_volume.h"
+#include "pectus/thoracic_volume.h"
 
 namespace pectus::vol {
 

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <functional>
 
-#include "thoracic_volume.h"
+#include "pectus/thoracic_volume.h"
 
 namespace pectus::vol::testing {
 

@@ -1,5 +1,6 @@
-// Host-free cores of the thoracic volume filters (thesis chapter 6.3): the slice (intersection)
-// method, the Ferguson bicubic envelope (surface approximation) method, and the pectus indices.
+// Host-free cores of the thoracic volume filters and of the Nuss bar planner (thesis chapter 6.3): the
+// slice (intersection) method, the Ferguson bicubic envelope (surface approximation) method, and the
+// pectus indices.
 // Frame (common/include/pectus/labels.h): millimetres, +z superior, +y anterior, +x patient's left;
 // the body's long axis is z. Volumes are in mm^3 (1 cm^3 = 1000 mm^3).
 #pragma once

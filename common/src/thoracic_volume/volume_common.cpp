@@ -4,7 +4,7 @@
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
-#include "thoracic_volume.h"
+#include "pectus/thoracic_volume.h"
 
 namespace pectus::vol {
 
