@@ -11,8 +11,9 @@ For every (age, pectus index, edge length) of a grid, one MeshLab script through
   -> 'Thoracic Volume (Slice Method)', 'Thoracic Volume (Ferguson Envelope)', 'Pectus Index' (their defaults,
      before = the smoothed cage, after = the FE result).
 
-Each row: success, refused (a filter refused the input before solving; its message is printed below the table)
-or failed (any other non-zero exit, a timeout, a missing figure); the calibrated force Fe, the simulated
+Each row: success, refused (the FE filter refused the cell before any solve with a message that names the
+parameter to change: the target elevation against the chest line, or the joint or sternum load radius; the
+message is printed below the table) or failed (any other non-zero exit, the --timeout limit, a missing figure); the calibrated force Fe, the simulated
 elevation of the lower sternum end, the volume gain (slice method and Ferguson envelope), the pectus index before
 and after, the time of each stage as the filters log it (the volumes: both methods, before and after) and the
 wall time of the meshlabserver run.
@@ -48,9 +49,11 @@ from pectus_mlx import grab, grab_all  # noqa: E402
 CAGE, LANDMARKS = pipeline.CAGE, pipeline.LANDMARKS
 CORNERS = dict(ages="5,17", indices="3,7", edges="2,8")
 ORDERS = {"default": {}, "tet10": dict(order=0), "tet4": dict(order=1)}
-# the messages of the checks that refuse a cell before any solve (the target against the chest line; the
-# generator's and the FE filter's input checks)
-REFUSALS = ("lies beyond what the model reaches", "parameter '", "must be", "Lower the target elevation")
+# the checks that refuse a cell before any solve, by the parameter their message tells to change: the target
+# against the chest line (before TetGen), the load and support placement (after TetGen, before the first solve)
+REFUSALS = {"lies beyond what the model reaches": "targetElevation",
+            "increase the joint radius": "jointRadius",
+            "increase the sternum load radius": "sternumLoadRadius"}
 
 
 def script(age: float, index: float, edge: float, order: str) -> mlx.Script:
@@ -95,7 +98,8 @@ def run_cell(age: float, index: float, edge: float, order: str, out: str, timeou
         row["status"] = "success"
     else:
         row["why"] = error_of(res) or f"meshlabserver exit {res.rc}, a figure missing from the Log"
-        refused = res.rc != 0 and row["tets"] is None and any(k in row["why"] for k in REFUSALS)
+        row["parameter"] = next((p for k, p in REFUSALS.items() if k in row["why"]), None)
+        refused = res.rc != 0 and row["tets"] is None and row["parameter"] is not None
         row["status"] = "refused" if refused else "failed"
     return row
 
@@ -126,7 +130,8 @@ def table(rows: list[dict]) -> list[str]:
             f"{fmt(r.get('envelope') if ok else None, '{:.2f}')} ({fmt(r.get('envelope_pct') if ok else None, '{:.2f}')}) | "
             f"{fmt(hb, '{:.2f}')} → {fmt(ha if ok else None, '{:.2f}')} | {fmt(r.get('t_cage'))} | {fmt(r.get('t_mga'))} | "
             f"{fmt(r.get('t_fe'))} | {fmt(r.get('t_volumes'))} | {r['wall']:.0f} |")
-    notes = [f"age {r['age']:g}, index {r['index']:g}, edge {r['edge']:g} mm, {r['status']}: {r['why']}"
+    notes = [f"age {r['age']:g}, index {r['index']:g}, edge {r['edge']:g} mm, {r['status']}"
+             f"{' (parameter ' + r['parameter'] + ')' if r.get('parameter') and r['status'] == 'refused' else ''}: {r['why']}"
              for r in rows if r["status"] != "success"]
     return out + [""] + notes if notes else out
 
