@@ -68,7 +68,8 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
       "(quads, eq. 3-24) over the node's elements. A move never inverts or folds an element, never lowers "
       "the node's sum, and never lets the node's worst element drop below min(its value, the guard, 0.35 by default). "
       "The best position over the adjacent elements is kept; sweeps repeat until the mean quality improves "
-      "by less than the tolerance.<br>"
+      "by less than the tolerance. Where the smoothed surface would cross itself (two faces intersect that did "
+      "not in the input), the moved nodes of the crossing faces are put back to their input positions.<br>"
       FIXED_NODES_INFO "Nodes of one colour of a greedy colouring share no element and are smoothed in parallel, with "
       "per-node random seeds: the result does not depend on the number of threads.<br>"
       "Afterwards the element quality is written to per-face quality and colours (red = 0, blue = 1), and the "
@@ -309,7 +310,9 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
   ctx.log(what + " (" + std::string(quads ? "quads, beta" : "triangles, alpha") + "): " +
           std::to_string(r.elements) + " elements; worst " + q + " " + fmt(r.before.min) + " -> " + fmt(r.after.min) +
           ", mean " + q + " " + fmt(r.before.mean) + " -> " + fmt(r.after.mean) + "; nodes moved " +
-          std::to_string(r.nodesMoved) + " of " + std::to_string(r.freeNodes) + " free; sweeps " +
+          std::to_string(r.nodesMoved) + " of " + std::to_string(r.freeNodes) + " free" +
+          (r.nodesPutBack ? " (" + std::to_string(r.nodesPutBack) + " put back: the surface crossed itself there)" : std::string()) +
+          "; sweeps " +
           std::to_string(r.sweeps) +
           (r.minPassSweeps ? " + " + std::to_string(r.minPassSweeps) + " worst-element" : std::string()) + "; time " + fmt(r.seconds, 2) + " s");
   ctx.log(what + ": fixed nodes: " + std::to_string(r.boundaryNodes) + " boundary, " +

@@ -71,11 +71,15 @@ def analysis_filters(outdir: str, elevation: float, quick: bool, cage: int, land
     nuss = example("nuss", "Nuss Procedure FE Analysis").set(
         landmarkLayer=landmarks, mode=0, targetElevation=elevation,
         resultBase=mlx.SaveFile(os.path.join(outdir, "nuss") + ".vtu", ".vtu"), **fe_settings(quick))
+    return [nuss] + measure_filters(cage, landmarks)
+
+
+def measure_filters(cage: int, landmarks: int) -> list:
+    """Both thoracic volumes and the pectus index of the current layer (after) against `cage` (before)."""
     compare = dict(compare=True, beforeLayer=cage, landmarkLayer=landmarks)
-    sl = example("slice", "Thoracic Volume (Slice Method)").set(**compare)
-    env = example("envelope", "Thoracic Volume (Ferguson Envelope)").set(**compare)
-    idx = example("index", "Pectus Index").set(**compare)
-    return [nuss, sl, env, idx]
+    return [example(k, n).set(**compare) for k, n in (("slice", "Thoracic Volume (Slice Method)"),
+                                                     ("envelope", "Thoracic Volume (Ferguson Envelope)"),
+                                                     ("index", "Pectus Index"))]
 
 
 def build_script(outdir: str, age: float, haller: float, elevation: float, quick: bool, planner: dict | None = None) -> mlx.Script:

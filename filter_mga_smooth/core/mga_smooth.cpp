@@ -13,6 +13,7 @@
 #include "pectus/element_quality.h"
 #include "pectus/errors.h"
 #include "pectus/mesh_checks.h"
+#include "pectus/self_intersections.h"
 
 #ifdef _OPENMP
 #include <omp.h>
@@ -563,6 +564,30 @@ void searchGradient(NodeSearch& ns, int iterations) {
 
 }  // namespace
 
+std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, const std::vector<Vec3>& before,
+                                  std::vector<Vec3>& after) {
+  std::vector<std::array<int, 3>> tris;
+  for (const auto& f : faces) {
+    tris.push_back({f[0], f[1], f[2]});
+    if (f.size() == 4) tris.push_back({f[0], f[2], f[3]});
+  }
+  std::vector<int> back;
+  for (;;) {  // each round puts back at least one node, so this ends (at the latest with the input)
+    bool any = false;
+    for (const FacePair& p : selfIntersections(after, tris))
+      for (int t : {p.a, p.b})
+        for (int v : tris[std::size_t(t)])
+          if (after[std::size_t(v)] != before[std::size_t(v)]) {
+            after[std::size_t(v)] = before[std::size_t(v)];
+            back.push_back(v);
+            any = true;
+          }
+    if (!any) break;
+  }
+  std::sort(back.begin(), back.end());
+  return back;
+}
+
 Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& userFixed) {
   const auto t0 = std::chrono::steady_clock::now();
   if (opt.population < 3) throw InputError("population must be at least 3, got " + std::to_string(opt.population));
@@ -817,6 +842,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
     }
   };
   res.foldedBefore = foldedElements(M);
+  const std::vector<Vec3> N0 = M.N;  // the input's normals, for the nodes restoreCrossings puts back
   res.setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   bool stopped = false;
   for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
@@ -855,6 +881,14 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
       if (stats(M).min <= before) break;
     }
 
+  {
+    std::vector<std::vector<int>> faces;
+    faces.reserve(M.E.size());
+    for (const Element& e : M.E) faces.emplace_back(e.v.begin(), e.v.begin() + e.nv);
+    const std::vector<int> back = restoreCrossings(faces, tm.V, M.X);
+    for (int n : back) M.N[std::size_t(n)] = N0[std::size_t(n)];
+    res.nodesPutBack = back.size();
+  }
   res.after = stats(M);
   res.foldedAfter = foldedElements(M);
   res.evaluations = std::accumulate(evaluations.begin(), evaluations.end(), std::size_t(0));

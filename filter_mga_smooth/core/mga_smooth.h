@@ -123,6 +123,7 @@ struct Result {
   std::string featureSummary;        ///< FeatureDetection::Creases: Creases::summary()
   std::size_t evaluations = 0;       ///< fitness evaluations (both methods)
   std::size_t nodesMoved = 0;
+  std::size_t nodesPutBack = 0;      ///< moved nodes returned to their input position: the surface crossed itself there
   std::size_t searches = 0;          ///< node searches over all sweeps (the active set skips converged nodes)
   int sweeps = 0;
   int minPassSweeps = 0;             ///< final max-min sweeps run
@@ -132,7 +133,15 @@ struct Result {
   double setupSeconds = 0;           ///< of which before the first sweep: checks, fixed nodes, C1 surface, colouring
 };
 
+/// Puts moved nodes back to their positions `before` until no two crossing faces (pectus::selfIntersections;
+/// a quad is split along its diagonal v0-v2) have a node that moved: a smoothed surface must not cross itself
+/// where its input did not. `faces`: vertex indices into before/after (3 or 4 each). Returns the nodes put back,
+/// sorted; crossings among unmoved nodes (the input's own) are left.
+std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, const std::vector<Vec3>& before,
+                                  std::vector<Vec3>& after);
+
 /// Smooths with opt.method. Nodes are the live vertices of `m`. `userFixed` (per m.vert index, empty = none): 1 = keep fixed.
+/// Moves that make the surface cross itself are undone at the end (restoreCrossings).
 /// Throws InputError for bad parameters, a mesh without faces, NaN coordinates, non-manifold input
 /// (edge or vertex), invalid quads, or a mesh with no free node.
 /// Fixed-node classes are counted once, in the order boundary, feature, singular, user.

@@ -591,3 +591,41 @@ TEST(MgaSmooth, BadInput) {
   nm.F.push_back({0, 6, int(nm.V.size() - 1)});  // the interior diagonal 0-6
   EXPECT_THROW(sm::smoothMesh(*toMesh(nm), sm::Options()), pectus::InputError);
 }
+
+// three closed surfaces 10 mm apart: a move that pushes a node of the first through the second is undone,
+// a move on the third, which crosses nothing, stays, and crossings among unmoved nodes are left alone
+TEST(MgaSmooth, RestoreCrossingsPutsBackTheNodesOfCrossingFaces) {
+  const std::vector<Vec3> tet{{0, 0, 0}, {4, 0, 0}, {0, 4, 0}, {0, 0, 4}};
+  std::vector<Vec3> before;
+  for (double x : {0.0, 10.0, 20.0})
+    for (const Vec3& p : tet) before.push_back(p + Vec3(x, 0, 0));
+  std::vector<std::vector<int>> faces;
+  for (int o : {0, 4, 8})
+    for (const auto& f : std::vector<std::vector<int>>{{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}})
+      faces.push_back({f[0] + o, f[1] + o, f[2] + o});
+  std::vector<Vec3> after = before;
+  after[1] = Vec3(11, 0.5, 0.5);  // through the second tet's faces
+  after[9] = Vec3(24.5, 0, 0);    // crosses nothing
+  const std::vector<int> back = pectus::smooth::restoreCrossings(faces, before, after);
+  EXPECT_EQ(back, std::vector<int>{1});
+  EXPECT_EQ(after[1], before[1]);
+  EXPECT_EQ(after[9], Vec3(24.5, 0, 0));
+
+  // the input crossing itself (the second tet moved into the first), nothing moved: nothing to put back
+  std::vector<Vec3> crossing = before;
+  for (int i = 4; i < 8; ++i) crossing[std::size_t(i)] -= Vec3(9, 0, 0);
+  std::vector<Vec3> same = crossing;
+  EXPECT_TRUE(pectus::smooth::restoreCrossings(faces, crossing, same).empty());
+
+  // a quad surface (a cube, quads split along v0-v2) with a corner pushed into the tet beside it
+  std::vector<Vec3> cube{{0, 0, 0}, {1, 0, 0}, {1, 1, 0}, {0, 1, 0}, {0, 0, 1}, {1, 0, 1}, {1, 1, 1}, {0, 1, 1}};
+  for (Vec3& p : cube) p = 3.0 * p + Vec3(-10, 0, 0);
+  std::vector<Vec3> cb = cube;
+  for (const Vec3& p : tet) cb.push_back(p);
+  const std::vector<std::vector<int>> qf{{0, 3, 2, 1}, {4, 5, 6, 7}, {0, 1, 5, 4}, {1, 2, 6, 5}, {2, 3, 7, 6}, {3, 0, 4, 7},
+                                         {8, 10, 9}, {8, 9, 11}, {8, 11, 10}, {9, 10, 11}};
+  std::vector<Vec3> ca = cb;
+  ca[6] = Vec3(0.5, 0.5, 0.5);  // the cube's corner (1,1,1) into the tet
+  EXPECT_EQ(pectus::smooth::restoreCrossings(qf, cb, ca), std::vector<int>{6});
+  EXPECT_EQ(ca[6], cb[6]);
+}
