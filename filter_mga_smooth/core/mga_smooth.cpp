@@ -6,6 +6,8 @@
 #include <cmath>
 #include <cstdint>
 #include <numeric>
+#include <set>
+#include <utility>
 
 #include "creases.h"
 #include "pectus/c1_cmesh.h"
@@ -571,10 +573,14 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
     tris.push_back({f[0], f[1], f[2]});
     if (f.size() == 4) tris.push_back({f[0], f[2], f[3]});
   }
+  // the input's own crossings are left as they are: only faces that cross after smoothing are undone
+  std::set<std::pair<int, int>> inInput;
+  for (const FacePair& p : selfIntersections(before, tris)) inInput.insert(std::minmax(p.a, p.b));
   std::vector<int> back;
   for (;;) {  // each round puts back at least one node, so this ends (at the latest with the input)
     bool any = false;
-    for (const FacePair& p : selfIntersections(after, tris))
+    for (const FacePair& p : selfIntersections(after, tris)) {
+      if (inInput.count(std::minmax(p.a, p.b))) continue;
       for (int t : {p.a, p.b})
         for (int v : tris[std::size_t(t)])
           if (after[std::size_t(v)] != before[std::size_t(v)]) {
@@ -582,6 +588,7 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
             back.push_back(v);
             any = true;
           }
+    }
     if (!any) break;
   }
   std::sort(back.begin(), back.end());

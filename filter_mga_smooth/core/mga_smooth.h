@@ -133,10 +133,10 @@ struct Result {
   double setupSeconds = 0;           ///< of which before the first sweep: checks, fixed nodes, C1 surface, colouring
 };
 
-/// Puts moved nodes back to their positions `before` until no two crossing faces (pectus::selfIntersections;
-/// a quad is split along its diagonal v0-v2) have a node that moved: a smoothed surface must not cross itself
-/// where its input did not. `faces`: vertex indices into before/after (3 or 4 each). Returns the nodes put back,
-/// sorted; crossings among unmoved nodes (the input's own) are left.
+/// Puts moved nodes back to their positions `before` until no two faces that cross (pectus::selfIntersections;
+/// a quad is split along its diagonal v0-v2) and did not cross in `before` have a node that moved: a smoothed
+/// surface must not cross itself where its input did not. `faces`: vertex indices into before/after (3 or 4
+/// each). Returns the nodes put back, sorted; the input's own crossings are left as they are.
 std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, const std::vector<Vec3>& before,
                                   std::vector<Vec3>& after);
 
