@@ -73,10 +73,7 @@ def run_case(case, sex, age, index, elevation, method, edge, out, source, cartil
     base = os.path.join(out, f"{case}_{source}_{method}_E{cartilage_e:g}_{spine}")
     fe = pf.nuss_fea(landmarkLayer=landmarks, targetElevation=elevation, resultBase=mlx.SaveFile(base + ".vtu", ".vtu"),
                      cartilageModulus=cartilage_e, **METHODS[method])
-    compare = dict(compare=True, beforeLayer=cage, landmarkLayer=landmarks)
-    volumes = [pipeline.example(k, n).set(**compare) for k, n in (("slice", "Thoracic Volume (Slice Method)"),
-                                                                  ("envelope", "Thoracic Volume (Ferguson Envelope)"),
-                                                                  ("index", "Pectus Index"))]
+    volumes = pipeline.measure_filters(cage, landmarks)
     t0 = time.time()
     res = mlx.run([], mlx.Script(make + [fe] + volumes), timeout=4 * 3600)
     wall = time.time() - t0
