@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cstdio>
 #include <cmath>
+#include <limits>
 #include <map>
 #include <numeric>
 #include <sstream>
@@ -216,6 +217,16 @@ Vector3d lowerSternumEnd(const std::vector<Landmark>& lms, const Placement& pl, 
   throw InputError("No lower sternum end landmark (code 500) and no sternum point given: " + why + ".");
 }
 
+constexpr int kMinJointNodes = 4;  // fixed nodes per costovertebral joint, at least
+
+// mm: the mean length of the faces' edges (an edge of two faces counted twice)
+double meanEdgeLength(const fe::SurfaceMesh& s) {
+  double sum = 0;
+  for (const auto& f : s.faces)
+    for (int k = 0; k < 3; ++k) sum += (s.vertices[size_t(f[k])] - s.vertices[size_t(f[(k + 1) % 3])]).norm();
+  return sum / double(std::max<std::size_t>(3 * s.faces.size(), 1));
+}
+
 // the fixed nodes, the Fe nodes and the four Fsr patches, into s (s.mesh: the tet mesh of cage)
 void checkRadii(const Placement& pl) {
   if (!(pl.jointRadius > 0 && pl.sternumLoadRadius > 0 && pl.ribSupportRadius > 0))
@@ -231,17 +242,34 @@ void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Plac
   // fixed: all mesh nodes (surface and interior) near a costovertebral joint landmark, and every node of the
   // vertebral column's tets when the column is in the model
   std::vector<char> fixed(mesh.nodes.size(), 0);
+  const double spacing = meanEdgeLength(cage.surface);
   int joints = 0;
   for (const auto& l : lms) {
     const int side = l.code / 100, rib = l.code % 100;
     if (!(side == 1 || side == 2) || rib < 1 || rib > 12) continue;
     ++joints;
-    int n = 0;
+    // each joint fixes the nodes within the joint radius and at least its four nearest nodes: a coarse or
+    // smoothed mesh may have fewer within the radius, and a rib held only at its joint (the floating ribs)
+    // needs three non-collinear nodes fixed; a landmark more than two mean edge lengths beyond the radius
+    // from every node is not on this cage
+    std::array<double, kMinJointNodes> nearest;
+    nearest.fill(std::numeric_limits<double>::infinity());
+    for (int i = 0; i < mesh.numNodes(); ++i) {
+      const double d = (mesh.nodes[i] - l.p).norm();
+      if (d < nearest.back()) nearest.back() = d, std::sort(nearest.begin(), nearest.end());
+    }
+    if (nearest.front() > pl.jointRadius + 2 * spacing)
+      throw InputError("The costovertebral joint of the " + partName(1, l.code) + " at " + pointText(l.p) + " lies " + mm(nearest.front()) +
+                       " mm from the nearest mesh node, more than the joint radius (" + mm(pl.jointRadius) + " mm) and two mean edge lengths (" +
+                       mm(2 * spacing) + " mm): the landmark layer does not belong to this cage; pick the cage's landmark layer or increase the joint radius.");
+    double radius = pl.jointRadius;
+    if (nearest.back() > radius) {
+      radius = nearest.back();
+      ++s.jointsWidened;
+      s.widestJointRadius = std::max(s.widestJointRadius, radius);
+    }
     for (int i = 0; i < mesh.numNodes(); ++i)
-      if ((mesh.nodes[i] - l.p).norm() <= pl.jointRadius) fixed[i] = 1, ++n;
-    if (n == 0)
-      throw InputError("No mesh node lies within the joint radius (" + mm(pl.jointRadius) + " mm) of the costovertebral joint of the " +
-                       partName(1, l.code) + " at " + pointText(l.p) + ": increase the joint radius or check the landmark layer.");
+      if ((mesh.nodes[i] - l.p).norm() <= radius) fixed[i] = 1;
   }
   if (joints == 0)
     throw InputError(

@@ -140,6 +140,35 @@ TEST(NussAnalysis, TissueModuliScaleTheCompliance) {
   EXPECT_NE(errorOf([&] { nuss::analyze(surf, model, lms, bad); }).find("Young's moduli"), std::string::npos);
 }
 
+// A joint with fewer than four mesh nodes within the joint radius (a coarse or smoothed mesh) is fixed at its
+// four nearest nodes, and counted; a joint landmark far from every node is refused.
+TEST(NussAnalysis, JointWithoutNodesWithinTheRadiusIsFixedAtItsNearestNodes) {
+  const auto surf = nuss::cageFromMesh(cage().mesh);
+  const auto& lms = cage().lms;
+  const nuss::Model model = nuss::buildModel(surf, coarse().mesh);
+  const nuss::Analysis a = nuss::analyze(surf, model, lms, coarse());
+  auto tiny = coarse();
+  tiny.place.jointRadius = 0.05;  // below every joint's nearest-node distance on the coarse cage
+  const nuss::Analysis b = nuss::analyze(surf, model, lms, tiny);
+  int joints = 0;
+  for (const auto& l : lms) joints += (l.code / 100 == 1 || l.code / 100 == 2) && l.code % 100 >= 1 && l.code % 100 <= 12;
+  std::printf("joints %d; radius 6 mm: %d widened, %d fixed nodes; radius 0.05 mm: %d widened (up to %.2f mm), %d fixed nodes\n",
+              joints, a.jointsWidened, a.fixedAtJoints, b.jointsWidened, b.widestJointRadius, b.fixedAtJoints);
+  EXPECT_LT(a.jointsWidened, joints / 4);          // 6 mm holds four nodes at most joints of this coarse TET4 mesh
+  EXPECT_EQ(b.jointsWidened, joints);
+  EXPECT_GE(b.fixedAtJoints, 4 * joints - 8);      // every joint holds its four nearest nodes (neighbours may share)
+  EXPECT_LT(b.fixedAtJoints, a.fixedAtJoints);     // and fewer than the 6 mm radius fixes
+  EXPECT_GT(b.widestJointRadius, tiny.place.jointRadius);
+  for (int n : b.fixedNodes) EXPECT_EQ(b.result.displacement(n).norm(), 0.0);
+  EXPECT_GT(b.elevation, a.elevation);             // fewer fixed nodes: a softer cage
+  auto far = lms;
+  for (auto& l : far)
+    if (l.code == 104) l.p.y() -= 100;  // 100 mm behind the right 4th rib's head, behind the whole cage
+  const std::string e = errorOf([&] { nuss::analyze(surf, model, far, coarse()); });
+  EXPECT_NE(e.find("right rib 4"), std::string::npos) << e;
+  EXPECT_NE(e.find("does not belong to this cage"), std::string::npos) << e;
+}
+
 TEST(NussAnalysis, UnlabelledOrEmptyLayersAreRefused) {
   pectus::OwnedMesh m;
   EXPECT_NE(errorOf([&] { nuss::cageFromMesh(m); }).find("no faces"), std::string::npos);
