@@ -229,231 +229,280 @@ bool minimumCurvatureGradients(const std::vector<Vec2>& xy, const std::vector<do
 
 }  // namespace
 
-void C1Surface::build(std::vector<Vec3>* given) {
-  topo_ = std::make_shared<const Topology>(mesh_);
-  const Topology& topo = *topo_;
-  const int nv = int(mesh_.V.size()), nf = int(mesh_.F.size());
-  const bool hf = opt_.frame == Frame::HeightField;
-  if (hf) {
-    if (!(opt_.axis.norm() > 0) || !opt_.axis.allFinite()) throw InputError("height-field axis must be a non-zero vector");
-    opt_.axis.normalize();
-  }
-  stats_ = Stats();
-  stats_.faces = std::size_t(nf);
-  stats_.vertices = std::size_t(nv);
+namespace {
 
-  // face normals (area weighted) and degeneracy
+// area-weighted face normals, and which faces are degenerate (no area or a repeated vertex)
+std::vector<Vec3> faceNormals(const TriMesh& mesh, std::vector<char>& degen, std::size_t& degenerate) {
+  const int nf = int(mesh.F.size());
   std::vector<Vec3> fn(nf);
-  std::vector<char> degen(nf, 0);
-  double scale2 = 0;
+  degen.assign(nf, 0);
   for (int f = 0; f < nf; ++f) {
-    const auto& F = mesh_.F[f];
-    const Vec3 &a = mesh_.V[F[0]], &b = mesh_.V[F[1]], &c = mesh_.V[F[2]];
+    const auto& F = mesh.F[f];
+    const Vec3 &a = mesh.V[F[0]], &b = mesh.V[F[1]], &c = mesh.V[F[2]];
     fn[f] = (b - a).cross(c - a);
     const double l2 = std::max({(b - a).squaredNorm(), (c - b).squaredNorm(), (a - c).squaredNorm()});
-    scale2 = std::max(scale2, l2);
     if (!(fn[f].norm() > 1e-12 * l2) || F[0] == F[1] || F[1] == F[2] || F[0] == F[2]) {
       degen[f] = 1;
-      ++stats_.degenerateFaces;
+      ++degenerate;
     }
   }
-  if (hf) {
-    int pos = 0, neg = 0;
-    for (int f = 0; f < nf; ++f)
-      if (!degen[f]) (fn[f].dot(opt_.axis) > 1e-12 * fn[f].norm() ? pos : neg) += 1;
-    if (pos && neg)
-      throw InputError("the mesh is not a height field over the chosen axis: " + std::to_string(std::min(pos, neg)) +
-                       " of its faces are flipped or vertical when seen along the axis; use the 3D "
-                       "(vertex normal) frame");
+  return fn;
+}
+
+// Frame::HeightField needs every non-degenerate face to face the same way along the axis
+void requireHeightField(const std::vector<Vec3>& fn, const std::vector<char>& degen, const Vec3& axis) {
+  int pos = 0, neg = 0;
+  for (std::size_t f = 0; f < fn.size(); ++f)
+    if (!degen[f]) (fn[f].dot(axis) > 1e-12 * fn[f].norm() ? pos : neg) += 1;
+  if (pos && neg)
+    throw InputError("the mesh is not a height field over the chosen axis: " + std::to_string(std::min(pos, neg)) +
+                     " of its faces are flipped or vertical when seen along the axis; use the 3D "
+                     "(vertex normal) frame");
+}
+
+// What the per-vertex normal estimate reads: the mesh, its face normals, and the height-field frame
+// (he1, he2, axis) when hf
+struct VertexNormalInput {
+  const TriMesh& mesh;
+  const Topology& topo;
+  const std::vector<Vec3>& fn;
+  const std::vector<char>& degen;
+  GradientMethod gradient;
+  bool hf;
+  Vec3 axis, he1, he2;
+};
+
+// the vertex frame (e1, e2, f): the height-field frame, or f the vertex's area-weighted normal (else its
+// mean unit face normal); false where neither exists (a flat vertex)
+bool vertexFrame(const VertexNormalInput& in, int v, Vec3& f, Vec3& e1, Vec3& e2) {
+  if (in.hf) {
+    f = in.axis; e1 = in.he1; e2 = in.he2;
+    return true;
   }
+  const Topology& topo = in.topo;
+  Vec3 s(0, 0, 0), su(0, 0, 0);
+  for (int q = topo.vfStart[v]; q < topo.vfStart[v + 1]; ++q)
+    if (!in.degen[topo.vf[q]]) { s += in.fn[topo.vf[q]]; su += in.fn[topo.vf[q]].normalized(); }
+  if (s.norm() > 1e-9 * su.norm() && s.norm() > 0) f = s.normalized();
+  else if (su.norm() > 1e-6) f = su.normalized();
+  else return false;
+  std::tie(e1, e2) = completeFrame(f);
+  return true;
+}
 
-  normals_.assign(nv, hf ? opt_.axis : Vec3(0, 0, 1));
-  flat_.assign(nv, 0);
-  Vec3 he1, he2;  // (not a structured binding: clang 14 cannot capture those in the OpenMP region)
-  std::tie(he1, he2) = completeFrame(hf ? opt_.axis : Vec3(0, 0, 1));
+// v's 2-ring neighbourhood, grown to the 3-ring where it has fewer than 8 points (corners, boundaries);
+// each ring's new vertices in ascending order, v itself not included
+std::vector<int> ringNeighbourhood(const VertexNormalInput& in, int v) {
+  const int nv = int(in.mesh.V.size());
+  // `seen` marks the vertices taken for v (a stamp per v)
+  thread_local std::vector<unsigned> seen;
+  thread_local unsigned stamp = 0;
+  if (seen.size() < std::size_t(nv)) seen.assign(std::size_t(nv), 0u);
+  if (++stamp == 0) {
+    std::fill(seen.begin(), seen.end(), 0u);
+    stamp = 1;
+  }
+  std::vector<int> nb{v};
+  seen[std::size_t(v)] = stamp;
+  std::size_t ringStart = 0;
+  for (int ring = 0; ring < 3; ++ring) {
+    if (ring == 2 && nb.size() >= 9) break;
+    const std::size_t ringEnd = nb.size();
+    for (std::size_t q0 = ringStart; q0 < ringEnd; ++q0) {
+      const int w = nb[q0];
+      for (int r = in.topo.vfStart[w]; r < in.topo.vfStart[w + 1]; ++r)
+        for (int kk = 0; kk < 3; ++kk) {
+          const int a = in.mesh.F[in.topo.vf[r]][kk];
+          if (seen[std::size_t(a)] != stamp) {
+            seen[std::size_t(a)] = stamp;
+            nb.push_back(a);
+          }
+        }
+    }
+    std::sort(nb.begin() + std::ptrdiff_t(ringEnd), nb.end());
+    ringStart = ringEnd;
+  }
+  nb.erase(nb.begin());
+  return nb;
+}
 
+// GradientMethod::QuadraticFit (and MinimumCurvature's start and fallback): the gradient of a weighted
+// least-squares quadratic over the ring neighbourhood in the frame (e1, e2, f), or of a plane where the
+// quadratic is rank-deficient (linear set); false if neither fits
+bool quadraticFitGradient(const VertexNormalInput& in, int v, const Vec3& f, const Vec3& e1, const Vec3& e2, Vec2& g,
+                          bool& linear) {
+  const TriMesh& mesh = in.mesh;
+  const std::vector<int> nb = ringNeighbourhood(in, v);
+  const Vec3& p = mesh.V[v];
+  // 1-ring mean distance as the length scale
+  double r1 = 0;
+  int c1 = 0;
+  for (int q = in.topo.vfStart[v]; q < in.topo.vfStart[v + 1]; ++q)
+    for (int k = 0; k < 3; ++k)
+      if (mesh.F[in.topo.vf[q]][k] != v) { r1 += (mesh.V[mesh.F[in.topo.vf[q]][k]] - p).norm(); ++c1; }
+  r1 = c1 ? r1 / c1 : 1.0;
+  if (!(r1 > 0 && nb.size() >= 2)) return false;
+  const int n = int(nb.size());
+  Eigen::MatrixXd A(n, 5);
+  Eigen::VectorXd z(n);
+  for (int i = 0; i < n; ++i) {
+    const Vec3 d = mesh.V[nb[i]] - p;
+    const double x = d.dot(e1) / r1, y = d.dot(e2) / r1, h = d.dot(f) / r1;
+    // nearer points count much more (inverse 4th power of the distance, tuned on Franke's sets)
+    const double q = 0.01 + x * x + y * y;
+    const double w = 1.0 / (q * q);
+    A.row(i) << w * x, w * y, w * x * x, w * x * y, w * y * y;
+    z(i) = w * h;
+  }
+  bool ok = false;
+  if (n >= 6) {
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
+    qr.setThreshold(1e-8);
+    if (qr.rank() == 5) {
+      const Eigen::VectorXd c = qr.solve(z);
+      g = Vec2(c(0), c(1));
+      ok = g.allFinite();
+    }
+  }
+  if (!ok) {
+    Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A.leftCols(2));
+    qr.setThreshold(1e-8);
+    if (qr.rank() == 2) {
+      const Eigen::VectorXd c = qr.solve(z);
+      g = Vec2(c(0), c(1));
+      ok = g.allFinite();
+      linear = ok;
+    }
+  }
+  return ok;
+}
+
+// thesis eqs. 3-1 (interior) and 3-2 (boundary): the inverse-area weighted facet gradients in the frame
+// (e1, e2, f); also the fallback of the quadratic fit. False if no facet is usable
+bool inverseAreaGradient(const VertexNormalInput& in, int v, const Vec3& f, const Vec3& e1, const Vec3& e2, Vec2& g) {
+  const TriMesh& mesh = in.mesh;
+  const Topology& topo = in.topo;
+  Vec2 num(0, 0);
+  double den = 0;
+  for (int q = topo.vfStart[v]; q < topo.vfStart[v + 1]; ++q) {
+    const int t = topo.vf[q];
+    if (in.degen[t]) continue;
+    const auto& F = mesh.F[t];
+    Vec2 gi;
+    double Ai;
+    if (!facetGradient(mesh.V[F[0]], mesh.V[F[1]], mesh.V[F[2]], e1, e2, f, gi, Ai) || !(Ai > 0)) continue;
+    const double li = 1.0 / Ai;
+    Vec2 term = gi;
+    if (topo.boundary[v]) {
+      // t'_i: the face across the edge of t_i opposite to v
+      const int l = F[0] == v ? 0 : (F[1] == v ? 1 : 2);
+      const auto& E = topo.edges[topo.faceEdge[t][l]];
+      const int tp = E.f1 < 0 ? -1 : (E.f0 / 3 == t ? E.f1 / 3 : E.f0 / 3);
+      Vec2 gp;
+      double Ap;
+      if (tp >= 0 && !in.degen[tp]) {
+        const auto& G = mesh.F[tp];
+        if (facetGradient(mesh.V[G[0]], mesh.V[G[1]], mesh.V[G[2]], e1, e2, f, gp, Ap) && Ap > 0)
+          term = ((2 * Ai + Ap) * gi - Ai * gp) / (Ai + Ap);
+      }
+    }
+    num += li * term;
+    den += li;
+  }
+  if (!(den > 0)) return false;
+  g = num / den;
+  return g.allFinite();
+}
+
+// the per-vertex normal counts of Stats
+struct VertexCounts {
+  std::size_t flat = 0, linear = 0, isolated = 0, boundary = 0;
+};
+
+// every vertex's unit normal: the given one, or the frame tilted by the estimated gradient (quadratic fit
+// or inverse-area facet gradients; the frame itself if neither works); a vertex without a frame or a
+// usable given normal is flat
+VertexCounts estimateVertexNormals(const VertexNormalInput& in, const std::vector<Vec3>* given,
+                                   std::vector<Vec3>& normals, std::vector<char>& flat) {
+  const int nv = int(in.mesh.V.size());
+  const Topology& topo = in.topo;
   std::size_t flatCount = 0, linCount = 0, isolated = 0, bnd = 0;
 #pragma omp parallel for schedule(dynamic, 256) reduction(+ : flatCount, linCount, isolated, bnd)
   for (int v = 0; v < nv; ++v) {
-    const int b0 = topo.vfStart[v], b1 = topo.vfStart[v + 1];
-    if (b0 == b1) { ++isolated; continue; }
+    if (topo.vfStart[v] == topo.vfStart[v + 1]) { ++isolated; continue; }
     if (topo.boundary[v]) ++bnd;
-    // frame
     Vec3 f, e1, e2;
-    if (hf) {
-      f = opt_.axis; e1 = he1; e2 = he2;
-    } else {
-      Vec3 s(0, 0, 0), su(0, 0, 0);
-      for (int q = b0; q < b1; ++q)
-        if (!degen[topo.vf[q]]) { s += fn[topo.vf[q]]; su += fn[topo.vf[q]].normalized(); }
-      if (s.norm() > 1e-9 * su.norm() && s.norm() > 0) f = s.normalized();
-      else if (su.norm() > 1e-6) f = su.normalized();
-      else { flat_[v] = 1; ++flatCount; normals_[v] = Vec3(0, 0, 0); continue; }
-      std::tie(e1, e2) = completeFrame(f);
-    }
+    if (!vertexFrame(in, v, f, e1, e2)) { flat[v] = 1; ++flatCount; normals[v] = Vec3(0, 0, 0); continue; }
     if (given) {
       Vec3 n = (*given)[v];
-      if (!(n.norm() > 0) || !n.allFinite()) { flat_[v] = 1; ++flatCount; continue; }
+      if (!(n.norm() > 0) || !n.allFinite()) { flat[v] = 1; ++flatCount; continue; }
       n.normalize();
-      normals_[v] = n;
+      normals[v] = n;
       continue;
     }
-    const Vec3& p = mesh_.V[v];
     Vec2 g(0, 0);
     bool ok = false;
-    if (opt_.gradient != GradientMethod::InverseArea) {  // QuadraticFit, and MinimumCurvature's start/fallback
-      // 2-ring neighbourhood, grown to the 3-ring where it has fewer than 8 points (corners, boundaries);
-      // each ring's new vertices in ascending order. `seen` marks the vertices taken for v (a stamp per v)
-      thread_local std::vector<unsigned> seen;
-      thread_local unsigned stamp = 0;
-      if (seen.size() < std::size_t(nv)) seen.assign(std::size_t(nv), 0u);
-      if (++stamp == 0) {
-        std::fill(seen.begin(), seen.end(), 0u);
-        stamp = 1;
-      }
-      std::vector<int> nb{v};
-      seen[std::size_t(v)] = stamp;
-      std::size_t ringStart = 0;
-      for (int ring = 0; ring < 3; ++ring) {
-        if (ring == 2 && nb.size() >= 9) break;
-        const std::size_t ringEnd = nb.size();
-        for (std::size_t q0 = ringStart; q0 < ringEnd; ++q0) {
-          const int w = nb[q0];
-          for (int r = topo.vfStart[w]; r < topo.vfStart[w + 1]; ++r)
-            for (int kk = 0; kk < 3; ++kk) {
-              const int a = mesh_.F[topo.vf[r]][kk];
-              if (seen[std::size_t(a)] != stamp) {
-                seen[std::size_t(a)] = stamp;
-                nb.push_back(a);
-              }
-            }
-        }
-        std::sort(nb.begin() + std::ptrdiff_t(ringEnd), nb.end());
-        ringStart = ringEnd;
-      }
-      nb.erase(nb.begin());
-      // 1-ring mean distance as the length scale
-      double r1 = 0;
-      int c1 = 0;
-      for (int q = b0; q < b1; ++q)
-        for (int k = 0; k < 3; ++k)
-          if (mesh_.F[topo.vf[q]][k] != v) { r1 += (mesh_.V[mesh_.F[topo.vf[q]][k]] - p).norm(); ++c1; }
-      r1 = c1 ? r1 / c1 : 1.0;
-      if (r1 > 0 && nb.size() >= 2) {
-        const int n = int(nb.size());
-        Eigen::MatrixXd A(n, 5);
-        Eigen::VectorXd z(n);
-        for (int i = 0; i < n; ++i) {
-          const Vec3 d = mesh_.V[nb[i]] - p;
-          const double x = d.dot(e1) / r1, y = d.dot(e2) / r1, h = d.dot(f) / r1;
-          // nearer points count much more (inverse 4th power of the distance, tuned on Franke's sets)
-          const double q = 0.01 + x * x + y * y;
-          const double w = 1.0 / (q * q);
-          A.row(i) << w * x, w * y, w * x * x, w * x * y, w * y * y;
-          z(i) = w * h;
-        }
-        if (n >= 6) {
-          Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A);
-          qr.setThreshold(1e-8);
-          if (qr.rank() == 5) {
-            const Eigen::VectorXd c = qr.solve(z);
-            g = Vec2(c(0), c(1));
-            ok = g.allFinite();
-          }
-        }
-        if (!ok) {
-          Eigen::ColPivHouseholderQR<Eigen::MatrixXd> qr(A.leftCols(2));
-          qr.setThreshold(1e-8);
-          if (qr.rank() == 2) {
-            const Eigen::VectorXd c = qr.solve(z);
-            g = Vec2(c(0), c(1));
-            ok = g.allFinite();
-            if (ok) ++linCount;
-          }
-        }
-      }
+    if (in.gradient != GradientMethod::InverseArea) {
+      bool linear = false;
+      ok = quadraticFitGradient(in, v, f, e1, e2, g, linear);
+      if (linear) ++linCount;
     }
-    if (!ok) {
-      // thesis eqs. 3-1 (interior) and 3-2 (boundary); also the fallback of the quadratic fit
-      Vec2 num(0, 0);
-      double den = 0;
-      for (int q = b0; q < b1; ++q) {
-        const int t = topo.vf[q];
-        if (degen[t]) continue;
-        const auto& F = mesh_.F[t];
-        Vec2 gi;
-        double Ai;
-        if (!facetGradient(mesh_.V[F[0]], mesh_.V[F[1]], mesh_.V[F[2]], e1, e2, f, gi, Ai) || !(Ai > 0)) continue;
-        const double li = 1.0 / Ai;
-        Vec2 term = gi;
-        if (topo.boundary[v]) {
-          // t'_i: the face across the edge of t_i opposite to v
-          const int l = F[0] == v ? 0 : (F[1] == v ? 1 : 2);
-          const auto& E = topo.edges[topo.faceEdge[t][l]];
-          const int tp = E.f1 < 0 ? -1 : (E.f0 / 3 == t ? E.f1 / 3 : E.f0 / 3);
-          Vec2 gp;
-          double Ap;
-          if (tp >= 0 && !degen[tp]) {
-            const auto& G = mesh_.F[tp];
-            if (facetGradient(mesh_.V[G[0]], mesh_.V[G[1]], mesh_.V[G[2]], e1, e2, f, gp, Ap) && Ap > 0)
-              term = ((2 * Ai + Ap) * gi - Ai * gp) / (Ai + Ap);
-          }
-        }
-        num += li * term;
-        den += li;
-      }
-      if (den > 0) { g = num / den; ok = g.allFinite(); }
-    }
+    if (!ok) ok = inverseAreaGradient(in, v, f, e1, e2, g);
     if (!ok) g = Vec2(0, 0);  // no usable facet: the frame plane itself
     Vec3 n = f - g.x() * e1 - g.y() * e2;
-    normals_[v] = n.normalized();
+    normals[v] = n.normalized();
   }
-  if (hf && !given && opt_.gradient == GradientMethod::MinimumCurvature && nv > 0) {
-    // heights over the plane of (he1, he2); the per-vertex estimates as start and fallback
-    std::vector<Vec2> xy(nv), g(nv);
-    std::vector<double> z(nv);
-    for (int v = 0; v < nv; ++v) {
-      const Vec3& p = mesh_.V[v];
-      xy[v] = Vec2(p.dot(he1), p.dot(he2));
-      z[v] = p.dot(opt_.axis);
-      const double c = normals_[v].dot(opt_.axis);
-      g[v] = std::abs(c) > 0 ? Vec2(-normals_[v].dot(he1) / c, -normals_[v].dot(he2) / c) : Vec2(0, 0);
-    }
-    if (minimumCurvatureGradients(xy, z, topo.edges, g)) {
-      stats_.globalGradients = true;
-      for (int v = 0; v < nv; ++v)
-        if (topo.vfStart[v] != topo.vfStart[v + 1])
-          normals_[v] = (opt_.axis - g[v].x() * he1 - g[v].y() * he2).normalized();
-    }
+  return {flatCount, linCount, isolated, bnd};
+}
+
+// GradientMethod::MinimumCurvature on a height field: the global estimate over the plane of (he1, he2),
+// with the per-vertex normals as its start and fallback; false (normals unchanged) if the solve fails
+bool globalGradientNormals(const VertexNormalInput& in, std::vector<Vec3>& normals) {
+  const int nv = int(in.mesh.V.size());
+  std::vector<Vec2> xy(nv), g(nv);
+  std::vector<double> z(nv);
+  for (int v = 0; v < nv; ++v) {
+    const Vec3& p = in.mesh.V[v];
+    xy[v] = Vec2(p.dot(in.he1), p.dot(in.he2));
+    z[v] = p.dot(in.axis);
+    const double c = normals[v].dot(in.axis);
+    g[v] = std::abs(c) > 0 ? Vec2(-normals[v].dot(in.he1) / c, -normals[v].dot(in.he2) / c) : Vec2(0, 0);
   }
-  stats_.flatVertices = flatCount;
-  stats_.linearFitVertices = linCount;
-  stats_.isolatedVertices = isolated;
-  stats_.boundaryVertices = bnd;
+  if (!minimumCurvatureGradients(xy, z, in.topo.edges, g)) return false;
+  for (int v = 0; v < nv; ++v)
+    if (in.topo.vfStart[v] != in.topo.vfStart[v + 1])
+      normals[v] = (in.axis - g[v].x() * in.he1 - g[v].y() * in.he2).normalized();
+  return true;
+}
 
-  if (hf)
-    for (int v = 0; v < nv; ++v)
-      if (!flat_[v] && topo.vfStart[v] != topo.vfStart[v + 1] && !(normals_[v].dot(opt_.axis) > 1e-6)) {
-        if (normals_[v].dot(opt_.axis) < -1e-6) { normals_[v] = -normals_[v]; continue; }
-        throw InputError("vertex " + std::to_string(v) +
-                         " has a normal orthogonal to the height-field axis; use the 3D (vertex normal) frame");
-      }
+// HeightField: every normal points along the axis (a reversed one is flipped); one orthogonal to it throws
+void orientAlongAxis(const Topology& topo, const std::vector<char>& flat, const Vec3& axis, std::vector<Vec3>& normals) {
+  for (int v = 0; v < int(normals.size()); ++v)
+    if (!flat[v] && topo.vfStart[v] != topo.vfStart[v + 1] && !(normals[v].dot(axis) > 1e-6)) {
+      if (normals[v].dot(axis) < -1e-6) { normals[v] = -normals[v]; continue; }
+      throw InputError("vertex " + std::to_string(v) +
+                       " has a normal orthogonal to the height-field axis; use the 3D (vertex normal) frame");
+    }
+}
 
-  // control nets
-  net_.resize(nf);
-  const Vec3 ax = opt_.axis;
+// The control nets (eqs. 3-9..3-15): per face the 6 edge control points (the vertices' tangent planes) and
+// the three b111 (one mean b111 for Blend::PlainCubic)
+void controlNets(const TriMesh& mesh, const std::vector<Vec3>& normals, const std::vector<char>& flat, bool hf,
+                 const Vec3& ax, Blend blend, std::vector<std::array<Vec3, 9>>& net) {
+  const int nf = int(mesh.F.size());
+  net.resize(nf);
   auto T = [&](int v, const Vec3& d) -> Vec3 {
-    if (flat_[v]) return d;
-    const Vec3& n = normals_[v];
+    if (flat[v]) return d;
+    const Vec3& n = normals[v];
     if (hf) return d - (n.dot(d) / n.dot(ax)) * ax;
     return d - n.dot(d) * n;
   };
 #pragma omp parallel for schedule(static)
   for (int t = 0; t < nf; ++t) {
-    const auto& F = mesh_.F[t];
+    const auto& F = mesh.F[t];
     Vec3 Vv[3], Vp[3];
     for (int k = 0; k < 3; ++k) {
-      Vv[k] = mesh_.V[F[k]];
+      Vv[k] = mesh.V[F[k]];
       Vp[k] = hf ? Vec3(Vv[k] - Vv[k].dot(ax) * ax) : Vv[k];
     }
     // e[i][j]: edge control point next to vertex i towards vertex j (eq. 3-10 per coordinate)
@@ -461,7 +510,7 @@ void C1Surface::build(std::vector<Vec3>* given) {
     for (int i = 0; i < 3; ++i)
       for (int j = 0; j < 3; ++j)
         if (i != j) e[i][j] = Vv[i] + T(F[i], Vv[j] - Vv[i]) / 3.0;
-    auto& N = net_[t];
+    auto& N = net[t];
     N[0] = e[0][1]; N[1] = e[0][2]; N[2] = e[1][0]; N[3] = e[1][2]; N[4] = e[2][0]; N[5] = e[2][1];
     // b111^a for the edge opposite vertex a (from b to c): the cross-boundary derivative along the
     // direction n_a = V_a - V_b - h_a (V_c - V_b) (orthogonal to the edge, eqs. 3-11/3-12) is
@@ -480,11 +529,47 @@ void C1Surface::build(std::vector<Vec3>* given) {
       const Vec3 C = e[c][a] - e[c][b] - h * (Vv[c] - e[c][b]);
       N[6 + a] = e[b][c] + h * (e[c][b] - e[b][c]) + 0.5 * (A + C);
     }
-    if (opt_.blend == Blend::PlainCubic) {
+    if (blend == Blend::PlainCubic) {
       const Vec3 m = (N[6] + N[7] + N[8]) / 3.0;
       N[6] = N[7] = N[8] = m;
     }
   }
+}
+
+}  // namespace
+
+void C1Surface::build(std::vector<Vec3>* given) {
+  topo_ = std::make_shared<const Topology>(mesh_);
+  const Topology& topo = *topo_;
+  const int nv = int(mesh_.V.size()), nf = int(mesh_.F.size());
+  const bool hf = opt_.frame == Frame::HeightField;
+  if (hf) {
+    if (!(opt_.axis.norm() > 0) || !opt_.axis.allFinite()) throw InputError("height-field axis must be a non-zero vector");
+    opt_.axis.normalize();
+  }
+  stats_ = Stats();
+  stats_.faces = std::size_t(nf);
+  stats_.vertices = std::size_t(nv);
+
+  std::vector<char> degen;
+  const std::vector<Vec3> fn = faceNormals(mesh_, degen, stats_.degenerateFaces);
+  if (hf) requireHeightField(fn, degen, opt_.axis);
+
+  // vertex normals
+  normals_.assign(nv, hf ? opt_.axis : Vec3(0, 0, 1));
+  flat_.assign(nv, 0);
+  VertexNormalInput in{mesh_, topo, fn, degen, opt_.gradient, hf, opt_.axis, Vec3(), Vec3()};
+  std::tie(in.he1, in.he2) = completeFrame(hf ? opt_.axis : Vec3(0, 0, 1));
+  const VertexCounts counts = estimateVertexNormals(in, given, normals_, flat_);
+  if (hf && !given && opt_.gradient == GradientMethod::MinimumCurvature && nv > 0)
+    stats_.globalGradients = globalGradientNormals(in, normals_);
+  stats_.flatVertices = counts.flat;
+  stats_.linearFitVertices = counts.linear;
+  stats_.isolatedVertices = counts.isolated;
+  stats_.boundaryVertices = counts.boundary;
+  if (hf) orientAlongAxis(topo, flat_, opt_.axis, normals_);
+
+  controlNets(mesh_, normals_, flat_, hf, opt_.axis, opt_.blend, net_);
 }
 
 std::vector<Vec2> C1Surface::heightGradients() const {

@@ -564,6 +564,382 @@ void searchGradient(NodeSearch& ns, int iterations) {
   }
 }
 
+
+// thesis step 1, the parameters: throws InputError naming the first one out of its range
+void validateOptions(const Options& opt) {
+  if (opt.population < 3) throw InputError("population must be at least 3, got " + std::to_string(opt.population));
+  if (!(opt.accuracy > 0) || !(opt.accuracy < 0.5))
+    throw InputError("accuracy must be in (0, 0.5), got " + std::to_string(opt.accuracy));
+  if (opt.maxSweeps < 1) throw InputError("maximum sweeps must be at least 1");
+  if (opt.generations < 1) throw InputError("generations per element must be at least 1");
+  if (opt.restarts < 0) throw InputError("restarts must not be negative");
+  if (!(opt.tolerance >= 0)) throw InputError("tolerance must not be negative");
+  if (!(opt.featureAngleDeg > 0 && opt.featureAngleDeg <= 180))
+    throw InputError("feature angle must be in (0, 180] degrees");
+  if (!(opt.worstGuard >= 0 && opt.worstGuard <= 1)) throw InputError("worst-element guard must be in [0, 1]");
+  if (!(opt.minPassBelow >= 0 && opt.minPassBelow <= 1))
+    throw InputError("final worst-element pass threshold must be in [0, 1]");
+  if (opt.minPassSweeps < 0) throw InputError("final worst-element pass sweeps must not be negative");
+  if (!(opt.singularAngleDeg > 0 && opt.singularAngleDeg <= 180))
+    throw InputError("singular angle must be in (0, 180] degrees");
+  if (opt.method == Method::ConjugateGradient && (opt.cgIterations < 1 || opt.cgIterations > 10000))
+    throw InputError("conjugate gradient iterations must be in [1, 10000], got " + std::to_string(opt.cgIterations));
+}
+
+// the mesh the sweeps move: tm's compact nodes (toM: node -> m.vert index) and em's elements on them
+Mesh buildMesh(const c1::TriMesh& tm, const std::vector<int>& toM, const ElementMesh& em, std::size_t mVerts) {
+  std::vector<int> toC(mVerts, -1);
+  for (std::size_t i = 0; i < toM.size(); ++i) toC[std::size_t(toM[i])] = int(i);
+  Mesh M;
+  M.X = tm.V;
+  M.E = em.elements;
+  for (auto& e : M.E)
+    for (int k = 0; k < e.nv; ++k) e.v[k] = toC[std::size_t(e.v[k])];
+  M.vE.assign(tm.V.size(), {});
+  for (int i = 0; i < int(M.E.size()); ++i)
+    for (int k = 0; k < M.E[std::size_t(i)].nv; ++k) M.vE[std::size_t(M.E[std::size_t(i)].v[k])].push_back(i);
+  return M;
+}
+
+/// The nodes that stay where they are, by kind (a node can be of several kinds)
+struct NodeKinds {
+  std::vector<char> boundary, feature, singular;
+  std::size_t creaseChains = 0;  ///< Creases: chains found
+  std::string featureSummary;    ///< Creases: Creases::summary()
+};
+
+// unit normal of every face of tm (zero for a face without area)
+std::vector<Vec3> unitFaceNormals(const c1::TriMesh& tm) {
+  std::vector<Vec3> fn(tm.F.size());
+  for (std::size_t f = 0; f < tm.F.size(); ++f) {
+    const auto& F = tm.F[f];
+    const Vec3 n = (tm.V[std::size_t(F[1])] - tm.V[std::size_t(F[0])]).cross(tm.V[std::size_t(F[2])] - tm.V[std::size_t(F[0])]);
+    fn[f] = n.norm() > 0 ? Vec3(n.normalized()) : Vec3(0, 0, 0);
+  }
+  return fn;
+}
+
+// the diagonals of the quad elements (the faux edges inside quads, which are not feature edges), sorted
+std::vector<std::uint64_t> quadDiagonals(const Mesh& M) {
+  std::vector<std::uint64_t> diagonals;
+  for (const auto& e : M.E)
+    if (e.nv == 4) {
+      diagonals.push_back(edgeKey(e.v[0], e.v[2]));
+      diagonals.push_back(edgeKey(e.v[1], e.v[3]));
+    }
+  std::sort(diagonals.begin(), diagonals.end());
+  return diagonals;
+}
+
+// Angles: the nodes of every edge (not a quad diagonal) whose faces' normals differ by more than the
+// feature angle
+void sharpEdgeNodes(const C1Surface& S, const std::vector<Vec3>& fn, const std::vector<std::uint64_t>& diagonals,
+                    double featureAngleDeg, std::vector<char>& feature) {
+  const double cosLim = std::cos(featureAngleDeg * M_PI / 180.0);
+  for (const auto& e : S.edges()) {
+    if (e.f1 >= 0 && featureAngleDeg < 180 && !std::binary_search(diagonals.begin(), diagonals.end(), edgeKey(e.a, e.b))) {
+      const Vec3& a = fn[std::size_t(e.f0)];
+      const Vec3& b = fn[std::size_t(e.f1)];
+      if (a.squaredNorm() > 0 && b.squaredNorm() > 0 && a.dot(b) < cosLim)
+        feature[std::size_t(e.a)] = feature[std::size_t(e.b)] = 1;
+    }
+  }
+}
+
+// Angles: the nodes whose faces' normal cone (the largest angle between two of their normals) is wider
+// than the singular angle: large curvature variation within one ring (thesis 4.3)
+void wideConeNodes(const c1::TriMesh& tm, const std::vector<Vec3>& fn, double singularAngleDeg, std::vector<char>& singular) {
+  const std::size_t nv = tm.V.size();
+  std::vector<int> start(nv + 1, 0), vf(3 * tm.F.size());
+  for (const auto& F : tm.F)
+    for (int k = 0; k < 3; ++k) ++start[std::size_t(F[std::size_t(k)]) + 1];
+  for (std::size_t i = 0; i < nv; ++i) start[i + 1] += start[i];
+  {
+    std::vector<int> fill(start.begin(), start.end() - 1);
+    for (int f = 0; f < int(tm.F.size()); ++f)
+      for (int k = 0; k < 3; ++k) vf[std::size_t(fill[std::size_t(tm.F[std::size_t(f)][std::size_t(k)])]++)] = f;
+  }
+  const double cosSing = std::cos(singularAngleDeg * M_PI / 180.0);
+  for (std::size_t i = 0; i < nv; ++i) {
+    for (int a = start[i]; a < start[i + 1] && !singular[i]; ++a) {
+      const Vec3& na = fn[std::size_t(vf[std::size_t(a)])];
+      if (!(na.squaredNorm() > 0)) continue;
+      for (int b = a + 1; b < start[i + 1]; ++b) {
+        const Vec3& nb = fn[std::size_t(vf[std::size_t(b)])];
+        if (nb.squaredNorm() > 0 && na.dot(nb) < cosSing) {
+          singular[i] = 1;
+          break;
+        }
+      }
+    }
+  }
+}
+
+// boundary nodes, and feature and singular nodes by opt.features: the crease chains and their corners,
+// or the feature and singular angles
+NodeKinds classifyNodes(const c1::TriMesh& tm, const Mesh& M, const C1Surface& S, const Options& opt) {
+  const std::size_t nv = tm.V.size();
+  NodeKinds nk;
+  nk.boundary.assign(nv, 0), nk.feature.assign(nv, 0), nk.singular.assign(nv, 0);
+  const std::vector<Vec3> fn = unitFaceNormals(tm);
+  const std::vector<std::uint64_t> diagonals = quadDiagonals(M);
+  for (const auto& e : S.edges())
+    if (e.f1 < 0) nk.boundary[std::size_t(e.a)] = nk.boundary[std::size_t(e.b)] = 1;
+  if (opt.features == FeatureDetection::Creases) {
+    // crease chains told from noise (creases.h); their corners are the singular points
+    const Creases cr = detectCreases(tm.V, tm.F, diagonals);
+    for (std::size_t i = 0; i < nv; ++i) {
+      nk.feature[i] = cr.node[i] && !cr.corner[i];
+      nk.singular[i] = cr.corner[i];
+    }
+    nk.creaseChains = cr.chains.size();
+    nk.featureSummary = cr.summary();
+  } else {
+    sharpEdgeNodes(S, fn, diagonals, opt.featureAngleDeg, nk.feature);
+  }
+  if (opt.features == FeatureDetection::Angles && opt.singularAngleDeg < 180)
+    wideConeNodes(tm, fn, opt.singularAngleDeg, nk.singular);
+  return nk;
+}
+
+// the fixed nodes (boundary, feature, singular, the user's, in no element), each counted into res under
+// the first of those kinds; returns the free nodes, and throws InputError, naming the counts, if there is none
+std::vector<int> freeNodesOf(const NodeKinds& nk, const Mesh& M, const std::vector<int>& toM,
+                             const std::vector<char>& userFixed, const Options& opt, std::vector<char>& fixed,
+                             Result& res) {
+  const std::size_t nv = M.X.size();
+  fixed.assign(nv, 0);
+  for (std::size_t i = 0; i < nv; ++i) {
+    const bool user = !userFixed.empty() && userFixed[std::size_t(toM[i])];
+    if (nk.boundary[i]) ++res.boundaryNodes;
+    else if (nk.feature[i]) ++res.featureNodes;
+    else if (nk.singular[i]) ++res.singularNodes;
+    else if (user) ++res.userFixedNodes;
+    fixed[i] = nk.boundary[i] || nk.feature[i] || nk.singular[i] || user || M.vE[i].empty();
+  }
+  std::vector<int> freeNodes;
+  for (std::size_t i = 0; i < nv; ++i)
+    if (!fixed[i]) freeNodes.push_back(int(i));
+  if (freeNodes.empty())
+    throw InputError("no free node to smooth: all " + std::to_string(nv) + " vertices are fixed (" +
+                     std::to_string(res.boundaryNodes) + " boundary, " + std::to_string(res.featureNodes) +
+                     " on feature edges, " + std::to_string(res.singularNodes) + " singular, " +
+                     std::to_string(res.userFixedNodes) +
+                     " by the selection)" +
+                     (opt.features == FeatureDetection::Angles
+                          ? std::string("; raise the feature or singular angle or change the selection mode")
+                      : res.featureNodes + res.singularNodes > 0
+                          ? "; feature detection found " + nk.featureSummary +
+                                "; choose feature detection by angles, or change the selection mode"
+                          : std::string("; change the selection mode")));
+  return freeNodes;
+}
+
+// every node's start location on the surface: its corner of the first face it is in
+std::vector<Loc> cornerLocations(const c1::TriMesh& tm) {
+  std::vector<Loc> loc(tm.V.size());
+  for (int f = 0; f < int(tm.F.size()); ++f)
+    for (int k = 0; k < 3; ++k) {
+      Loc& L = loc[std::size_t(tm.F[std::size_t(f)][std::size_t(k)])];
+      if (L.face >= 0) continue;
+      L.face = f;
+      L.s = k == 1 ? 1 : 0;
+      L.t = k == 2 ? 1 : 0;
+    }
+  return loc;
+}
+
+// greedy colouring of the free nodes in index order: nodes sharing an element get different colours, so
+// the nodes of one colour can move in parallel; returns the nodes of each colour
+std::vector<std::vector<int>> colourClasses(const Mesh& M, const std::vector<int>& freeNodes) {
+  std::vector<int> colour(M.X.size(), -1);
+  std::vector<std::vector<int>> classes;
+  for (int n : freeNodes) {
+    std::vector<char> used(classes.size() + 1, 0);
+    for (int ei : M.vE[std::size_t(n)])
+      for (int k = 0; k < M.E[std::size_t(ei)].nv; ++k) {
+        const int c = colour[std::size_t(M.E[std::size_t(ei)].v[k])];
+        if (c >= 0) used[std::size_t(c)] = 1;
+      }
+    int c = 0;
+    while (used[std::size_t(c)]) ++c;
+    colour[std::size_t(n)] = c;
+    if (c == int(classes.size())) classes.emplace_back();
+    classes[std::size_t(c)].push_back(n);
+  }
+  return classes;
+}
+
+/// The sweeps over the free nodes (thesis steps 2-9): the colours one after the other, the nodes of a
+/// colour in parallel, each searched from where it is and moved to its best point on the C1 surface.
+class Sweeps {
+ public:
+  Sweeps(Mesh& M, std::vector<Loc>& loc, const C1Surface& S, const Projector& proj, const Options& opt,
+         const std::vector<int>& toM, const std::vector<std::vector<int>>& classes, const std::vector<int>& freeNodes,
+         const std::vector<char>& fixed)
+      : M_(M), loc_(loc), S_(S), proj_(proj), opt_(opt), toM_(toM), classes_(classes), freeNodes_(freeNodes),
+        fixed_(fixed), projDist_(M.X.size(), 0.0), evaluations_(M.X.size(), 0), active_(M.X.size(), 0),
+        gained_(M.X.size(), 0) {
+    mo_.population = opt.population;
+    mo_.accuracy = opt.accuracy;
+    mo_.maxRestarts = opt.restarts;
+    mo_.maxGenerations = opt.generations;
+    mo_.selection = opt.selection;
+    for (int n : freeNodes) active_[std::size_t(n)] = 1;
+  }
+
+  /// the sweeps until the mean quality gains less than the tolerance, no node is active, the sweep cap
+  /// or the progress callback stops them; then the optional final max-min pass (not after a stop)
+  void run(Result& res) {
+    double mean = res.before.mean;
+    bool stopped = false;
+    for (int sweep = 0; sweep < opt_.maxSweeps; ++sweep) {
+      sweepOnce(sweep, false);
+      res.sweeps = sweep + 1;
+      res.searches += std::size_t(std::count(active_.begin(), active_.end(), char(1)));
+      const std::size_t nActive = opt_.activeSet ? nextActiveSet() : freeNodes_.size();
+      const double newMean = stats(M_).mean;
+      const double gain = newMean - mean;
+      mean = newMean;
+      if (opt_.progress && !opt_.progress(sweep + 1, mean)) {
+        stopped = true;
+        break;
+      }
+      if (gain < opt_.tolerance || nActive == 0) break;
+    }
+    if (opt_.minPassBelow > 0 && !stopped)
+      for (int k = 0; k < opt_.minPassSweeps; ++k) {
+        const double before = stats(M_).min;
+        sweepOnce(opt_.maxSweeps + k, true);
+        ++res.minPassSweeps;
+        if (stats(M_).min <= before) break;
+      }
+  }
+
+  std::size_t evaluations() const { return std::accumulate(evaluations_.begin(), evaluations_.end(), std::size_t(0)); }
+  double maxProjectionDistance() const { return *std::max_element(projDist_.begin(), projDist_.end()); }
+
+ private:
+  // one sweep over the free nodes; maxMin: only nodes whose worst element is below opt.minPassBelow,
+  // maximising that worst element
+  void sweepOnce(int sweep, bool maxMin) {
+    const std::uint64_t sweepSeed = mga::itemSeed(opt_.seed, std::uint64_t(sweep));
+    for (const auto& cls : classes_) {
+#pragma omp parallel for schedule(dynamic, 8)
+      for (int ci = 0; ci < int(cls.size()); ++ci) {
+        const int n = cls[std::size_t(ci)];
+        if (!maxMin && !active_[std::size_t(n)]) continue;
+        searchNode(n, maxMin, sweepSeed);
+      }
+    }
+  }
+
+  // node n's search (the micro-GA or the gradient baseline) and its move
+  void searchNode(int n, bool maxMin, std::uint64_t sweepSeed) {
+    const Vec3 x0 = M_.X[std::size_t(n)];
+    const Loc l0 = loc_[std::size_t(n)];
+    const Vec3 n0 = M_.N[std::size_t(n)];
+    double curMin = 0;
+    const double cap = maxMin ? opt_.minPassBelow : 0.0;
+    thread_local TriStar star;
+    const bool haveStar = star.gather(M_, n);
+    double fit0 = haveStar ? star.fitness(x0, n0, -1.0, cap, &curMin) : fitnessAt(M_, n, x0, n0, -1.0, cap, &curMin);
+    if (maxMin && !(curMin < opt_.minPassBelow)) return;
+    // the node's worst element may not drop below min(its current value, the guard level)
+    const double guard = std::min(curMin, opt_.worstGuard);
+    if (fit0 >= 0) fit0 = haveStar ? star.fitness(x0, n0, guard, cap) : fitnessAt(M_, n, x0, n0, guard, cap);
+    NodeSearch ns{M_, proj_, n, x0, n0, l0, guard, cap, fit0, fit0, x0, l0};
+    ns.star = haveStar ? &star : nullptr;
+    if (opt_.method == Method::MicroGA) {
+      ns.linTol = kSearchLinTol;
+      searchMga(ns, mo_, mga::itemSeed(sweepSeed, std::uint64_t(toM_[std::size_t(n)])), opt_.elementSearch);
+    } else {
+      searchGradient(ns, opt_.cgIterations);  // exact projections: its finite differences need them
+    }
+    evaluations_[std::size_t(n)] += ns.evaluations;
+    // the move: the surface point exactly at the best location (the search's candidates may be off
+    // the patch to first order, see kSearchLinTol), taken only if its fitness there still gains
+    Vec3 nrm = n0;
+    if (ns.bestFit > fit0) {
+      const Loc& b = ns.bestLoc;
+      const c1::SurfacePoint sp = S_.at(b.face, Vec3(1 - b.s - b.t, b.s, b.t));
+      const double f = ns.fitness(sp.point, sp.normal);
+      if (f > fit0) {
+        ns.bestX = sp.point;
+        ns.bestFit = f;
+        nrm = sp.normal;
+      } else {
+        ns.bestX = x0;
+        ns.bestLoc = l0;
+        ns.bestFit = fit0;
+        ns.bestDist = 0;
+      }
+    }
+    // the node moves after its own search: neighbours of the same colour do not see it, and
+    // no node of this colour reads it (they share no element)
+    M_.X[std::size_t(n)] = ns.bestX;
+    M_.N[std::size_t(n)] = nrm;
+    loc_[std::size_t(n)] = ns.bestLoc;
+    projDist_[std::size_t(n)] = std::max(projDist_[std::size_t(n)], ns.bestDist);
+    if (!maxMin) gained_[std::size_t(n)] = ns.bestFit - fit0 > opt_.tolerance * double(M_.vE[std::size_t(n)].size());
+  }
+
+  // the active set of the next sweep: the free nodes of the elements of every node that gained more than
+  // the tolerance x (its number of elements) in its last search; returns their number
+  std::size_t nextActiveSet() {
+    const std::size_t nv = M_.X.size();
+    std::fill(active_.begin(), active_.end(), 0);
+    for (std::size_t i = 0; i < nv; ++i)
+      if (gained_[i])
+        for (int ei : M_.vE[i])
+          for (int k = 0; k < M_.E[std::size_t(ei)].nv; ++k) active_[std::size_t(M_.E[std::size_t(ei)].v[k])] = 1;
+    std::fill(gained_.begin(), gained_.end(), 0);
+    std::size_t nActive = 0;
+    for (std::size_t i = 0; i < nv; ++i) {
+      if (fixed_[i]) active_[i] = 0;
+      nActive += active_[i];
+    }
+    return nActive;
+  }
+
+  Mesh& M_;
+  std::vector<Loc>& loc_;
+  const C1Surface& S_;
+  const Projector& proj_;
+  const Options& opt_;
+  const std::vector<int>& toM_;
+  const std::vector<std::vector<int>>& classes_;
+  const std::vector<int>& freeNodes_;
+  const std::vector<char>& fixed_;
+  mga::Options mo_;
+  std::vector<double> projDist_;         ///< per node: the largest candidate-to-surface distance of its moves
+  std::vector<std::size_t> evaluations_; ///< per node: fitness evaluations
+  std::vector<char> active_, gained_;    ///< per node: searched in the next sweep; gained in its last search
+};
+
+// undoes the moves that make the surface cross itself (restoreCrossings); the nodes put back get their
+// input normals N0 again. Returns how many were put back
+std::size_t putBackCrossings(Mesh& M, const std::vector<Vec3>& input, const std::vector<Vec3>& N0) {
+  std::vector<std::vector<int>> faces;
+  faces.reserve(M.E.size());
+  for (const Element& e : M.E) faces.emplace_back(e.v.begin(), e.v.begin() + e.nv);
+  const std::vector<int> back = restoreCrossings(faces, input, M.X);
+  for (int n : back) M.N[std::size_t(n)] = N0[std::size_t(n)];
+  return back.size();
+}
+
+// the smoothed positions per m.vert index (deleted vertices unchanged), the nodes moved and the quality per face
+void collectPositions(const CMeshO& m, const Mesh& M, const c1::TriMesh& tm, const std::vector<int>& toM, Result& res) {
+  res.positions.resize(m.vert.size());
+  for (std::size_t i = 0; i < m.vert.size(); ++i)
+    res.positions[i] = Vec3(m.vert[i].cP()[0], m.vert[i].cP()[1], m.vert[i].cP()[2]);
+  for (std::size_t i = 0; i < tm.V.size(); ++i) {
+    if (M.X[i] != tm.V[i]) ++res.nodesMoved;
+    res.positions[std::size_t(toM[i])] = M.X[i];
+  }
+  res.perFace = spreadToFaces(M.E, elementQualities(M.E, M.X), m.face.size());
+}
+
 }  // namespace
 
 std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, const std::vector<Vec3>& before,
@@ -597,24 +973,7 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
 
 Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& userFixed) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (opt.population < 3) throw InputError("population must be at least 3, got " + std::to_string(opt.population));
-  if (!(opt.accuracy > 0) || !(opt.accuracy < 0.5))
-    throw InputError("accuracy must be in (0, 0.5), got " + std::to_string(opt.accuracy));
-  if (opt.maxSweeps < 1) throw InputError("maximum sweeps must be at least 1");
-  if (opt.generations < 1) throw InputError("generations per element must be at least 1");
-  if (opt.restarts < 0) throw InputError("restarts must not be negative");
-  if (!(opt.tolerance >= 0)) throw InputError("tolerance must not be negative");
-  if (!(opt.featureAngleDeg > 0 && opt.featureAngleDeg <= 180))
-    throw InputError("feature angle must be in (0, 180] degrees");
-  if (!(opt.worstGuard >= 0 && opt.worstGuard <= 1)) throw InputError("worst-element guard must be in [0, 1]");
-  if (!(opt.minPassBelow >= 0 && opt.minPassBelow <= 1))
-    throw InputError("final worst-element pass threshold must be in [0, 1]");
-  if (opt.minPassSweeps < 0) throw InputError("final worst-element pass sweeps must not be negative");
-  if (!(opt.singularAngleDeg > 0 && opt.singularAngleDeg <= 180))
-    throw InputError("singular angle must be in (0, 180] degrees");
-  if (opt.method == Method::ConjugateGradient && (opt.cgIterations < 1 || opt.cgIterations > 10000))
-    throw InputError("conjugate gradient iterations must be in [1, 10000], got " + std::to_string(opt.cgIterations));
-
+  validateOptions(opt);
   MeshRequirements req;
   req.faces = true;
   req.finite = true;
@@ -622,292 +981,46 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   req.vertexManifold = true;
   requireMesh(m, req, "input");
 
+  // the nodes, the elements on them, and the C1 surface of the original mesh, built once (its topology
+  // also gives the edges for the fixed nodes)
   std::vector<int> toM;
-  c1::TriMesh tm = c1::toTriMesh(m, &toM);
-  std::vector<int> toC(m.vert.size(), -1);
-  for (std::size_t i = 0; i < toM.size(); ++i) toC[std::size_t(toM[i])] = int(i);
-  const std::size_t nv = tm.V.size();
-
+  const c1::TriMesh tm = c1::toTriMesh(m, &toM);
   const ElementMesh em = buildElements(m, opt.kind);
-  Mesh M;
-  M.X = tm.V;
-  M.E = em.elements;
-  for (auto& e : M.E)
-    for (int k = 0; k < e.nv; ++k) e.v[k] = toC[std::size_t(e.v[k])];
-  M.vE.assign(nv, {});
-  for (int i = 0; i < int(M.E.size()); ++i)
-    for (int k = 0; k < M.E[std::size_t(i)].nv; ++k) M.vE[std::size_t(M.E[std::size_t(i)].v[k])].push_back(i);
-
+  Mesh M = buildMesh(tm, toM, em, m.vert.size());
   Result res;
   res.elements = M.E.size();
   res.quads = em.quads();
-
-  // the C1 surface of the original mesh, built once (its topology also gives the edges below)
   C1Surface S(tm);
 
-  // fixed nodes: boundary, feature, unreferenced, user
-  std::vector<char> fixed(nv, 0), boundary(nv, 0), feature(nv, 0), singular(nv, 0);
-  {
-    auto normal = [&](int f) {
-      const auto& F = tm.F[std::size_t(f)];
-      const Vec3 n = (tm.V[std::size_t(F[1])] - tm.V[std::size_t(F[0])]).cross(tm.V[std::size_t(F[2])] - tm.V[std::size_t(F[0])]);
-      return n.norm() > 0 ? Vec3(n.normalized()) : Vec3(0, 0, 0);
-    };
-    std::vector<Vec3> fn(tm.F.size());
-    for (std::size_t f = 0; f < tm.F.size(); ++f) fn[f] = normal(int(f));
-    // faux edges inside quads are not feature edges
-    auto key = [](int a, int b) { return edgeKey(a, b); };
-    std::vector<std::uint64_t> fauxInside;
-    for (const auto& e : M.E)
-      if (e.nv == 4) {
-        fauxInside.push_back(key(e.v[0], e.v[2]));
-        fauxInside.push_back(key(e.v[1], e.v[3]));
-      }
-    std::sort(fauxInside.begin(), fauxInside.end());
-    for (const auto& e : S.edges())
-      if (e.f1 < 0) boundary[std::size_t(e.a)] = boundary[std::size_t(e.b)] = 1;
-    if (opt.features == FeatureDetection::Creases) {
-      // crease chains told from noise (creases.h); their corners are the singular points
-      const Creases cr = detectCreases(tm.V, tm.F, fauxInside);
-      for (std::size_t i = 0; i < nv; ++i) {
-        feature[i] = cr.node[i] && !cr.corner[i];
-        singular[i] = cr.corner[i];
-      }
-      res.creaseChains = cr.chains.size();
-      res.featureSummary = cr.summary();
-    } else {
-      const double cosLim = std::cos(opt.featureAngleDeg * M_PI / 180.0);
-      for (const auto& e : S.edges()) {
-        if (e.f1 >= 0 && opt.featureAngleDeg < 180 && !std::binary_search(fauxInside.begin(), fauxInside.end(), key(e.a, e.b))) {
-          const Vec3& a = fn[std::size_t(e.f0)];
-          const Vec3& b = fn[std::size_t(e.f1)];
-          if (a.squaredNorm() > 0 && b.squaredNorm() > 0 && a.dot(b) < cosLim)
-            feature[std::size_t(e.a)] = feature[std::size_t(e.b)] = 1;
-        }
-      }
-    }
-    // singular nodes: the normal cone of the node's faces is wider than the singular angle
-    if (opt.features == FeatureDetection::Angles && opt.singularAngleDeg < 180) {
-      std::vector<int> start(nv + 1, 0), vf(3 * tm.F.size());
-      for (const auto& F : tm.F)
-        for (int k = 0; k < 3; ++k) ++start[std::size_t(F[std::size_t(k)]) + 1];
-      for (std::size_t i = 0; i < nv; ++i) start[i + 1] += start[i];
-      {
-        std::vector<int> fill(start.begin(), start.end() - 1);
-        for (int f = 0; f < int(tm.F.size()); ++f)
-          for (int k = 0; k < 3; ++k) vf[std::size_t(fill[std::size_t(tm.F[std::size_t(f)][std::size_t(k)])]++)] = f;
-      }
-      const double cosSing = std::cos(opt.singularAngleDeg * M_PI / 180.0);
-      for (std::size_t i = 0; i < nv; ++i) {
-        for (int a = start[i]; a < start[i + 1] && !singular[i]; ++a) {
-          const Vec3& na = fn[std::size_t(vf[std::size_t(a)])];
-          if (!(na.squaredNorm() > 0)) continue;
-          for (int b = a + 1; b < start[i + 1]; ++b) {
-            const Vec3& nb = fn[std::size_t(vf[std::size_t(b)])];
-            if (nb.squaredNorm() > 0 && na.dot(nb) < cosSing) {
-              singular[i] = 1;
-              break;
-            }
-          }
-        }
-      }
-    }
-  }
-  for (std::size_t i = 0; i < nv; ++i) {
-    const bool user = !userFixed.empty() && userFixed[std::size_t(toM[i])];
-    if (boundary[i]) ++res.boundaryNodes;
-    else if (feature[i]) ++res.featureNodes;
-    else if (singular[i]) ++res.singularNodes;
-    else if (user) ++res.userFixedNodes;
-    fixed[i] = boundary[i] || feature[i] || singular[i] || user || M.vE[i].empty();
-  }
-  std::vector<int> freeNodes;
-  for (std::size_t i = 0; i < nv; ++i)
-    if (!fixed[i]) freeNodes.push_back(int(i));
+  std::vector<char> fixed;
+  const NodeKinds kinds = classifyNodes(tm, M, S, opt);
+  res.creaseChains = kinds.creaseChains;
+  res.featureSummary = kinds.featureSummary;
+  const std::vector<int> freeNodes = freeNodesOf(kinds, M, toM, userFixed, opt, fixed, res);
   res.freeNodes = freeNodes.size();
-  if (freeNodes.empty())
-    throw InputError("no free node to smooth: all " + std::to_string(nv) + " vertices are fixed (" +
-                     std::to_string(res.boundaryNodes) + " boundary, " + std::to_string(res.featureNodes) +
-                     " on feature edges, " + std::to_string(res.singularNodes) + " singular, " +
-                     std::to_string(res.userFixedNodes) +
-                     " by the selection)" +
-                     (opt.features == FeatureDetection::Angles
-                          ? std::string("; raise the feature or singular angle or change the selection mode")
-                      : res.featureNodes + res.singularNodes > 0
-                          ? "; feature detection found " + res.featureSummary +
-                                "; choose feature detection by angles, or change the selection mode"
-                          : std::string("; change the selection mode")));
-
   res.before = stats(M);
 
+  // every node on the surface: its location, and the surface normal there
   S.buildIndex();
-  Projector proj(S);
-  std::vector<Loc> loc(nv);
-  for (int f = 0; f < int(tm.F.size()); ++f)
-    for (int k = 0; k < 3; ++k) {
-      Loc& L = loc[std::size_t(tm.F[std::size_t(f)][std::size_t(k)])];
-      if (L.face >= 0) continue;
-      L.face = f;
-      L.s = k == 1 ? 1 : 0;
-      L.t = k == 2 ? 1 : 0;
-    }
+  const Projector proj(S);
+  std::vector<Loc> loc = cornerLocations(tm);
+  M.N.resize(tm.V.size());
+  for (std::size_t i = 0; i < tm.V.size(); ++i) M.N[i] = normalAt(S, loc[i]);
 
-  M.N.resize(nv);
-  for (std::size_t i = 0; i < nv; ++i) M.N[i] = normalAt(S, loc[i]);
-
-  // greedy colouring: nodes sharing an element get different colours
-  std::vector<int> colour(nv, -1);
-  std::vector<std::vector<int>> classes;
-  for (int n : freeNodes) {
-    std::vector<char> used(classes.size() + 1, 0);
-    for (int ei : M.vE[std::size_t(n)])
-      for (int k = 0; k < M.E[std::size_t(ei)].nv; ++k) {
-        const int c = colour[std::size_t(M.E[std::size_t(ei)].v[k])];
-        if (c >= 0) used[std::size_t(c)] = 1;
-      }
-    int c = 0;
-    while (used[std::size_t(c)]) ++c;
-    colour[std::size_t(n)] = c;
-    if (c == int(classes.size())) classes.emplace_back();
-    classes[std::size_t(c)].push_back(n);
-  }
+  const std::vector<std::vector<int>> classes = colourClasses(M, freeNodes);
   res.colours = int(classes.size());
-
-  mga::Options mo;
-  mo.population = opt.population;
-  mo.accuracy = opt.accuracy;
-  mo.maxRestarts = opt.restarts;
-  mo.maxGenerations = opt.generations;
-  mo.selection = opt.selection;
-
-  double mean = res.before.mean;
-  std::vector<double> projDist(nv, 0.0);
-  std::vector<std::size_t> evaluations(nv, 0);
-  // active set: after the first sweep a node is searched again only if it or a node of its elements
-  // gained more than tolerance x (its number of elements) in its last search
-  std::vector<char> active(nv, 0), gained(nv, 0);
-  for (int n : freeNodes) active[std::size_t(n)] = 1;
-  const double activeTol = opt.tolerance;
-  const bool useActive = opt.activeSet;
-  // one sweep over the free nodes; maxMin: only nodes whose worst element is below opt.minPassBelow,
-  // maximising that worst element
-  auto sweepOnce = [&](int sweep, bool maxMin) {
-    const std::uint64_t sweepSeed = mga::itemSeed(opt.seed, std::uint64_t(sweep));
-    const double guardLevel = opt.worstGuard;
-    for (const auto& cls : classes) {
-#pragma omp parallel for schedule(dynamic, 8)
-      for (int ci = 0; ci < int(cls.size()); ++ci) {
-        const int n = cls[std::size_t(ci)];
-        if (!maxMin && !active[std::size_t(n)]) continue;
-        const Vec3 x0 = M.X[std::size_t(n)];
-        const Loc l0 = loc[std::size_t(n)];
-        const Vec3 n0 = M.N[std::size_t(n)];
-        double curMin = 0;
-        const double cap = maxMin ? opt.minPassBelow : 0.0;
-        thread_local TriStar star;
-        const bool haveStar = star.gather(M, n);
-        double fit0 = haveStar ? star.fitness(x0, n0, -1.0, cap, &curMin) : fitnessAt(M, n, x0, n0, -1.0, cap, &curMin);
-        if (maxMin && !(curMin < opt.minPassBelow)) continue;
-        // the node's worst element may not drop below min(its current value, the guard level)
-        const double guard = std::min(curMin, guardLevel);
-        if (fit0 >= 0) fit0 = haveStar ? star.fitness(x0, n0, guard, cap) : fitnessAt(M, n, x0, n0, guard, cap);
-        NodeSearch ns{M, proj, n, x0, n0, l0, guard, cap, fit0, fit0, x0, l0};
-        ns.star = haveStar ? &star : nullptr;
-        if (opt.method == Method::MicroGA) {
-          ns.linTol = kSearchLinTol;
-          searchMga(ns, mo, mga::itemSeed(sweepSeed, std::uint64_t(toM[std::size_t(n)])), opt.elementSearch);
-        } else {
-          searchGradient(ns, opt.cgIterations);  // exact projections: its finite differences need them
-        }
-        evaluations[std::size_t(n)] += ns.evaluations;
-        // the move: the surface point exactly at the best location (the search's candidates may be off
-        // the patch to first order, see kSearchLinTol), taken only if its fitness there still gains
-        Vec3 nrm = n0;
-        if (ns.bestFit > fit0) {
-          const Loc& b = ns.bestLoc;
-          const c1::SurfacePoint sp = S.at(b.face, Vec3(1 - b.s - b.t, b.s, b.t));
-          const double f = ns.fitness(sp.point, sp.normal);
-          if (f > fit0) {
-            ns.bestX = sp.point;
-            ns.bestFit = f;
-            nrm = sp.normal;
-          } else {
-            ns.bestX = x0;
-            ns.bestLoc = l0;
-            ns.bestFit = fit0;
-            ns.bestDist = 0;
-          }
-        }
-        // the node moves after its own search: neighbours of the same colour do not see it, and
-        // no node of this colour reads it (they share no element)
-        M.X[std::size_t(n)] = ns.bestX;
-        M.N[std::size_t(n)] = nrm;
-        loc[std::size_t(n)] = ns.bestLoc;
-        projDist[std::size_t(n)] = std::max(projDist[std::size_t(n)], ns.bestDist);
-        if (!maxMin) gained[std::size_t(n)] = ns.bestFit - fit0 > activeTol * double(M.vE[std::size_t(n)].size());
-      }
-    }
-  };
+  Sweeps sweeps(M, loc, S, proj, opt, toM, classes, freeNodes, fixed);
   res.foldedBefore = foldedElements(M);
   const std::vector<Vec3> N0 = M.N;  // the input's normals, for the nodes restoreCrossings puts back
   res.setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  bool stopped = false;
-  for (int sweep = 0; sweep < opt.maxSweeps; ++sweep) {
-    sweepOnce(sweep, false);
-    res.sweeps = sweep + 1;
-    res.searches += std::size_t(std::count(active.begin(), active.end(), char(1)));
-    std::size_t nActive = 0;
-    if (useActive) {
-      std::fill(active.begin(), active.end(), 0);
-      for (std::size_t i = 0; i < nv; ++i)
-        if (gained[i])
-          for (int ei : M.vE[i])
-            for (int k = 0; k < M.E[std::size_t(ei)].nv; ++k) active[std::size_t(M.E[std::size_t(ei)].v[k])] = 1;
-      std::fill(gained.begin(), gained.end(), 0);
-      for (std::size_t i = 0; i < nv; ++i) {
-        if (fixed[i]) active[i] = 0;
-        nActive += active[i];
-      }
-    } else {
-      nActive = freeNodes.size();
-    }
-    const double newMean = stats(M).mean;
-    const double gain = newMean - mean;
-    mean = newMean;
-    if (opt.progress && !opt.progress(sweep + 1, mean)) {
-      stopped = true;
-      break;
-    }
-    if (gain < opt.tolerance || nActive == 0) break;
-  }
-  if (opt.minPassBelow > 0 && !stopped)
-    for (int k = 0; k < opt.minPassSweeps; ++k) {
-      const double before = stats(M).min;
-      sweepOnce(opt.maxSweeps + k, true);
-      ++res.minPassSweeps;
-      if (stats(M).min <= before) break;
-    }
+  sweeps.run(res);
 
-  {
-    std::vector<std::vector<int>> faces;
-    faces.reserve(M.E.size());
-    for (const Element& e : M.E) faces.emplace_back(e.v.begin(), e.v.begin() + e.nv);
-    const std::vector<int> back = restoreCrossings(faces, tm.V, M.X);
-    for (int n : back) M.N[std::size_t(n)] = N0[std::size_t(n)];
-    res.nodesPutBack = back.size();
-  }
+  res.nodesPutBack = putBackCrossings(M, tm.V, N0);
   res.after = stats(M);
   res.foldedAfter = foldedElements(M);
-  res.evaluations = std::accumulate(evaluations.begin(), evaluations.end(), std::size_t(0));
-  res.maxProjectionDistance = *std::max_element(projDist.begin(), projDist.end());
-  res.positions.resize(m.vert.size());
-  for (std::size_t i = 0; i < m.vert.size(); ++i)
-    res.positions[i] = Vec3(m.vert[i].cP()[0], m.vert[i].cP()[1], m.vert[i].cP()[2]);
-  for (std::size_t i = 0; i < nv; ++i) {
-    if (M.X[i] != tm.V[i]) ++res.nodesMoved;
-    res.positions[std::size_t(toM[i])] = M.X[i];
-  }
-  res.perFace = spreadToFaces(M.E, elementQualities(M.E, M.X), m.face.size());
+  res.evaluations = sweeps.evaluations();
+  res.maxProjectionDistance = sweeps.maxProjectionDistance();
+  collectPositions(m, M, tm, toM, res);
   res.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return res;
 }

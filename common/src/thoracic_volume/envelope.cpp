@@ -218,26 +218,42 @@ namespace {
 struct Sample {
   double z, angle, r, c, s;
 };
-}  // namespace
 
-EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const EnvelopeParams& p, const Progress& progress) {
-  requireRange(range, "of the envelope");
-  if (p.nLong < 1 || p.mAround < 3) throw InputError("the envelope needs at least 1 x 3 patches");
-  if (!(p.minStep > 0)) throw InputError("the envelope's minimum step must be positive");
-  // n measured patch rows plus one guard row beyond each end of the range (the cage goes on there:
-  // the measured end rings are not free edges that could dip into a gap); the outermost rings are
-  // tied to their inner neighbours, the volume is integrated over the measured rows only
-  const int m = p.mAround, B = std::max(1, p.binsPerPatch), n = p.nLong + 2;
-  const double dz = (range.zHi - range.zLo) / p.nLong, dphi = 2 * kPi / m;
-  const double ezLo = range.zLo - dz, ezHi = range.zHi + dz;
+// The patch grid: m columns around the axis; n rows, the measured nLong plus one guard row beyond each end
+// of the range (the cage goes on there: the measured end rings are not free edges that could dip into a
+// gap); the outermost rings are tied to their inner neighbours, the volume is integrated over the measured
+// rows only. B x B bins per patch keep its samples.
+struct Grid {
+  int m, B, n;
+  double dz, dphi, ezLo, ezHi;
+  int keys() const { return (n + 1) * m; }
+  std::size_t patches() const { return std::size_t(n) * m; }
+  int key(int i, int j) const { return i * m + ((j % m) + m) % m; }  ///< key point (ring i, column j mod m)
+};
 
-  // the axis: centre of the bounding box (x, y) of the geometry in the range
-  Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
-  std::vector<char> inRange(soup.V.size(), 0);
+Grid gridFor(const Range& range, const EnvelopeParams& p) {
+  Grid g;
+  g.m = p.mAround, g.B = std::max(1, p.binsPerPatch), g.n = p.nLong + 2;
+  g.dz = (range.zHi - range.zLo) / p.nLong, g.dphi = 2 * kPi / g.m;
+  g.ezLo = range.zLo - g.dz, g.ezHi = range.zHi + g.dz;
+  return g;
+}
+
+// angle of d around the axis in [0, 2 pi)
+double angleOf(const Eigen::Vector2d& d) {
+  double a = std::atan2(d.y(), d.x());
+  if (a < 0) a += 2 * kPi;
+  return a;
+}
+
+// the bounding box (x, y) of the faces' vertices in the range, whose centre is the axis; throws when there
+// are none or the box has no extent
+void boxInRange(const Soup& soup, const Range& range, Eigen::Vector2d& lo, Eigen::Vector2d& hi) {
+  lo = Eigen::Vector2d(1e300, 1e300), hi = Eigen::Vector2d(-1e300, -1e300);
   for (const auto& f : soup.F)
     for (int k = 0; k < 3; ++k) {
       const auto& v = soup.V[f[k]];
-      if (v.z() >= range.zLo && v.z() <= range.zHi) inRange[f[k]] = 1, lo = lo.cwiseMin(v.head<2>()), hi = hi.cwiseMax(v.head<2>());
+      if (v.z() >= range.zLo && v.z() <= range.zHi) lo = lo.cwiseMin(v.head<2>()), hi = hi.cwiseMax(v.head<2>());
     }
   if (!(hi.x() >= lo.x())) {
     std::ostringstream o;
@@ -247,21 +263,18 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
   }
   if (std::max(hi.x() - lo.x(), hi.y() - lo.y()) < 1e-6)
     throw InputError("degenerate axis: the geometry in the measured range has no extent across the long axis (z)");
-  Envelope env;
-  env.n = n, env.m = m, env.zLo = ezLo, env.zHi = ezHi, env.row0 = 1, env.row1 = n - 1;
-  env.axis = 0.5 * (lo + hi);
-  env.phi.resize(m);
-  for (int j = 0; j < m; ++j) env.phi[j] = j * dphi;
+}
 
-  // samples: the vertices in range plus points inside large faces (so that sparse meshes bound the surface)
+// samples: the used vertices within the grid's z plus points inside faces larger than a bin (so that
+// sparse meshes bound the surface), in cylindrical coordinates about the axis
+std::vector<Sample> collectSamples(const Soup& soup, const Grid& g, const Eigen::Vector2d& axis, double rmaxBox) {
   std::vector<Sample> raw;
   auto addSample = [&](const Eigen::Vector3d& q) {
-    if (q.z() < ezLo || q.z() > ezHi) return;
-    const Eigen::Vector2d d = q.head<2>() - env.axis;
+    if (q.z() < g.ezLo || q.z() > g.ezHi) return;
+    const Eigen::Vector2d d = q.head<2>() - axis;
     const double r = d.norm();
     if (r < 1e-9) return;
-    double a = std::atan2(d.y(), d.x());
-    if (a < 0) a += 2 * kPi;
+    const double a = angleOf(d);
     raw.push_back({q.z(), a, r, d.x() / r, d.y() / r});
   };
   std::vector<char> used(soup.V.size(), 0);
@@ -269,11 +282,10 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
     for (int k = 0; k < 3; ++k) used[f[k]] = 1;
   for (std::size_t i = 0; i < soup.V.size(); ++i)
     if (used[i]) addSample(soup.V[i]);
-  const double rmaxBox = 0.5 * (hi - lo).norm();
-  const double target = std::min(dz, dphi * rmaxBox) / B;
+  const double target = std::min(g.dz, g.dphi * rmaxBox) / g.B;
   for (const auto& f : soup.F) {
     const Eigen::Vector3d &a = soup.V[f[0]], &b = soup.V[f[1]], &c = soup.V[f[2]];
-    if (std::max({a.z(), b.z(), c.z()}) < ezLo || std::min({a.z(), b.z(), c.z()}) > ezHi) continue;
+    if (std::max({a.z(), b.z(), c.z()}) < g.ezLo || std::min({a.z(), b.z(), c.z()}) > g.ezHi) continue;
     const double e = std::max({(a - b).norm(), (b - c).norm(), (c - a).norm()});
     if (e <= target) continue;
     const int q = int(std::min(64.0, std::ceil(e / target)));  // clamped before the cast (e / target can be 1e18)
@@ -285,41 +297,63 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
   }
   if (raw.empty())
     throw InputError("no geometry in the measured range: the envelope cannot touch anything");
-  if (progress) progress(5, "envelope samples");
+  return raw;
+}
 
-  // reduce: the outermost sample per (patch, bin); quarter occupancy for the singular key points
-  const std::size_t P = std::size_t(n) * m;
+// the samples reduced to the outermost one per (patch, bin), per patch outermost first, and which patch
+// quarters hold a sample (for the singular key points)
+struct PatchSamples {
+  std::vector<std::vector<Sample>> perPatch;
+  std::vector<char> quarter;  ///< per patch 4: (u >= 0.5) * 2 + (v >= 0.5)
+  double rmax = 0;            ///< the largest sample radius
+  int count = 0;
+};
+
+PatchSamples reduceSamples(const std::vector<Sample>& raw, const Grid& g) {
+  const int B = g.B;
+  const std::size_t P = g.patches();
+  PatchSamples ps;
   std::vector<int> best(P * B * B, -1);
-  std::vector<char> quarter(P * 4, 0);
-  double rmax = 0;
+  ps.quarter.assign(P * 4, 0);
   for (std::size_t k = 0; k < raw.size(); ++k) {
     const auto& sm = raw[k];
-    const double t = (sm.z - ezLo) / dz;
-    const int i = clampedCell(t, n);
+    const double t = (sm.z - g.ezLo) / g.dz;
+    const int i = clampedCell(t, g.n);
     const double u = std::clamp(t - i, 0.0, 1.0);
-    const double a = sm.angle / dphi;
-    const int j = clampedCell(a, m);
+    const double a = sm.angle / g.dphi;
+    const int j = clampedCell(a, g.m);
     const double v = std::clamp(a - j, 0.0, 1.0);
-    const std::size_t pid = std::size_t(i) * m + j;
-    quarter[pid * 4 + (u >= 0.5 ? 2 : 0) + (v >= 0.5 ? 1 : 0)] = 1;
+    const std::size_t pid = std::size_t(i) * g.m + j;
+    ps.quarter[pid * 4 + (u >= 0.5 ? 2 : 0) + (v >= 0.5 ? 1 : 0)] = 1;
     const int bu = std::min(B - 1, int(u * B)), bv = std::min(B - 1, int(v * B));
     int& slot = best[(pid * B + bu) * B + bv];
     if (slot < 0 || raw[slot].r < sm.r) slot = int(k);
-    rmax = std::max(rmax, sm.r);
+    ps.rmax = std::max(ps.rmax, sm.r);
   }
-  std::vector<std::vector<Sample>> perPatch(P);
-  int nSamples = 0;
+  ps.perPatch.resize(P);
   for (std::size_t pid = 0; pid < P; ++pid) {
+    auto& mine = ps.perPatch[pid];
     for (int b = 0; b < B * B; ++b)
-      if (best[pid * B * B + b] >= 0) perPatch[pid].push_back(raw[best[pid * B * B + b]]), ++nSamples;
-    std::sort(perPatch[pid].begin(), perPatch[pid].end(), [](const Sample& x, const Sample& y) { return x.r > y.r; });
+      if (best[pid * B * B + b] >= 0) mine.push_back(raw[best[pid * B * B + b]]), ++ps.count;
+    std::sort(mine.begin(), mine.end(), [](const Sample& x, const Sample& y) { return x.r > y.r; });
   }
+  return ps;
+}
 
-  // singular key points (Fig. 6-10): no sample in the four patch quarters around them
-  const int K = (n + 1) * m;
-  auto kid = [m](int i, int j) { return i * m + ((j % m) + m) % m; };
-  std::vector<char> singular(K, 0);
-  int nSingular = 0;
+// The key points that move together: a singular key point (Fig. 6-10: no sample in the four patch
+// quarters around it) is tied to a non-singular one and moves with it; each group is one radius.
+struct KeyGroups {
+  int singular = 0;                          ///< singular key points
+  std::vector<int> roots;                    ///< the groups, by their non-singular key point
+  std::vector<std::vector<int>> members;     ///< per root: the key points that move with it
+  std::vector<std::vector<int>> affected;    ///< per root: the patches its members shape
+};
+
+// per key point: no sample in the four patch quarters around it; throws when every key point is singular
+std::vector<char> singularKeys(const std::vector<char>& quarter, const Grid& g, int& count) {
+  const int n = g.n, m = g.m;
+  std::vector<char> singular(g.keys(), 0);
+  count = 0;
   for (int i = 0; i <= n; ++i)
     for (int j = 0; j < m; ++j) {
       bool any = false;
@@ -331,12 +365,18 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
           const int qu = di == -1 ? 1 : 0, qv = dj == -1 ? 1 : 0;
           any = any || quarter[(std::size_t(pi) * m + pj) * 4 + qu * 2 + qv];
         }
-      if (!any) singular[kid(i, j)] = 1, ++nSingular;
+      if (!any) singular[g.key(i, j)] = 1, ++count;
     }
-  if (nSingular == K) throw InputError("the envelope cannot touch anything: no key point has a sample around it");
-  // tie every singular key point to its closest non-singular key point along the circle (I-1 first),
-  // a fully singular ring to the nearest ring's key point in the same column
-  std::vector<int> root(K);
+  if (count == g.keys()) throw InputError("the envelope cannot touch anything: no key point has a sample around it");
+  return singular;
+}
+
+// every singular key point tied to its closest non-singular key point along the circle (I-1 first), a fully
+// singular ring to the nearest ring's key point in the same column; the end rings to their inner neighbours
+std::vector<int> tieSingularKeys(const std::vector<char>& singular, const Grid& g) {
+  const int n = g.n, m = g.m;
+  auto kid = [&g](int i, int j) { return g.key(i, j); };
+  std::vector<int> root(g.keys());
   for (int i = 1; i < n; ++i)
     for (int j = 0; j < m; ++j) {
       const int k = kid(i, j);
@@ -361,136 +401,195 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
     root[kid(0, j)] = root[kid(1, j)];
     root[kid(n, j)] = root[kid(n - 1, j)];
   }
-  std::vector<std::vector<int>> members(K);
-  for (int k = 0; k < K; ++k) members[root[k]].push_back(k);
-  std::vector<int> roots;
+  return root;
+}
+
+KeyGroups groupKeys(const std::vector<char>& quarter, const Grid& g) {
+  const int K = g.keys(), n = g.n, m = g.m;
+  KeyGroups kg;
+  const std::vector<char> singular = singularKeys(quarter, g, kg.singular);
+  const std::vector<int> root = tieSingularKeys(singular, g);
+  kg.members.resize(K);
+  for (int k = 0; k < K; ++k) kg.members[root[k]].push_back(k);
   for (int k = 0; k < K; ++k)
-    if (root[k] == k) roots.push_back(k);
+    if (root[k] == k) kg.roots.push_back(k);
   // patches influenced by each group (rows i-2..i+1, columns j-3..j+2 of every member)
-  std::vector<std::vector<int>> affected(K);
-  std::vector<int> stamp(P, -1);
-  for (int g : roots) {
-    for (int k : members[g]) {
+  kg.affected.resize(K);
+  std::vector<int> stamp(g.patches(), -1);
+  for (int r : kg.roots) {
+    for (int k : kg.members[r]) {
       const int i = k / m, j = k % m;
       for (int pi = i - 2; pi <= i + 1; ++pi) {
         if (pi < 0 || pi >= n) continue;
         for (int pj = j - 3; pj <= j + 2; ++pj) {
           const int pid = pi * m + ((pj % m) + m) % m;
-          if (stamp[pid] != g) stamp[pid] = g, affected[g].push_back(pid);
+          if (stamp[pid] != r) stamp[pid] = r, kg.affected[r].push_back(pid);
         }
       }
     }
   }
+  return kg;
+}
 
-  EnvelopeResult res;
-  Surf sf(env);
-  const double tol = 1e-7 * rmax;
-  auto cutIn = [&](int pid) {
-    for (const auto& sm : perPatch[pid]) {
-      ++res.cutTests;
-      if (sm.r > sf.ray(sm.c, sm.s, sm.angle, sm.z) + tol) return true;
-    }
-    return false;
-  };
-  auto cutAny = [&](const std::vector<int>& pids) {
-    for (int pid : pids)
-      if (cutIn(pid)) return true;
-    return false;
-  };
-  std::vector<int> allPatches(P);
-  std::iota(allPatches.begin(), allPatches.end(), 0);
-
-  double R0 = 1.05 * rmax;
-  env.L.assign(K, R0);
-  for (int guard = 0; cutAny(allPatches) && guard < 20; ++guard) {
-    R0 *= 1.2;
-    env.L.assign(K, R0);
-  }
-  const double minL = 0.02 * R0;
-  // smoothing exclusions: end rings, and the key points around the lower end of the sternum
-  std::vector<char> smoothable(K, 0);
-  for (int i = 2; i < n - 1; ++i)  // not the guard rings nor the measured end planes (thesis)
-    for (int j = 0; j < m; ++j) smoothable[kid(i, j)] = 1;
-  if (p.sternumEnd) {
-    const Eigen::Vector2d d = p.sternumEnd->head<2>() - env.axis;
-    double a = std::atan2(d.y(), d.x());
-    if (a < 0) a += 2 * kPi;
-    for (int i = 0; i <= n; ++i)
-      for (int j = 0; j < m; ++j) {
-        double da = std::abs(j * dphi - a);
+// the key points that eq. 6-1 may smooth: not the guard rings nor the measured end planes (thesis), and
+// not those around the lower end of the sternum
+std::vector<char> smoothableKeys(const Grid& g, const Eigen::Vector2d& axis, const std::optional<Eigen::Vector3d>& sternumEnd) {
+  std::vector<char> smoothable(g.keys(), 0);
+  for (int i = 2; i < g.n - 1; ++i)
+    for (int j = 0; j < g.m; ++j) smoothable[g.key(i, j)] = 1;
+  if (sternumEnd) {
+    const double a = angleOf(sternumEnd->head<2>() - axis);
+    for (int i = 0; i <= g.n; ++i)
+      for (int j = 0; j < g.m; ++j) {
+        double da = std::abs(j * g.dphi - a);
         da = std::min(da, 2 * kPi - da);
-        if (std::abs(ezLo + i * dz - p.sternumEnd->z()) <= dz && da <= dphi) smoothable[kid(i, j)] = 0;
+        if (std::abs(g.ezLo + i * g.dz - sternumEnd->z()) <= g.dz && da <= g.dphi) smoothable[g.key(i, j)] = 0;
       }
   }
-  auto setGroup = [&](int g, double L) {
-    for (int k : members[g]) env.L[k] = L;
-  };
+  return smoothable;
+}
 
-  double step = p.initialStep > 0 ? p.initialStep : 0.25 * R0;
-  std::vector<char> held(K), touched(K);
-  int totalLevels = 0;
-  for (double s = step; s >= p.minStep; s *= 0.5) ++totalLevels;
-  for (; step >= p.minStep; step *= 0.5) {
-    ++res.levels;
-    std::fill(held.begin(), held.end(), 0);
+// The shrinking of the key points' radii onto the samples (Fig. 6-9): a group steps inward while no
+// sample of the patches it shapes ends up outside the surface (cut), halving the step level by level.
+class Shrink {
+ public:
+  Shrink(Envelope& env, const Grid& g, const PatchSamples& ps, const KeyGroups& kg, EnvelopeResult& res)
+      : env_(env), g_(g), sf_(env), perPatch_(ps.perPatch), kg_(kg), res_(res), tol_(1e-7 * ps.rmax) {}
+
+  // the start radius: 1.05 x the largest sample radius, raised by 20 % (at most 20 times) while it cuts
+  double startRadius(double rmax) {
+    std::vector<int> allPatches(g_.patches());
+    std::iota(allPatches.begin(), allPatches.end(), 0);
+    double R0 = 1.05 * rmax;
+    env_.L.assign(g_.keys(), R0);
+    for (int guard = 0; cutAny(allPatches) && guard < 20; ++guard) {
+      R0 *= 1.2;
+      env_.L.assign(g_.keys(), R0);
+    }
+    return R0;
+  }
+
+  // one step level: sweeps moving every group inward by `step` until each is held (it would cut, or
+  // reach minL) or gains less than a quarter step; touched: the groups held by the cage
+  void level(double step, double minL, const std::vector<char>* smoothable, std::vector<char>& touched) {
+    std::vector<char> held(g_.keys(), 0);
     std::fill(touched.begin(), touched.end(), 0);
-    int active = int(roots.size());
+    int active = int(kg_.roots.size());
     for (int sweep = 0; active > 0 && sweep < 100000; ++sweep) {
-      const std::vector<double> before = env.L;
-      for (int g : roots) {
+      const std::vector<double> before = env_.L;
+      for (int g : kg_.roots) {
         if (held[g]) continue;
-        const double L0 = env.L[g], L1 = L0 - step;
+        const double L0 = env_.L[g], L1 = L0 - step;
         if (L1 < minL) {
           held[g] = 1;
           continue;
         }
         setGroup(g, L1);
-        if (cutAny(affected[g])) {
+        if (cutAny(kg_.affected[g])) {
           setGroup(g, L0);
           held[g] = 1, touched[g] = 1;
         } else {
-          ++res.moves;
+          ++res_.moves;
         }
       }
-      if (p.smoothing) {
-        // eq. 6-1: L' = mean of the three key points along z, taken only when it is larger
-        const std::vector<double> cur = env.L;
-        std::vector<int> raised;
-        for (int g : roots) {
-          if (!smoothable[g]) continue;
-          const int i = g / m, j = g % m;
-          const double Ls = (cur[kid(i - 1, j)] + cur[g] + cur[kid(i + 1, j)]) / 3.0;
-          if (Ls > cur[g] + 1e-12) raised.push_back(g);
-        }
-        if (!raised.empty()) {
-          for (int g : raised) {
-            const int i = g / m, j = g % m;
-            setGroup(g, (cur[kid(i - 1, j)] + cur[g] + cur[kid(i + 1, j)]) / 3.0);
-          }
-          // a raise changes the tangents of the neighbours: keep it only if nothing is cut
-          std::fill(stamp.begin(), stamp.end(), -1);
-          std::vector<int> pids;
-          for (int g : raised)
-            for (int pid : affected[g])
-              if (stamp[pid] != 0) stamp[pid] = 0, pids.push_back(pid);
-          if (cutAny(pids)) env.L = cur;
-        }
-      }
+      if (smoothable) smooth(*smoothable);
       active = 0;
-      for (int g : roots) {
+      for (int g : kg_.roots) {
         if (held[g]) continue;
-        if (before[g] - env.L[g] < 0.25 * step) held[g] = 1;
+        if (before[g] - env_.L[g] < 0.25 * step) held[g] = 1;
         else ++active;
       }
     }
+  }
+
+ private:
+  // eq. 6-1: L' = mean of the three key points along z, taken only when it is larger and cuts nothing
+  void smooth(const std::vector<char>& smoothable) {
+    const std::vector<double> cur = env_.L;
+    std::vector<int> raised;
+    for (int g : kg_.roots) {
+      if (!smoothable[g]) continue;
+      if (ringMean(cur, g) > cur[g] + 1e-12) raised.push_back(g);
+    }
+    if (raised.empty()) return;
+    for (int g : raised) setGroup(g, ringMean(cur, g));
+    // a raise changes the tangents of the neighbours: keep it only if nothing is cut
+    std::vector<int> stamp(g_.patches(), -1);
+    std::vector<int> pids;
+    for (int g : raised)
+      for (int pid : kg_.affected[g])
+        if (stamp[pid] != 0) stamp[pid] = 0, pids.push_back(pid);
+    if (cutAny(pids)) env_.L = cur;
+  }
+  double ringMean(const std::vector<double>& L, int k) const {
+    const int i = k / g_.m, j = k % g_.m;
+    return (L[g_.key(i - 1, j)] + L[k] + L[g_.key(i + 1, j)]) / 3.0;
+  }
+  void setGroup(int g, double L) {
+    for (int k : kg_.members[g]) env_.L[k] = L;
+  }
+  // a sample of the patch lies outside the surface
+  bool cutIn(int pid) {
+    for (const auto& sm : perPatch_[pid]) {
+      ++res_.cutTests;
+      if (sm.r > sf_.ray(sm.c, sm.s, sm.angle, sm.z) + tol_) return true;
+    }
+    return false;
+  }
+  bool cutAny(const std::vector<int>& pids) {
+    for (int pid : pids)
+      if (cutIn(pid)) return true;
+    return false;
+  }
+
+  Envelope& env_;
+  const Grid& g_;
+  Surf sf_;
+  const std::vector<std::vector<Sample>>& perPatch_;
+  const KeyGroups& kg_;
+  EnvelopeResult& res_;
+  double tol_;
+};
+}  // namespace
+
+EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const EnvelopeParams& p, const Progress& progress) {
+  requireRange(range, "of the envelope");
+  if (p.nLong < 1 || p.mAround < 3) throw InputError("the envelope needs at least 1 x 3 patches");
+  if (!(p.minStep > 0)) throw InputError("the envelope's minimum step must be positive");
+  const Grid g = gridFor(range, p);
+  Eigen::Vector2d lo, hi;
+  boxInRange(soup, range, lo, hi);
+  Envelope env;
+  env.n = g.n, env.m = g.m, env.zLo = g.ezLo, env.zHi = g.ezHi, env.row0 = 1, env.row1 = g.n - 1;
+  env.axis = 0.5 * (lo + hi);
+  env.phi.resize(g.m);
+  for (int j = 0; j < g.m; ++j) env.phi[j] = j * g.dphi;
+
+  const std::vector<Sample> raw = collectSamples(soup, g, env.axis, 0.5 * (hi - lo).norm());
+  if (progress) progress(5, "envelope samples");
+  const PatchSamples ps = reduceSamples(raw, g);
+  const KeyGroups kg = groupKeys(ps.quarter, g);
+
+  EnvelopeResult res;
+  Shrink shrink(env, g, ps, kg, res);
+  const double R0 = shrink.startRadius(ps.rmax);
+  const double minL = 0.02 * R0;
+  const std::vector<char> smoothable = smoothableKeys(g, env.axis, p.sternumEnd);
+  double step = p.initialStep > 0 ? p.initialStep : 0.25 * R0;
+  std::vector<char> touched(g.keys());
+  int totalLevels = 0;
+  for (double s = step; s >= p.minStep; s *= 0.5) ++totalLevels;
+  for (; step >= p.minStep; step *= 0.5) {
+    ++res.levels;
+    shrink.level(step, minL, p.smoothing ? &smoothable : nullptr, touched);
     if (progress) progress(10 + 85 * res.levels / std::max(1, totalLevels), "envelope convergence");
   }
-  for (int g : roots) res.touching += touched[g];
+  for (int r : kg.roots) res.touching += touched[r];
   if (res.touching == 0)
     throw InputError("the envelope cannot touch anything: every key point collapsed onto the axis (is the layer a "
                      "rib cage around the long axis z, and the range on it?)");
-  res.samples = nSamples;
-  res.singular = nSingular;
+  res.samples = ps.count;
+  res.singular = kg.singular;
   res.volume = env.volume();
   res.env = std::move(env);
   return res;

@@ -73,22 +73,11 @@ double runSlope(const std::vector<double>& r, const std::vector<char>& hit, int 
 }
 }  // namespace
 
-SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K, const std::optional<Eigen::Vector2d>& seed) {
-  SliceRegion R;
-  R.z = z;
-  R.segments = std::move(segments);
-  R.radius.assign(K, 0.0);
-  R.hit.assign(K, 0);
-  double len = 0;
-  Eigen::Vector2d c(0, 0);
-  for (const auto& sg : R.segments) {
-    const double l = (sg.b - sg.a).norm();
-    len += l, c += l * 0.5 * (sg.a + sg.b);
-  }
-  if (!(len > 0)) return R;
-  c /= len;
-  if (seed) c = *seed;
-  R.centroid = c;
+namespace {
+inline int wrapRay(int k, int K) { return ((k % K) + K) % K; }
+
+// ray k's nearest crossing with the segments, seen from c: R.radius and R.hit for every ray, R.hits
+void castRays(SliceRegion& R, const Eigen::Vector2d& c, int K) {
   const double dth = 2 * kPi / K;
   std::vector<double> best(K, 1e300);
   for (const auto& sg : R.segments) {
@@ -111,24 +100,32 @@ SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K, cons
   }
   for (int k = 0; k < K; ++k)
     if (best[k] < 1e299) R.hit[k] = 1, R.radius[k] = best[k], ++R.hits;
-  if (R.hits < 3) return R;
-  // rays at the end of a section that see its end face or an outer wall through the gap jump
-  // outward: drop them from the run's ends while they exceed the run's linear extrapolation by 1 %
-  auto at = [&](int k) { return ((k % K) + K) % K; };
-  // short runs of hits (under 3 degrees) that lie outward of the chord between the neighbouring runs
-  // are outer walls seen through a gap (parallax): dropped
+}
+
+// the runs of consecutive hit rays as (first ray, length), in increasing angle from the first hit after a
+// miss (there must be a miss and a hit)
+std::vector<std::pair<int, int>> hitRuns(const std::vector<char>& hit) {
+  const int K = int(hit.size());
+  int s0 = 0;
+  while (hit[s0] || !hit[wrapRay(s0 + 1, K)]) ++s0;  // s0: a miss followed by a hit
+  std::vector<std::pair<int, int>> runs;
+  for (int k = wrapRay(s0 + 1, K), n = 0; n < K;) {
+    if (!hit[k]) { k = wrapRay(k + 1, K), ++n; continue; }
+    int len = 0;
+    while (hit[wrapRay(k + len, K)] && n + len < K) ++len;
+    runs.push_back({k, len});
+    k = wrapRay(k + len, K), n += len;
+  }
+  return runs;
+}
+
+// short runs of hits (under 3 degrees) that lie outward of the chord between the neighbouring runs
+// are outer walls seen through a gap (parallax): dropped
+void dropParallaxRuns(SliceRegion& R, int K) {
+  auto at = [K](int k) { return wrapRay(k, K); };
   for (int pass = 0; pass < 5 && R.hits >= 3 && R.hits < K; ++pass) {
     bool changed = false;
-    int s0 = 0;
-    while (R.hit[s0] || !R.hit[at(s0 + 1)]) ++s0;  // s0: a miss followed by a hit
-    std::vector<std::pair<int, int>> runs;          // (first, length)
-    for (int k = at(s0 + 1), n = 0; n < K;) {
-      if (!R.hit[k]) { k = at(k + 1), ++n; continue; }
-      int len = 0;
-      while (R.hit[at(k + len)] && n + len < K) ++len;
-      runs.push_back({k, len});
-      k = at(k + len), n += len;
-    }
+    const std::vector<std::pair<int, int>> runs = hitRuns(R.hit);
     if (runs.size() < 3) break;
     const int maxLen = std::max(3, K / 120);
     for (std::size_t q = 0; q < runs.size(); ++q) {
@@ -151,41 +148,37 @@ SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K, cons
     }
     if (!changed) break;
   }
-  if (R.hits < 3) return R;
-  if (R.hits < K) {
-    // ends of the runs: walking from inside the run towards its end, the first ray that jumps
-    // outward of the linear extrapolation by more than 1 % starts the dropped tail
-    std::vector<std::pair<int, int>> runs;
-    int s0 = 0;
-    while (R.hit[s0] || !R.hit[at(s0 + 1)]) ++s0;
-    for (int k = at(s0 + 1), n = 0; n < K;) {
-      if (!R.hit[k]) { k = at(k + 1), ++n; continue; }
-      int len = 0;
-      while (R.hit[at(k + len)] && n + len < K) ++len;
-      runs.push_back({k, len});
-      k = at(k + len), n += len;
-    }
-    for (const auto& [f, len] : runs) {
-      if (len < 6) continue;
-      const int depth = std::min(len - 3, std::max(4, K / 60));
-      for (int dir : {-1, +1}) {
-        const int edge = dir > 0 ? at(f + len - 1) : f;
-        for (int j = depth; j >= 0; --j) {
-          const int e = at(edge - dir * j), i1 = at(e - dir), i2 = at(e - 2 * dir);
-          if (!R.hit[e] || !R.hit[i1] || !R.hit[i2]) break;
-          if (R.radius[e] - (2 * R.radius[i1] - R.radius[i2]) > 0.01 * R.radius[i1]) {
-            for (int q = j; q >= 0; --q) {
-              const int d = at(edge - dir * q);
-              if (R.hit[d]) R.hit[d] = 0, --R.hits;
-            }
-            break;
+}
+
+// ends of the runs: walking from inside the run towards its end, the first ray that jumps outward of the
+// linear extrapolation by more than 1 % starts the dropped tail (it sees the section's end face or an
+// outer wall through the gap)
+void dropJumpingRunEnds(SliceRegion& R, int K) {
+  auto at = [K](int k) { return wrapRay(k, K); };
+  for (const auto& [f, len] : hitRuns(R.hit)) {
+    if (len < 6) continue;
+    const int depth = std::min(len - 3, std::max(4, K / 60));
+    for (int dir : {-1, +1}) {
+      const int edge = dir > 0 ? at(f + len - 1) : f;
+      for (int j = depth; j >= 0; --j) {
+        const int e = at(edge - dir * j), i1 = at(e - dir), i2 = at(e - 2 * dir);
+        if (!R.hit[e] || !R.hit[i1] || !R.hit[i2]) break;
+        if (R.radius[e] - (2 * R.radius[i1] - R.radius[i2]) > 0.01 * R.radius[i1]) {
+          for (int q = j; q >= 0; --q) {
+            const int d = at(edge - dir * q);
+            if (R.hit[d]) R.hit[d] = 0, --R.hits;
           }
+          break;
         }
       }
     }
-    if (R.hits < 3) return R;
   }
-  // fill the gaps: cubic Hermite in the angle between the neighbouring hit rays
+}
+
+// fills the gaps between hit rays (cubic Hermite in the angle, between the chord and the farther end; a
+// straight chord across a large gap) and closes the polygon around c
+void fillGaps(SliceRegion& R, const Eigen::Vector2d& c, int K) {
+  const double dth = 2 * kPi / K;
   int first = 0;
   while (!R.hit[first]) ++first;
   int k = first;
@@ -229,6 +222,36 @@ SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K, cons
   R.polygon.resize(K);
   for (int j = 0; j < K; ++j)
     R.polygon[j] = c + R.radius[j] * Eigen::Vector2d(std::cos(j * dth), std::sin(j * dth));
+}
+}  // namespace
+
+SliceRegion regionFromSegments(double z, std::vector<Seg2> segments, int K, const std::optional<Eigen::Vector2d>& seed) {
+  SliceRegion R;
+  R.z = z;
+  R.segments = std::move(segments);
+  R.radius.assign(K, 0.0);
+  R.hit.assign(K, 0);
+  double len = 0;
+  Eigen::Vector2d c(0, 0);
+  for (const auto& sg : R.segments) {
+    const double l = (sg.b - sg.a).norm();
+    len += l, c += l * 0.5 * (sg.a + sg.b);
+  }
+  if (!(len > 0)) return R;
+  c /= len;
+  if (seed) c = *seed;
+  R.centroid = c;
+  castRays(R, c, K);
+  if (R.hits < 3) return R;
+  // rays that see an outer wall through a gap are treated as gaps: short runs outward of their
+  // neighbours' chord, then the run ends that jump outward of the run's linear trend
+  dropParallaxRuns(R, K);
+  if (R.hits < 3) return R;
+  if (R.hits < K) {
+    dropJumpingRunEnds(R, K);
+    if (R.hits < 3) return R;
+  }
+  fillGaps(R, c, K);
   return R;
 }
 
