@@ -126,7 +126,7 @@ def parse(log: list[str]) -> dict:
         "slice_volumes": grab_all(log, r"Slice method, layer .*intrathoracic volume ([0-9.]+) cm3"),
         "envelope_volumes": grab_all(log, r"Ferguson envelope, layer .*thoracic volume ([0-9.]+) cm3"),
         "haller": grab_all(log, r"Pectus index, layer .*Haller index ([0-9.]+)"),
-        "fe_seconds": grab(log, r"total ([0-9.]+) s; files"),
+        "fe_seconds": grab(log, r"solve [0-9.]+ s, total ([0-9.]+) s"),
         "planner_table": [l.split("|", 1)[1][1:] for l in log if l.startswith("Planner |")],
         "planner_header": next((l for l in log if l.startswith("Nuss bar planner:")), ""),
         "planner_best": next((l for l in log if l.startswith("Planner best")), ""),
