@@ -230,10 +230,3 @@ std::vector<PathSample> strainAlongRib(const Analysis& a, int side, int rib, dou
 std::string partName(int tissue, int part);
 
 }  // namespace pectus::nuss
-
-namespace pectus::nuss {
-/// CSV files of an analysis (throw InputError when the path cannot be written):
-/// force_N,elevation_mm per curve point; distance_mm,tissue,mean/max equivalent strain,mean von Mises.
-void writeCurveCsv(const std::string& path, const Analysis& a);
-void writeRibPathCsv(const std::string& path, const std::vector<PathSample>& samples);
-}  // namespace pectus::nuss
