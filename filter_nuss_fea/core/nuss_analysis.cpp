@@ -17,17 +17,19 @@ namespace pectus::nuss {
 using Eigen::Vector3d;
 using Clock = std::chrono::steady_clock;
 
+std::string fixedText(double v, int precision) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
 namespace {
 
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-std::string mm(double v, int prec = 1) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(prec);
-  s << v;
-  return s.str();
-}
+std::string mm(double v, int prec = 1) { return fixedText(v, prec); }
 
 std::string pointText(const Vector3d& p) { return "(" + mm(p.x()) + ", " + mm(p.y()) + ", " + mm(p.z()) + ") mm"; }
 

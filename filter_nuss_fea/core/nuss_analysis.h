@@ -226,6 +226,10 @@ fe::Problem problemAt(const Analysis& a, const Options& opt, double force);
 struct PathSample { double distance, meanStrain, maxStrain, meanStress; int tissue; int tets; };
 std::vector<PathSample> strainAlongRib(const Analysis& a, int side, int rib, double binWidth = 2.0);
 
+/// `v` with `precision` decimals in the classic locale ("47.83"), whatever the host's C locale: the
+/// figures of the messages and of the files' headings.
+std::string fixedText(double v, int precision);
+
 /// "right rib 5", "left costal cartilage 3", "sternum body", ...
 std::string partName(int tissue, int part);
 

@@ -2,7 +2,6 @@
 
 #include <algorithm>
 #include <cmath>
-#include <sstream>
 
 #include <vcg/complex/algorithms/update/bounding.h>
 #include <vcg/complex/algorithms/update/color.h>
@@ -11,17 +10,6 @@
 #include "pectus/errors.h"
 
 namespace pectus::nuss {
-
-namespace {
-// fixed-point text in the classic locale (as the Log's figures), whatever the host's C locale
-std::string fixed(double v, int precision) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
-}  // namespace
 
 std::string resultBase(std::string path) {
   if (path.size() > 4 && path.compare(path.size() - 4, 4, ".vtu") == 0) path.resize(path.size() - 4);
@@ -44,7 +32,7 @@ fe::InpOptions inpOptions(const Analysis& a, const Options& opt) {
   io.nlgeom = opt.nonlinear;
   io.increments = std::max(10, static_cast<int>(std::ceil(a.force / opt.curveStep)));
   io.printNodes = a.sternumNodes;
-  io.heading = "pectus-meshlab Nuss FE model, Fe = " + fixed(a.force, 2) + " N";
+  io.heading = "pectus-meshlab Nuss FE model, Fe = " + fixedText(a.force, 2) + " N";
   return io;
 }
 
