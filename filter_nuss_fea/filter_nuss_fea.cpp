@@ -4,15 +4,14 @@
 #include <chrono>
 
 #include <QFileInfo>
-#include <vcg/complex/algorithms/update/color.h>
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
 #include "haller.h"
 #include "bar_planner.h"
 #include "nuss_analysis.h"
+#include "nuss_output.h"
 #include "tissue_join.h"
-#include "pectus/fe/io.h"
 #include "plot.h"
 #include "ribcage.h"
 
@@ -346,33 +345,12 @@ void readPatchParams(FilterContext& ctx, pectus::nuss::Placement& pl) {
   pl.ribSupportRadius = ctx.floatIn("ribSupportRadius", 0, 100, true);
 }
 
-// a new layer with the deformed cage (vertex i moves with FE node nodeOfVertex[i]), vertex quality and
-// colour = `nodal` (the 98th percentile caps the ramp so the joints' peaks do not wash out the map)
-// the deformed surface (the analysed one: the current layer or the joined tissue layers) as a new layer,
-// coloured by the nodal field
+// the deformed surface of an analysis (nuss_output.h) as a new layer, coloured by the nodal field
 MeshModel& addDeformedLayer(FilterContext& ctx, CMeshO& surface, const pectus::nuss::CageSurface& cage,
                             const pectus::nuss::Analysis& a, const std::vector<double>& nodal, const QString& label) {
   MeshModel& res = ctx.addLayer(label);
   res.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR);
-  pectus::copyLabelledMesh(res.cm, surface);
-  // the copy holds the live vertices of the surface in order; its vertex i is FE node nodeOfVertex[i]
-  for (size_t i = 0, k = 0; i < surface.vert.size(); ++i) {
-    if (surface.vert[i].IsD()) continue;
-    auto& v = res.cm.vert[k++];
-    const int n = cage.nodeOfVertex[i];
-    if (n < 0) continue;  // referenced by no face: not in the model, left where it was
-    const Eigen::Vector3d d = a.result.displacement(n);
-    v.P() += Point3m(Scalarm(d.x()), Scalarm(d.y()), Scalarm(d.z()));
-    v.Q() = Scalarm(nodal[n]);
-  }
-  std::vector<float> q;
-  for (const auto& v : res.cm.vert)
-    if (!v.IsD()) q.push_back(v.Q());
-  std::sort(q.begin(), q.end());
-  const float hi = q.empty() ? 1.0f : std::max(q[std::min(q.size() - 1, size_t(0.98 * q.size()))], 1e-12f);
-  vcg::tri::UpdateColor<CMeshO>::PerVertexQualityRamp(res.cm, hi, 0.0f);  // red = high, blue = low
-  vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(res.cm);
-  vcg::tri::UpdateBounding<CMeshO>::Box(res.cm);
+  pectus::nuss::deformedSurface(res.cm, surface, cage, a, nodal);
   return res;
 }
 }  // namespace
@@ -438,8 +416,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   const bool stressField = ctx.enumIn("field", 2) == 0;
   const int pathSide = ctx.enumIn("pathSide", 2) + 1;
   const int pathRib = ctx.intIn("pathRib", 1, 10);
-  std::string base = ctx.params().getSaveFileName("resultBase").trimmed().toStdString();
-  if (base.size() > 4 && base.compare(base.size() - 4, 4, ".vtu") == 0) base.resize(base.size() - 4);
+  const std::string base = nuss::resultBase(ctx.params().getSaveFileName("resultBase").trimmed().toStdString());
   o.progress = [&](int pc, const std::string& w) { ctx.progress(pc, w.c_str()); };
 
   // the model surface: the current labelled layer, or the visible tissue layers joined into `joined`
@@ -463,21 +440,11 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   CMeshO& surfaceMesh = perTissue ? joined : cur.cm;
   const auto t0 = std::chrono::steady_clock::now();
   const nuss::Analysis a = nuss::analyze(cage, lms, o);
-  const auto path = nuss::strainAlongRib(a, pathSide, pathRib);
 
   // files first: a failure to write leaves the document unchanged
   std::string files;
   if (!base.empty()) {
-    pectus::fe::writeVtu(base + ".vtu", a.mesh, &a.result);
-    const pectus::fe::Problem prob = nuss::problemAt(a, o, a.force);
-    pectus::fe::InpOptions io;
-    io.nlgeom = o.nonlinear;
-    io.increments = std::max(10, static_cast<int>(std::ceil(a.force / 20.0)));
-    io.printNodes = a.sternumNodes;
-    io.heading = "pectus-meshlab Nuss FE model, Fe = " + fmt(a.force, 2) + " N";
-    pectus::fe::writeCalculixInp(base + ".inp", prob, io);
-    nuss::writeCurveCsv(base + "_force_displacement.csv", a);
-    nuss::writeRibPathCsv(base + "_rib_strain.csv", path);
+    nuss::writeOutputs(nuss::filesAt(base, pathSide, pathRib), a, o);
     std::vector<std::pair<double, std::string>> hl;
     if (calibrate) hl.push_back({a.target.elevation, "target " + fmt(a.target.elevation, 1) + " mm"});
     pectus::ml::writeLinePlot(base + "_force_displacement.png", "Elevating force vs sternum end displacement (Fig. 6-14)",

@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <sstream>
 
+#include "nuss_output.h"
 #include "pectus/errors.h"
 
 namespace pectus::nuss {
@@ -73,21 +74,21 @@ std::vector<int> parseLevels(const std::string& text) {
   return out;
 }
 
-// the cage surface the volumes and the index measure: without a vertebral column kept as the support
-// (labels.h, kVertebralColumn), as the thoracic volume filters leave it out
-vol::Soup measuredSurface(const CageSurface& cage) {
+namespace {
+// the cage surface the volumes and the index measure, before or (with an analysis) after: the FE surface
+// nodes (0..nv-1) moved by their displacements, without a vertebral column kept as the support (labels.h,
+// kVertebralColumn), as the thoracic volume filters leave it out. The layer of the best option is the
+// analysed mesh moved by the same displacements (nuss_output.h, deformedSurface).
+vol::Soup measuredSurface(const CageSurface& cage, const Analysis* after = nullptr) {
   vol::Soup s;
   s.V = cage.surface.vertices;
+  if (after)
+    for (size_t i = 0; i < s.V.size(); ++i) s.V[i] += after->result.displacement(static_cast<int>(i));
   for (size_t f = 0; f < cage.surface.faces.size(); ++f)
     if (cage.facePart[f] != kVertebralColumn) s.F.push_back(cage.surface.faces[f]);
   return s;
 }
-
-vol::Soup deformedSurface(const CageSurface& cage, const Analysis& a) {
-  vol::Soup s = measuredSurface(cage);
-  for (size_t i = 0; i < s.V.size(); ++i) s.V[i] += a.result.displacement(static_cast<int>(i));
-  return s;
-}
+}  // namespace
 
 Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const PlanOptions& opt) {
   auto progress = [&](int pc, const std::string& w) {
@@ -176,7 +177,7 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
     r.maxStrainAt = a.maxStrainAt.describe();
 
     progress(p0 + (p1 - p0) * 4 / 5, r.option + ": volumes and pectus index after");
-    const vol::Soup after = deformedSurface(cage, a);
+    const vol::Soup after = measuredSurface(cage, &a);
     const double sv = vol::sliceVolume(after, sliceRange, opt.slice).volume;
     const double ev = vol::fergusonEnvelope(after, envelopeRange, envelope).volume;
     r.sliceGain = sv - plan.sliceBefore;
@@ -199,8 +200,7 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
 }
 
 void writePlanCsv(const std::string& path, const Plan& plan) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw InputError("Cannot write '" + path + "': check the folder exists and is writable.");
+  std::FILE* f = openOutput(path);
   std::fprintf(f,
                "option,bars,level,second_level,force_N,elevation_mm,max_stress_MPa,max_stress_at,max_strain,max_strain_at,"
                "slice_gain_cm3,slice_gain_percent,envelope_gain_cm3,envelope_gain_percent,haller_before,haller_after,solves,seconds,best\n");
@@ -211,7 +211,7 @@ void writePlanCsv(const std::string& path, const Plan& plan) {
                  csvField(r.maxStrainAt).c_str(), r.sliceGain / 1000.0, r.slicePercent, r.envelopeGain / 1000.0, r.envelopePercent,
                  plan.hallerBefore, r.hallerAfter, r.solves, r.seconds, int(k) == plan.best ? 1 : 0);
   }
-  if (std::fclose(f) != 0) throw InputError("Cannot finish writing '" + path + "'.");
+  closeOutput(f, path);
 }
 
 std::vector<std::string> planTable(const Plan& plan) {

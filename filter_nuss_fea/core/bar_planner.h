@@ -69,9 +69,6 @@ struct Plan {
 /// non-positive target; and as the analysis does for anything it refuses.
 Plan planBars(const CageSurface& cage, const std::vector<Landmark>& landmarks, const PlanOptions& opt);
 
-/// The surface of the cage moved by an analysis' displacements (surface vertices are nodes 0..nv-1).
-vol::Soup deformedSurface(const CageSurface& cage, const Analysis& a);
-
 /// One line per row, comma-separated, quoted where needed; throws InputError when it cannot be written.
 void writePlanCsv(const std::string& path, const Plan& plan);
 /// The table as fixed-width text lines (header first), for the Log and the main job.

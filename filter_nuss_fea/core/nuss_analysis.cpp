@@ -18,17 +18,19 @@ namespace pectus::nuss {
 using Eigen::Vector3d;
 using Clock = std::chrono::steady_clock;
 
+std::string fixedText(double v, int precision) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(precision);
+  s << v;
+  return s.str();
+}
+
 namespace {
 
 double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock::now() - t0).count(); }
 
-std::string mm(double v, int prec = 1) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(prec);
-  s << v;
-  return s.str();
-}
+std::string mm(double v, int prec = 1) { return fixedText(v, prec); }
 
 std::string pointText(const Vector3d& p) { return "(" + mm(p.x()) + ", " + mm(p.y()) + ", " + mm(p.z()) + ") mm"; }
 
@@ -810,33 +812,6 @@ std::vector<PathSample> strainAlongRib(const Analysis& a, int side, int rib, dou
     out.push_back(s);
   }
   return out;
-}
-
-}  // namespace pectus::nuss
-
-namespace pectus::nuss {
-
-namespace {
-std::FILE* openOrThrow(const std::string& path) {
-  std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw InputError("Cannot write '" + path + "': check the folder exists and is writable.");
-  return f;
-}
-}  // namespace
-
-void writeCurveCsv(const std::string& path, const Analysis& a) {
-  std::FILE* f = openOrThrow(path);
-  std::fprintf(f, "force_N,elevation_mm\n");
-  for (const auto& p : a.curve) std::fprintf(f, "%.6g,%.6g\n", p.first, p.second);
-  std::fclose(f);
-}
-
-void writeRibPathCsv(const std::string& path, const std::vector<PathSample>& samples) {
-  std::FILE* f = openOrThrow(path);
-  std::fprintf(f, "distance_from_sternum_midline_mm,tissue,mean_equivalent_strain,max_equivalent_strain,mean_von_mises_MPa,tets\n");
-  for (const auto& s : samples)
-    std::fprintf(f, "%.3f,%s,%.6g,%.6g,%.6g,%d\n", s.distance, tissueName(Tissue(s.tissue)), s.meanStrain, s.maxStrain, s.meanStress, s.tets);
-  std::fclose(f);
 }
 
 }  // namespace pectus::nuss

@@ -229,14 +229,11 @@ fe::Problem problemAt(const Analysis& a, const Options& opt, double force);
 struct PathSample { double distance, meanStrain, maxStrain, meanStress; int tissue; int tets; };
 std::vector<PathSample> strainAlongRib(const Analysis& a, int side, int rib, double binWidth = 2.0);
 
+/// `v` with `precision` decimals in the classic locale ("47.83"), whatever the host's C locale: the
+/// figures of the messages and of the files' headings.
+std::string fixedText(double v, int precision);
+
 /// "right rib 5", "left costal cartilage 3", "sternum body", ...
 std::string partName(int tissue, int part);
 
-}  // namespace pectus::nuss
-
-namespace pectus::nuss {
-/// CSV files of an analysis (throw InputError when the path cannot be written):
-/// force_N,elevation_mm per curve point; distance_mm,tissue,mean/max equivalent strain,mean von Mises.
-void writeCurveCsv(const std::string& path, const Analysis& a);
-void writeRibPathCsv(const std::string& path, const std::vector<PathSample>& samples);
 }  // namespace pectus::nuss

@@ -3,10 +3,12 @@
 // and the bad-input messages (missing labels/landmarks, a part without a joint, unreachable target).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <numeric>
 
 #include "nuss_analysis.h"
+#include "nuss_output.h"
 #include "tissue_join.h"
 #include "pectus/errors.h"
 #include "coarse_cage.h"
@@ -328,4 +330,67 @@ TEST(NussAnalysis, ChestLineTargetAndReach) {
   fromModel.targetFromChestLine = true;
   const std::string flat = errorOf([&] { nuss::resolveTarget(nuss::cageFromMesh(cage().mesh), cage().lms, fromModel); });
   EXPECT_NE(flat.find("no depression to correct"), std::string::npos) << flat;
+}
+
+TEST(NussOutput, OneWriterForTheFilesAndTheDeformedSurface) {
+  const auto surf = nuss::cageFromMesh(cage().mesh);
+  const auto o = coarse();
+  const nuss::Analysis a = nuss::analyze(surf, cage().lms, o);
+  const std::string dir = ::testing::TempDir();
+  const std::string base = nuss::resultBase(dir + "/nuss_output.vtu");
+  EXPECT_EQ(base, dir + "/nuss_output");
+  const nuss::OutputFiles files = nuss::filesAt(base, 2, 5);
+  EXPECT_EQ(files.ribStrainCsv, base + "_rib_strain.csv");
+  nuss::writeOutputs(files, a, o);
+  auto text = [](const std::string& path) {
+    std::string s;
+    if (std::FILE* f = std::fopen(path.c_str(), "r")) {
+      char b[4096];
+      for (size_t n; (n = std::fread(b, 1, sizeof b, f)) > 0;) s.append(b, n);
+      std::fclose(f);
+    }
+    return s;
+  };
+  EXPECT_NE(text(files.vtu).find("<VTKFile"), std::string::npos);
+  const std::string inp = text(files.inp);
+  EXPECT_NE(inp.find("*HEADING\npectus-meshlab Nuss FE model, Fe = 10.00 N\n"), std::string::npos);
+  EXPECT_EQ(inp.find("NLGEOM"), std::string::npos);  // small strain
+  EXPECT_EQ(text(files.curveCsv).rfind("force_N,elevation_mm\n", 0), 0u);
+  EXPECT_EQ(text(files.ribStrainCsv).rfind("distance_from_sternum_midline_mm,", 0), 0u);
+  // the deck's increments follow the curve step: one per step of the final force, 10 at least
+  nuss::Options big = o;
+  big.nonlinear = true;
+  nuss::Analysis b = a;
+  b.force = 430;
+  EXPECT_EQ(nuss::inpOptions(b, big).increments, 22);
+  EXPECT_TRUE(nuss::inpOptions(b, big).nlgeom);
+  b.force = 10;
+  EXPECT_EQ(nuss::inpOptions(b, big).increments, 10);
+  // an empty path writes nothing; an unwritable one names the path
+  nuss::OutputFiles none;
+  nuss::writeOutputs(none, a, o);
+  nuss::OutputFiles bad;
+  bad.curveCsv = "/nonexistent-dir/curve.csv";
+  EXPECT_NE(errorOf([&] { nuss::writeOutputs(bad, a, o); }).find("/nonexistent-dir/curve.csv"), std::string::npos);
+
+  // the deformed surface: the analysed mesh's vertices moved by their nodes, quality = the nodal field
+  pectus::OwnedMesh out;
+  out.face.EnableColor();
+  out.face.EnableQuality();
+  nuss::deformedSurface(out, cage().mesh, surf, a, a.nodalStress);
+  ASSERT_EQ(out.vn, cage().mesh.vn);
+  ASSERT_EQ(out.fn, cage().mesh.fn);
+  double moved = 0;
+  for (size_t i = 0, k = 0; i < cage().mesh.vert.size(); ++i) {
+    if (cage().mesh.vert[i].IsD()) continue;
+    const int n = surf.nodeOfVertex[i];
+    const auto& v = out.vert[k++];
+    if (n < 0) continue;
+    const Eigen::Vector3d d = a.result.displacement(n);
+    EXPECT_NEAR(v.cP()[1], cage().mesh.vert[i].cP()[1] + d.y(), 1e-3);
+    EXPECT_FLOAT_EQ(v.cQ(), float(a.nodalStress[std::size_t(n)]));
+    moved = std::max(moved, d.norm());
+  }
+  EXPECT_GT(moved, 0.0);
+  EXPECT_TRUE(readFaceLabels(out).has_value());  // the tissue labels stay
 }

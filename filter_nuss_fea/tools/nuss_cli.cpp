@@ -6,9 +6,10 @@
 //                   [--bone-e MPa] [--cartilage-e MPa] [--help]
 // Builds the default rib cage (--layers: as one layer per tissue, joined as the filter's 'One layer per
 // tissue' input does), runs the analysis and prints one line of key=value figures, the mean displacement
-// of the sternal load patch's nodes and the tets' volume per tissue. --inp writes the same model at the
-// final force as a CalculiX deck (as the filter's BASE.inp), printing the sternal patch's nodes, which is
-// what bench/fe_vs_ccx.py --cases cage compares. --material: every tissue's large-displacement model;
+// of the sternal load patch's nodes and the tets' volume per tissue. --vtu and --inp write the model and its
+// result, and the same model at the final force as a CalculiX deck, through the FE filter's writer
+// (core/nuss_output.h: the same files as its BASE.vtu and BASE.inp, with the same increments and heading),
+// printing the sternal patch's nodes, which is what bench/fe_vs_ccx.py --cases cage compares. --material: every tissue's large-displacement model;
 // --calibration: how --target is reached (a force search, or one displacement-controlled solve);
 // --line-search, --adaptive-steps: the Newton options of those names (fe/solver.h), on by default as in the
 // analysis; --plain-newton turns both off. --bone-e, --cartilage-e: the tissues' Young's moduli (default
@@ -24,8 +25,8 @@
 #include <string>
 
 #include "nuss_analysis.h"
+#include "nuss_output.h"
 #include "pectus/errors.h"
-#include "pectus/fe/io.h"
 #include "ribcage.h"
 #include "tissue_join.h"
 
@@ -144,13 +145,10 @@ int main(int argc, char** argv) {
     if (!a.sternumNodes.empty()) um /= double(a.sternumNodes.size());
     std::printf("sternal patch mean displacement mm: %.6e %.6e %.6e (%zu nodes)\n", um.x(), um.y(), um.z(),
                 a.sternumNodes.size());
-    if (!vtu.empty()) fe::writeVtu(vtu, a.mesh, &a.result);
-    if (!inp.empty()) {
-      fe::InpOptions io;
-      io.nlgeom = o.nonlinear;
-      io.printNodes = a.sternumNodes;
-      fe::writeCalculixInp(inp, nuss::problemAt(a, o, a.force), io);
-    }
+    nuss::OutputFiles files;  // the FE filter's writer: the same .vtu and .inp as its BASE files
+    files.vtu = vtu;
+    files.inp = inp;
+    nuss::writeOutputs(files, a, o);
   } catch (const InputError& e) {
     std::fprintf(stderr, "error: %s\n", e.what());
     return 1;
