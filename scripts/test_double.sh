@@ -9,7 +9,8 @@
 # Left out of the run:
 #  - the suites that build whole rib cages (RibCage, RibCageCoarse, NussAnalysis, PatientPrepare,
 #    PatientSpine, BarPlanner, TissueJoin): 20 minutes or more on 2 cores; the float run of scripts/test.sh
-#    has them;
+#    has them. PatientSpine fails double (its cut and kept cages' volumes differ by 1.25 %, over its 1 %;
+#    docs/hosts.md);
 #  - Adapter.FailedFilterRollsBackEveryLayer and Adapter.ExceptionsNeverEscapeAndSuccessCommits: they make a
 #    MeshDocument, which lives in the libmeshlab-common the build links; Debian's is float, so in a double
 #    build they crash (they need a libmeshlab-common of the build's scalar, pymeshlab's: -DMESHLAB_COMMON_LIB).
