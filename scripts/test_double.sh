@@ -4,8 +4,8 @@
 # The double plugins compile and link but do not load into Debian's float MeshLab, so this build has no
 # private prefix, no package and no end-to-end tests.
 #   scripts/test_double.sh
-# Not a stage of scripts/test.sh: on a 2-core machine shared with other work (load average about 11) the
-# build took 45 minutes (13 minutes of CPU) and the unit tests 9 minutes.
+# Not a stage of scripts/test.sh: on a 2-core machine shared with other work the build took 45 minutes
+# (13 minutes of CPU; load average about 11) and the 218 unit tests 8 minutes (load average about 6).
 # Left out of the run:
 #  - PatientSpine.CutOrKeptAsTheFixedSupport, which fails double: its cut and kept cages' slice volumes
 #    differ by 1.25 %, over its 1 % (docs/hosts.md);
