@@ -66,8 +66,8 @@ QString apply(FakePlugin& p, int i, MeshDocument& md, const RichParameterList& p
 
 std::size_t layers(const MeshDocument& md) { return pectus::ml::meshes(md).size(); }
 
-std::vector<float> coords(const CMeshO& m) {
-  std::vector<float> c;
+std::vector<Scalarm> coords(const CMeshO& m) {
+  std::vector<Scalarm> c;
   for (const auto& v : m.vert) for (int k = 0; k < 3; ++k) c.push_back(v.cP()[k]);
   return c;
 }
