@@ -9,7 +9,11 @@
 #include <limits>
 #include <sstream>
 
+#include <fstream>
+#include <string>
 #include <dlfcn.h>
+#include <sys/resource.h>
+#include <unistd.h>
 #include <omp.h>
 
 #include <Eigen/CholmodSupport>
@@ -192,6 +196,47 @@ void setBlasThreads(double flops) {
   set(n);
 }
 
+// Bytes a new allocation can take without swapping or the kernel's out-of-memory killer: the kernel's
+// MemAvailable, bounded by the process' address-space limit (ulimit -v) and by PECTUS_FE_MEMORY_GB when
+// set (a share of a machine that runs other jobs). 0 if none is known.
+double availableBytes() {
+  double avail = 0;
+  std::ifstream meminfo("/proc/meminfo");
+  for (std::string key; meminfo >> key;) {
+    double kb = 0;
+    meminfo >> kb;
+    meminfo.ignore(64, '\n');
+    if (key == "MemAvailable:") {
+      avail = kb * 1024.0;
+      break;
+    }
+  }
+  if (!(avail > 0)) avail = double(::sysconf(_SC_AVPHYS_PAGES)) * double(::sysconf(_SC_PAGESIZE));
+  rlimit as{};
+  if (::getrlimit(RLIMIT_AS, &as) == 0 && as.rlim_cur != RLIM_INFINITY) avail = std::min(avail, double(as.rlim_cur));
+  if (const char* e = std::getenv("PECTUS_FE_MEMORY_GB"))
+    if (const double gb = std::atof(e); gb > 0) avail = avail > 0 ? std::min(avail, gb * 1e9) : gb * 1e9;
+  return avail;
+}
+
+// The symbolic analysis knows the size of the Cholesky factor before any of it is allocated: a model
+// whose factor does not fit in the memory left is refused here, with what to change, instead of being
+// killed by the operating system later in the solve. The factor may take half of what is available:
+// the tangent matrix, its element blocks, the Newton vectors and the results need the rest.
+constexpr double kFactorShareOfMemory = 0.5;
+void requireFactorFits(double factorEntries, int freeDofs) {
+  const double need = factorEntries * sizeof(double) / kFactorShareOfMemory, avail = availableBytes();
+  if (!(avail > 0) || need <= avail) return;
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(1);
+  s << "The FE model is too large for the memory of this machine: its stiffness matrix (" << freeDofs
+    << " free unknowns) needs about " << need / 1e9 << " GB to factorise and solve, and " << avail / 1e9
+    << " GB are available. Make fewer, larger tetrahedra: a larger edge length of the cage surface, a maximum tet "
+       "volume, tet quality 0 (no refinement), or TET4 elements.";
+  throw ModelTooLarge(s.str());
+}
+
 class Cholmod : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
  public:
   double rcond() { return m_cholmodFactor ? cholmod_rcond(m_cholmodFactor, &cholmod()) : 0.0; }
@@ -234,6 +279,14 @@ class Cholmod : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, 
     return order;
   }
   int nodeOrdering = -1;  // the method orderNodes used (CHOLMOD_AMD, CHOLMOD_METIS, ...)
+
+  // entries of the numeric factor the analysis prepared (a supernodal factor stores its supernodes' full
+  // columns: more than the nonzeros CHOLMOD counts)
+  double factorEntries() {
+    const cholmod_factor* L = m_cholmodFactor;
+    if (!L) return 0;
+    return std::max(double(cholmod().lnz), L->is_super ? double(L->xsize) : 0.0);
+  }
 
   // Symbolic analysis of K (lower triangle) whose dofs are already numbered in the fill-reducing order,
   // postordered (orderNodes): CHOLMOD's natural ordering without its postorder, so that it factorises K
@@ -486,6 +539,7 @@ struct Solver::Impl {
     double analyseSeconds = 0;
     if (!analysed) {
       if (!orderByNodes || !chol.analyzeInOrder(K)) chol.analyzePattern(K);
+      requireFactorFits(chol.factorEntries(), nFree);
       analysed = true;
       analyseSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
     }
@@ -660,6 +714,8 @@ struct Solver::Impl {
         if (refactor) try {
           factorize(factorSeconds);
           ++res.factorizations;
+        } catch (const ModelTooLarge&) {
+          throw;
         } catch (const InputError&) {
           // singular at the undeformed state: a real input problem; at a state distorted by prescribed
           // displacements (their whole increment on the boundary nodes, none yet inside) or deformed by the

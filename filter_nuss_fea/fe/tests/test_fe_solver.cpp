@@ -143,6 +143,27 @@ TEST(FeSolver, NodeOrderingSolvesTheSameSystemAsCholmodsOwn) {
   EXPECT_GT(byNodes.norm(), 0.1);
 }
 
+// a factor that does not fit in the memory left is refused after the symbolic analysis, before the
+// factorisation allocates it, with what to change; the same model solves where the memory suffices
+TEST(FeSolver, ModelWhoseFactorDoesNotFitIsRefusedBeforeFactorising) {
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, kL, 2, 2, 16, 1));
+  const Problem p = cantilever(q, 20.0);
+  setenv("PECTUS_FE_MEMORY_GB", "0.0001", 1);  // 100 kB
+  std::string what;
+  try {
+    solveLinear(p);
+  } catch (const ModelTooLarge& e) {
+    what = e.what();
+  }
+  setenv("PECTUS_FE_MEMORY_GB", "4", 1);
+  const Eigen::VectorXd u = solveLinear(p).u;
+  unsetenv("PECTUS_FE_MEMORY_GB");
+  EXPECT_NE(what.find("too large for the memory"), std::string::npos) << what;
+  EXPECT_NE(what.find("0.0 GB are available"), std::string::npos) << what;
+  EXPECT_NE(what.find("TET4"), std::string::npos) << what;
+  EXPECT_GT(u.norm(), 0.1);
+}
+
 TEST(FeSolver, CantileverVsBeamTheory) {
   const double P = 20.0;
   const double ref = timoshenko(P);

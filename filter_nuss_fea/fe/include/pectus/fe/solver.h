@@ -109,6 +109,13 @@ struct NewtonDidNotConverge : InputError {
   double loadFactor;
 };
 
+/// Thrown when the stiffness matrix's factor would not fit in the memory this process may still take
+/// (found by the symbolic analysis, before the factor is allocated): the message says how to make the
+/// model smaller. Never caught as a hard load step.
+struct ModelTooLarge : InputError {
+  using InputError::InputError;
+};
+
 struct Result {
   Eigen::VectorXd u;          ///< nodal displacements, 3*numNodes (mm)
   std::vector<double> vonMises;   ///< per tet (MPa): small strain sigma, or Cauchy stress for nonlinear
