@@ -74,13 +74,27 @@ std::vector<std::string> words(const std::string& name) {
 // a bar of thickness t = 2V/A gains about o A + o^2 A / (2 t); twice that much is not the structure any more.
 constexpr double kWrapGrowth = 2.0;
 
+// A hole wider than the detail lets the wrap in: it then wraps the structure's inside as well, and the result is
+// a hollow shell, twice the offset thick where it hugs both sides of the surface (TetGen fills such a shell with
+// hundreds of thousands of slivers). So the wrap is given the structure with its holes closed, where it is
+// 2-manifold; a wrap holding less than half the structure is still hollow and refused.
+constexpr double kWrapHollow = 0.5;
+
 Soup wrapOf(const std::string& name, const Soup& s, const PrepareOptions& opt) {
-  Soup w = alphaWrap(s, opt.alpha, opt.offset);
+  Soup sealed = s;
+  removeDuplicateFaces(sealed);
+  if (closeHoles(sealed) <= 0) sealed = s;
+  Soup w = alphaWrap(sealed, opt.alpha, opt.offset);
   const std::string still = w.empty() ? std::string("empty") : defects(w);
   if (!still.empty())
     throw InputError("Alpha wrapping cannot close '" + name + "' at detail " + mm(opt.alpha, 2) + " mm (the result is " + still +
                      "): raise 'Wrap detail (alpha)' or check the structure.");
-  const double v0 = volume(s), a0 = area(s), v1 = volume(w);
+  const double v0 = volume(sealed), a0 = area(sealed), v1 = volume(w);
+  if (v1 < kWrapHollow * v0)
+    throw InputError("Alpha wrapping went inside '" + name + "' through a hole wider than its detail (" + mm(opt.alpha, 2) +
+                     " mm): the wrap is a hollow shell of " + mm(v1 / 1000, 2) + " cm3 around a structure of " + mm(v0 / 1000, 2) +
+                     " cm3. Close the structure's holes (e.g. Filters > Remeshing > Close Holes) or raise 'Wrap detail (alpha)' "
+                     "above the holes' width.");
   const double t = 2 * v0 / std::max(a0, 1e-300), o = opt.offset;
   const double grown = v0 + o * a0 + o * o * a0 / std::max(2 * t, 1e-300);
   if (v1 > kWrapGrowth * grown)

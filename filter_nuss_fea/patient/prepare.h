@@ -28,7 +28,9 @@
 //     that makes it one: duplicate faces removed, holes closed, else wrapped (CGAL alpha_wrap_3: detail
 //     alpha, offset), with its volume change reported; clean ones are kept. A wrap that is not closed and
 //     manifold, or holds more than twice the structure grown by the offset (the detail bridges its gaps),
-//     is refused naming the structure and the detail to change. The costal cartilages are always
+//     is refused naming the structure and the detail to change. The wrap is given the structure with its
+//     holes closed (where it is 2-manifold): through a hole wider than the detail it would wrap the inside
+//     too, a hollow shell; a wrap holding less than half the structure is refused. The costal cartilages are always
 //     wrapped (before the fragments are counted): a segmentation's labels only touch, and the small offset
 //     makes each cartilage overlap the bone it joins, which the union needs; the wrap also reconnects the
 //     strips a voxel surface splits where voxels meet at an edge or a corner;
@@ -109,7 +111,7 @@ struct PrepareResult {
 /// Builds the labelled cage into `cage` (cleared first; face labels by writeFaceLabels). Throws InputError
 /// naming what to fix: no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised by
 /// name or shape (rename the layers), a frame that cannot be found, a structure alpha wrapping cannot close
-/// or follow at the requested detail, a landmark that cannot be placed and is not given.
+/// or follow at the requested detail or that is hollow, a landmark that cannot be placed and is not given.
 PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
                                  const std::function<void(int, const char*)>& progress = {});
 

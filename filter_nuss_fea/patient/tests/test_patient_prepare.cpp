@@ -265,6 +265,82 @@ TEST(PatientPrepare, RefusesAWrapThatBridgesTheStructure) {
   EXPECT_NE(msg.find("Lower 'Wrap detail (alpha)'"), std::string::npos) << msg;
 }
 
+namespace {
+// A layer's pieces, the largest `holed` of them with a hole wider than the wrap's detail (the faces within 4 mm
+// of one vertex removed), each holed one with a fin as well when `fin` (a triangle on one of its edges: a
+// non-manifold edge, so that the hole cannot be closed)
+void punch(OwnedMesh& m, std::size_t holed, bool fin) {
+  Soup s = soupOf(m);
+  weld(s);
+  auto pieces = components(s);
+  std::sort(pieces.begin(), pieces.end(), [](const Soup& a, const Soup& b) { return volume(a) > volume(b); });
+  Soup out;
+  for (std::size_t i = 0; i < pieces.size(); ++i) {
+    Soup p = pieces[i];
+    if (i < holed) {
+      const Eigen::Vector3d c = p.V[0];
+      std::vector<std::array<int, 3>> kept;
+      for (const auto& f : p.F)
+        if ((p.V[std::size_t(f[0])] - c).norm() > 4 && (p.V[std::size_t(f[1])] - c).norm() > 4 && (p.V[std::size_t(f[2])] - c).norm() > 4)
+          kept.push_back(f);
+      EXPECT_LT(kept.size(), p.F.size());
+      p.F = std::move(kept);
+      if (fin) {
+        const auto f = p.F.back();
+        p.V.push_back(p.V[std::size_t(f[0])] + Eigen::Vector3d(0, 0, 5));
+        p.F.push_back({f[0], f[1], int(p.V.size()) - 1});
+      }
+    }
+    append(out, p);
+  }
+  weld(out);
+  m.Clear();
+  toMesh(out, m);
+}
+// the structure's volume before and after its wrap, from the Log ("… (28 -> 11 pieces, 8.12 -> 8.48 cm3)")
+std::pair<double, double> wrappedVolumes(const PrepareResult& r, const std::string& name) {
+  for (const auto& l : r.log)
+    if (l.rfind("'" + name + "': wrapped", 0) == 0) {
+      const auto arrow = l.rfind(" -> "), open = l.rfind(", ", arrow);
+      return {std::stod(l.substr(open + 2)), std::stod(l.substr(arrow + 4))};
+    }
+  ADD_FAILURE() << "no wrap of '" << name << "' in the Log";
+  return {0, 0};
+}
+}  // namespace
+
+// A cartilage with a hole wider than the wrap's detail: the wrap would go in through it and wrap the inside as
+// well, a hollow shell that TetGen fills with slivers. The hole is closed first, so the wrap holds the whole
+// cartilage (and grows it by the offset), and the cage is as large as from the intact layers.
+TEST(PatientPrepare, HoledCartilageIsWrappedSolid) {
+  std::array<OwnedMesh, 3> m;
+  toScanner(m);
+  punch(m[1], 1, false);
+  PrepareOptions o;
+  o.edgeLength = 3.0;
+  o.alpha = 1.5;  // wider than the default, for the test's time: the hole is wider still
+  OwnedMesh cage;
+  const auto r = preparePatientCage(inputs(m), o, cage);
+  const auto [before, after] = wrappedVolumes(r, "costal cartilage");
+  std::printf("  costal cartilage %.3f -> %.3f cm3\n", before, after);
+  EXPECT_GT(after, before);
+  EXPECT_LT(after, 1.1 * before);
+}
+
+// When the hole cannot be closed (a non-manifold edge beside it), a wrap that went in is hollow: refused,
+// naming the structure and what to do.
+TEST(PatientPrepare, RefusesAHollowWrap) {
+  std::array<OwnedMesh, 3> m;
+  toScanner(m);
+  punch(m[1], 1000, true);
+  PrepareOptions o;
+  o.alpha = 1.5;
+  OwnedMesh cage;
+  const std::string msg = errorOf([&] { preparePatientCage(inputs(m), o, cage); });
+  EXPECT_NE(msg.find("Alpha wrapping went inside 'costal cartilage' through a hole wider than its detail (1.50 mm)"), std::string::npos) << msg;
+  EXPECT_NE(msg.find("Close the structure's holes"), std::string::npos) << msg;
+}
+
 // A sternum split down its midline (the halves 30 mm apart, joined by their stretched faces) has no midline
 // front surface: the deepest point of the funnel cannot be placed, and the message says to pick it. A picked
 // point then stands for it.
