@@ -228,34 +228,45 @@ std::unique_ptr<InpModel> readCalculixInp(const std::string& path) {
   return parseCalculixInp(all.str(), path);
 }
 
-std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::string& path) {
-  auto owned = std::make_unique<InpModel>();
-  InpModel& model = *owned;
-  TetMesh& m = model.mesh;
-  Problem& p = model.problem;
-  std::unordered_map<int, int> nodeIndex;  // deck node id -> 0-based node
-  std::vector<std::pair<int, std::array<int, 10>>> elems;  // (deck element id, deck node ids)
-  std::vector<int> elemTissue;
-  std::map<std::string, int> tissueOfSet;  // ELSET name -> tissue label
-  std::map<std::string, Material> materials;
-  std::map<std::string, std::vector<int>> nsets;
-  std::vector<std::pair<int, std::array<double, 3>>> loads;  // (deck node id, force)
+namespace {
+// Reads a deck in two passes over what it holds: line by line, keywords open blocks and data lines fill
+// them (in the deck's ids); then the mesh and the problem are assembled from the blocks (ids -> indices).
+class InpReader {
+ public:
+  InpReader(const std::string& text, const std::string& path) : text_(text), path_(path) {}
+
+  std::unique_ptr<InpModel> read() {
+    for (std::size_t pos = 0; pos < text_.size();) {
+      std::size_t end = text_.find('\n', pos);
+      if (end == std::string::npos) end = text_.size();
+      const std::string_view line = trim(std::string_view(text_).substr(pos, end - pos));
+      pos = end + 1;
+      ++lineNo_;
+      if (line.empty() || line.rfind("**", 0) == 0) continue;
+      if (line[0] == '*')
+        keyword(line);
+      else if (block_ != "*HEADING")
+        dataLine(line);
+    }
+    assemble();
+    return std::move(owned_);
+  }
+
+ private:
   struct BoundaryLine { int node, first, last; double value; };  // deck node id, dofs first..last (1-based)
-  std::vector<BoundaryLine> boundary;
-  std::string block, currentSet, currentMaterial;
-  int nen = 0, lineNo = 0, currentTissue = 0;
-  auto fail = [&](const std::string& why) {
-    throw InputError(path + ", line " + std::to_string(lineNo) + ": " + why);
-  };
-  auto number = [&](std::string_view t) {
+
+  [[noreturn]] void fail(const std::string& why) const {
+    throw InputError(path_ + ", line " + std::to_string(lineNo_) + ": " + why);
+  }
+  double number(std::string_view t) const {
     double v = 0;
     const char* first = t.data() + (!t.empty() && t[0] == '+' ? 1 : 0);
     const auto r = std::from_chars(first, t.data() + t.size(), v);
     if (t.empty() || r.ec != std::errc() || r.ptr != t.data() + t.size() || !std::isfinite(v))
       fail("'" + std::string(t) + "' is not a finite number");
     return v;
-  };
-  auto integer = [&](std::string_view t) {
+  }
+  int integer(std::string_view t) const {
     int i = 0;
     const auto r = std::from_chars(t.data(), t.data() + t.size(), i);
     if (!t.empty() && r.ec == std::errc() && r.ptr == t.data() + t.size()) return i;
@@ -263,148 +274,173 @@ std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::s
     // the range first: casting a double outside long's range (e.g. 1e300) is undefined behaviour
     if (!(std::abs(v) <= 2e9) || v != std::floor(v)) fail("'" + std::string(t) + "' is not an integer");
     return static_cast<int>(v);
-  };
-  std::vector<std::string_view> t;  // a data line's fields
-  for (std::size_t pos = 0; pos < text.size();) {
-    std::size_t end = text.find('\n', pos);
-    if (end == std::string::npos) end = text.size();
-    const std::string_view line = trim(std::string_view(text).substr(pos, end - pos));
-    pos = end + 1;
-    ++lineNo;
-    if (line.empty() || line.rfind("**", 0) == 0) continue;
-    if (line[0] == '*') {
-      const auto kv = keywordLine(line);
-      const std::string& key = kv.at("");
-      block = key;
-      if (key == "*HEADING" || key == "*STATIC" || key == "*NODE PRINT" || key == "*NODE FILE" || key == "*EL FILE" ||
-          key == "*END STEP" || key == "*BOUNDARY" || key == "*CLOAD" || key == "*NODE") {
-        if (key == "*STATIC") model.options.increments = 1;
-        if (key == "*NODE PRINT") {
-          const auto it = kv.find("NSET");
-          if (it != kv.end() && nsets.count(it->second))
-            for (int id : nsets[it->second]) model.options.printNodes.push_back(id);
-        }
-      } else if (key == "*ELEMENT") {
-        const auto type = kv.find("TYPE"), set = kv.find("ELSET");
-        if (type == kv.end() || (type->second != "C3D4" && type->second != "C3D10"))
-          fail("only *ELEMENT, TYPE=C3D4 or C3D10 is read");
-        const int n = type->second == "C3D10" ? 10 : 4;
-        if (nen && n != nen) fail("C3D4 and C3D10 elements in one deck");
-        nen = n;
-        currentSet = set == kv.end() ? std::string("EALL") : set->second;
-        if (!tissueOfSet.count(currentSet)) {
-          int label = static_cast<int>(tissueOfSet.size()) + 4;
-          for (int t = 1; t <= 3; ++t)
-            if (currentSet == "E" + setName(t)) label = t;
-          tissueOfSet[currentSet] = label;
-        }
-        currentTissue = tissueOfSet[currentSet];
-      } else if (key == "*MATERIAL") {
-        const auto it = kv.find("NAME");
-        if (it == kv.end()) fail("*MATERIAL without NAME");
-        currentMaterial = it->second;
-      } else if (key == "*ELASTIC") {
-        const auto it = kv.find("TYPE");
-        if (it != kv.end() && it->second != "ISO") fail("only isotropic *ELASTIC is read");
-        if (currentMaterial.empty()) fail("*ELASTIC outside a *MATERIAL");
-      } else if (key == "*HYPERELASTIC") {
-        if (!kv.count("NEO HOOKE")) fail("only *HYPERELASTIC, NEO HOOKE is read");
-        if (currentMaterial.empty()) fail("*HYPERELASTIC outside a *MATERIAL");
-      } else if (key == "*SOLID SECTION") {
-        const auto set = kv.find("ELSET"), mat = kv.find("MATERIAL");
-        if (set == kv.end() || mat == kv.end()) fail("*SOLID SECTION needs ELSET and MATERIAL");
-        if (!tissueOfSet.count(set->second)) fail("*SOLID SECTION of an unknown ELSET " + set->second);
-        if (!materials.count(mat->second)) fail("*SOLID SECTION with an undefined MATERIAL " + mat->second);
-        p.materials[tissueOfSet[set->second]] = materials[mat->second];
-      } else if (key == "*NSET") {
-        const auto it = kv.find("NSET");
-        if (it == kv.end()) fail("*NSET without a name");
-        currentSet = it->second;
-        nsets[currentSet];
-      } else if (key == "*STEP") {
-        model.options.nlgeom = kv.count("NLGEOM") > 0;
-      } else {
-        fail("keyword " + key + " is not read by pectus_fe (it reads the decks it writes)");
+  }
+  // the 0-based node of a deck node id
+  int node(int id) const {
+    const auto it = nodeIndex_.find(id);
+    if (it == nodeIndex_.end()) throw InputError(path_ + ": node " + std::to_string(id) + " is used but not defined.");
+    return it->second;
+  }
+
+  // A keyword line: opens its block and reads its parameters.
+  void keyword(std::string_view line) {
+    const auto kv = keywordLine(line);
+    const std::string& key = kv.at("");
+    block_ = key;
+    InpOptions& options = owned_->options;
+    if (key == "*HEADING" || key == "*NODE FILE" || key == "*EL FILE" || key == "*END STEP" || key == "*BOUNDARY" ||
+        key == "*CLOAD" || key == "*NODE") {
+      // no parameters to read: the block's data lines carry it
+    } else if (key == "*STATIC") {
+      options.increments = 1;
+    } else if (key == "*NODE PRINT") {
+      const auto it = kv.find("NSET");
+      if (it != kv.end() && nsets_.count(it->second))
+        for (int id : nsets_[it->second]) options.printNodes.push_back(id);
+    } else if (key == "*ELEMENT") {
+      const auto type = kv.find("TYPE"), set = kv.find("ELSET");
+      if (type == kv.end() || (type->second != "C3D4" && type->second != "C3D10")) fail("only *ELEMENT, TYPE=C3D4 or C3D10 is read");
+      const int n = type->second == "C3D10" ? 10 : 4;
+      if (nen_ && n != nen_) fail("C3D4 and C3D10 elements in one deck");
+      nen_ = n;
+      currentSet_ = set == kv.end() ? std::string("EALL") : set->second;
+      if (!tissueOfSet_.count(currentSet_)) {
+        int label = static_cast<int>(tissueOfSet_.size()) + 4;
+        for (int t = 1; t <= 3; ++t)
+          if (currentSet_ == "E" + setName(t)) label = t;
+        tissueOfSet_[currentSet_] = label;
       }
-      continue;
+      currentTissue_ = tissueOfSet_[currentSet_];
+    } else if (key == "*MATERIAL") {
+      const auto it = kv.find("NAME");
+      if (it == kv.end()) fail("*MATERIAL without NAME");
+      currentMaterial_ = it->second;
+    } else if (key == "*ELASTIC") {
+      const auto it = kv.find("TYPE");
+      if (it != kv.end() && it->second != "ISO") fail("only isotropic *ELASTIC is read");
+      if (currentMaterial_.empty()) fail("*ELASTIC outside a *MATERIAL");
+    } else if (key == "*HYPERELASTIC") {
+      if (!kv.count("NEO HOOKE")) fail("only *HYPERELASTIC, NEO HOOKE is read");
+      if (currentMaterial_.empty()) fail("*HYPERELASTIC outside a *MATERIAL");
+    } else if (key == "*SOLID SECTION") {
+      const auto set = kv.find("ELSET"), mat = kv.find("MATERIAL");
+      if (set == kv.end() || mat == kv.end()) fail("*SOLID SECTION needs ELSET and MATERIAL");
+      if (!tissueOfSet_.count(set->second)) fail("*SOLID SECTION of an unknown ELSET " + set->second);
+      if (!materials_.count(mat->second)) fail("*SOLID SECTION with an undefined MATERIAL " + mat->second);
+      owned_->problem.materials[tissueOfSet_[set->second]] = materials_[mat->second];
+    } else if (key == "*NSET") {
+      const auto it = kv.find("NSET");
+      if (it == kv.end()) fail("*NSET without a name");
+      currentSet_ = it->second;
+      nsets_[currentSet_];
+    } else if (key == "*STEP") {
+      options.nlgeom = kv.count("NLGEOM") > 0;
+    } else {
+      fail("keyword " + key + " is not read by pectus_fe (it reads the decks it writes)");
     }
-    if (block == "*HEADING") continue;
-    splitCommas(line, t);
-    if (block == "*NODE") {
+  }
+
+  // A data line of the open block.
+  void dataLine(std::string_view line) {
+    splitCommas(line, t_);
+    const auto& t = t_;
+    if (block_ == "*NODE") {
       if (t.size() < 4) fail("a node line needs an id and three coordinates");
       const int id = integer(t[0]);
-      if (nodeIndex.empty()) nodeIndex.reserve(std::max<std::size_t>(1024, text.size() / 64));
-      if (!nodeIndex.emplace(id, m.numNodes()).second) fail("node " + std::string(t[0]) + " defined twice");
+      TetMesh& m = owned_->mesh;
+      if (nodeIndex_.empty()) nodeIndex_.reserve(std::max<std::size_t>(1024, text_.size() / 64));
+      if (!nodeIndex_.emplace(id, m.numNodes()).second) fail("node " + std::string(t[0]) + " defined twice");
       m.nodes.emplace_back(number(t[1]), number(t[2]), number(t[3]));
-    } else if (block == "*ELEMENT") {
-      if (static_cast<int>(t.size()) != nen + 1) fail("an element line needs an id and " + std::to_string(nen) + " nodes");
+    } else if (block_ == "*ELEMENT") {
+      if (static_cast<int>(t.size()) != nen_ + 1) fail("an element line needs an id and " + std::to_string(nen_) + " nodes");
       std::array<int, 10> e{};
-      for (int a = 0; a < nen; ++a) e[a] = integer(t[a + 1]);
-      elems.emplace_back(integer(t[0]), e);
-      elemTissue.push_back(currentTissue);
-    } else if (block == "*ELASTIC") {
+      for (int a = 0; a < nen_; ++a) e[a] = integer(t[a + 1]);
+      elems_.emplace_back(integer(t[0]), e);
+      elemTissue_.push_back(currentTissue_);
+    } else if (block_ == "*ELASTIC") {
       if (t.size() < 2) fail("*ELASTIC needs E and the Poisson ratio");
-      materials[currentMaterial] = {number(t[0]), number(t[1])};
-    } else if (block == "*HYPERELASTIC") {
+      materials_[currentMaterial_] = {number(t[0]), number(t[1])};
+    } else if (block_ == "*HYPERELASTIC") {
       // C10, D1 -> mu = 2 C10, K = 2 / D1 -> E, nu (the same small-strain limit)
       if (t.size() < 2) fail("*HYPERELASTIC, NEO HOOKE needs C10 and D1");
       const double c10 = number(t[0]), d1 = number(t[1]);
       if (!(c10 > 0 && d1 > 0)) fail("*HYPERELASTIC, NEO HOOKE needs C10 > 0 and D1 > 0 (pectus_fe models compressible tissue)");
       const double mu = 2 * c10, K = 2 / d1;
-      materials[currentMaterial] = {9 * K * mu / (3 * K + mu), (3 * K - 2 * mu) / (2 * (3 * K + mu)), MaterialModel::NeoHookeanDecoupled};
-    } else if (block == "*NSET") {
+      materials_[currentMaterial_] = {9 * K * mu / (3 * K + mu), (3 * K - 2 * mu) / (2 * (3 * K + mu)), MaterialModel::NeoHookeanDecoupled};
+    } else if (block_ == "*NSET") {
       for (std::string_view id : t)
-        if (!id.empty()) nsets[currentSet].push_back(integer(id));
-    } else if (block == "*BOUNDARY") {
+        if (!id.empty()) nsets_[currentSet_].push_back(integer(id));
+    } else if (block_ == "*BOUNDARY") {
       if (t.size() < 2) fail("a *BOUNDARY line needs a node and a dof");
       const int first = integer(t[1]), last = t.size() > 2 && !t[2].empty() ? integer(t[2]) : first;
-      boundary.push_back({integer(t[0]), first, last, t.size() > 3 ? number(t[3]) : 0.0});
-    } else if (block == "*CLOAD") {
+      boundary_.push_back({integer(t[0]), first, last, t.size() > 3 ? number(t[3]) : 0.0});
+    } else if (block_ == "*CLOAD") {
       if (t.size() < 3) fail("a *CLOAD line needs a node, a dof and a value");
       const int dof = integer(t[1]);
       if (dof < 1 || dof > 3) fail("*CLOAD dof must be 1, 2 or 3");
       std::array<double, 3> fv{0, 0, 0};
       fv[std::size_t(dof - 1)] = number(t[2]);
-      loads.emplace_back(integer(t[0]), fv);
-    } else if (block == "*STEP") {
+      loads_.emplace_back(integer(t[0]), fv);
+    } else if (block_ == "*STEP") {
       fail("text after *STEP: a procedure keyword (*STATIC) was expected");
-    } else if (block == "*STATIC") {
-      if (model.options.nlgeom && !t.empty()) {
+    } else if (block_ == "*STATIC") {
+      InpOptions& options = owned_->options;
+      if (options.nlgeom && !t.empty()) {
         const double inc = number(t[0]);
         if (!(inc > 0 && inc <= 1)) fail("*STATIC initial increment must be in (0, 1]");
-        model.options.increments = std::max(1, static_cast<int>(std::lround(1.0 / inc)));
+        options.increments = std::max(1, static_cast<int>(std::lround(1.0 / inc)));
       }
     }  // data lines of *NODE PRINT / *NODE FILE / *EL FILE (output variables) are not needed here
   }
-  const auto node = [&](int id) {
-    const auto it = nodeIndex.find(id);
-    if (it == nodeIndex.end()) throw InputError(path + ": node " + std::to_string(id) + " is used but not defined.");
-    return it->second;
-  };
-  if (elems.empty()) throw InputError(path + ": no *ELEMENT of type C3D4 or C3D10.");
-  // tets in element id order (the writer's ids are the tets' 1-based indices)
-  std::vector<std::size_t> order(elems.size());
-  for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
-  std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return elems[a].first < elems[b].first; });
-  for (std::size_t k = 1; k < order.size(); ++k)
-    if (elems[order[k]].first == elems[order[k - 1]].first)
-      throw InputError(path + ": element " + std::to_string(elems[order[k]].first) + " is defined twice.");
-  m.order = nen == 10 ? 2 : 1;
-  for (std::size_t k : order) {
-    std::array<int, 10> e{};
-    for (int a = 0; a < nen; ++a) e[a] = node(elems[k].second[a]);
-    m.tets.push_back(e);
-    m.tissue.push_back(elemTissue[k]);
+
+  // The tets in element id order (the writer's ids are the tets' 1-based indices), the supports and the
+  // loads on 0-based nodes.
+  void assemble() {
+    TetMesh& m = owned_->mesh;
+    Problem& p = owned_->problem;
+    if (elems_.empty()) throw InputError(path_ + ": no *ELEMENT of type C3D4 or C3D10.");
+    std::vector<std::size_t> order(elems_.size());
+    for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
+    std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return elems_[a].first < elems_[b].first; });
+    for (std::size_t k = 1; k < order.size(); ++k)
+      if (elems_[order[k]].first == elems_[order[k - 1]].first)
+        throw InputError(path_ + ": element " + std::to_string(elems_[order[k]].first) + " is defined twice.");
+    m.order = nen_ == 10 ? 2 : 1;
+    for (std::size_t k : order) {
+      std::array<int, 10> e{};
+      for (int a = 0; a < nen_; ++a) e[a] = node(elems_[k].second[a]);
+      m.tets.push_back(e);
+      m.tissue.push_back(elemTissue_[k]);
+    }
+    for (const auto& b : boundary_) {
+      if (b.first < 1 || b.last > 3 || b.first > b.last) throw InputError(path_ + ": *BOUNDARY dofs must be within 1..3.");
+      for (int d = b.first; d <= b.last; ++d) p.fixed.push_back({node(b.node), d - 1, b.value});
+    }
+    p.force.assign(m.nodes.size(), Eigen::Vector3d::Zero());
+    for (const auto& l : loads_) p.force[std::size_t(node(l.first))] += Eigen::Vector3d(l.second[0], l.second[1], l.second[2]);
+    for (int& id : owned_->options.printNodes) id = node(id);
+    p.mesh = &owned_->mesh;
   }
-  for (const auto& b : boundary) {
-    if (b.first < 1 || b.last > 3 || b.first > b.last) throw InputError(path + ": *BOUNDARY dofs must be within 1..3.");
-    for (int d = b.first; d <= b.last; ++d) p.fixed.push_back({node(b.node), d - 1, b.value});
-  }
-  p.force.assign(m.nodes.size(), Eigen::Vector3d::Zero());
-  for (const auto& l : loads) p.force[std::size_t(node(l.first))] += Eigen::Vector3d(l.second[0], l.second[1], l.second[2]);
-  for (int& id : model.options.printNodes) id = node(id);
-  p.mesh = &model.mesh;
-  return owned;
+
+  const std::string& text_;
+  const std::string& path_;
+  std::unique_ptr<InpModel> owned_ = std::make_unique<InpModel>();
+  std::unordered_map<int, int> nodeIndex_;                     // deck node id -> 0-based node
+  std::vector<std::pair<int, std::array<int, 10>>> elems_;     // (deck element id, deck node ids)
+  std::vector<int> elemTissue_;
+  std::map<std::string, int> tissueOfSet_;                     // ELSET name -> tissue label
+  std::map<std::string, Material> materials_;
+  std::map<std::string, std::vector<int>> nsets_;
+  std::vector<std::pair<int, std::array<double, 3>>> loads_;  // (deck node id, force)
+  std::vector<BoundaryLine> boundary_;
+  std::string block_, currentSet_, currentMaterial_;
+  int nen_ = 0, lineNo_ = 0, currentTissue_ = 0;
+  std::vector<std::string_view> t_;  // the current data line's fields
+};
+}  // namespace
+
+std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::string& path) {
+  return InpReader(text, path).read();
 }
 
 }  // namespace pectus::fe
