@@ -307,20 +307,25 @@ std::pair<double, double> wrappedVolumes(const PrepareResult& r, const std::stri
   ADD_FAILURE() << "no wrap of '" << name << "' in the Log";
   return {0, 0};
 }
+// the generator's layers in a scanner frame, the cartilage layer punched (punch), prepared at a wrap detail of
+// 1.5 mm: wider than the default, for the test's time; the holes are wider still
+PrepareResult prepareHoled(std::size_t holed, bool fin, OwnedMesh& cage) {
+  std::array<OwnedMesh, 3> m;
+  toScanner(m);
+  punch(m[1], holed, fin);
+  PrepareOptions o;
+  o.edgeLength = 3.0;
+  o.alpha = 1.5;
+  return preparePatientCage(inputs(m), o, cage);
+}
 }  // namespace
 
 // A cartilage with a hole wider than the wrap's detail: the wrap would go in through it and wrap the inside as
 // well, a hollow shell that TetGen fills with slivers. The hole is closed first, so the wrap holds the whole
 // cartilage (and grows it by the offset), and the cage is as large as from the intact layers.
 TEST(PatientPrepare, HoledCartilageIsWrappedSolid) {
-  std::array<OwnedMesh, 3> m;
-  toScanner(m);
-  punch(m[1], 1, false);
-  PrepareOptions o;
-  o.edgeLength = 3.0;
-  o.alpha = 1.5;  // wider than the default, for the test's time: the hole is wider still
   OwnedMesh cage;
-  const auto r = preparePatientCage(inputs(m), o, cage);
+  const auto r = prepareHoled(1, false, cage);
   const auto [before, after] = wrappedVolumes(r, "costal cartilage");
   std::printf("  costal cartilage %.3f -> %.3f cm3\n", before, after);
   EXPECT_GT(after, before);
@@ -330,13 +335,8 @@ TEST(PatientPrepare, HoledCartilageIsWrappedSolid) {
 // When the hole cannot be closed (a non-manifold edge beside it), a wrap that went in is hollow: refused,
 // naming the structure and what to do.
 TEST(PatientPrepare, RefusesAHollowWrap) {
-  std::array<OwnedMesh, 3> m;
-  toScanner(m);
-  punch(m[1], 1000, true);
-  PrepareOptions o;
-  o.alpha = 1.5;
   OwnedMesh cage;
-  const std::string msg = errorOf([&] { preparePatientCage(inputs(m), o, cage); });
+  const std::string msg = errorOf([&] { prepareHoled(1000, true, cage); });
   EXPECT_NE(msg.find("Alpha wrapping went inside 'costal cartilage' through a hole wider than its detail (1.50 mm)"), std::string::npos) << msg;
   EXPECT_NE(msg.find("Close the structure's holes"), std::string::npos) << msg;
 }
