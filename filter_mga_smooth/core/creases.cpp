@@ -57,14 +57,18 @@ struct EdgeTable {
   }
 };
 
+// an edge whose key is in `ignored` (sorted) is never sharp
+bool isIgnored(const std::vector<std::uint64_t>& ignored, const Edge& e) {
+  return std::binary_search(ignored.begin(), ignored.end(), edgeKey(e.a, e.b));
+}
+
 // 1. sharp across: bent at least minDihedral, and edgeProminence times the median of its wings that are
 // not bent beyond minDihedral (of all of them if all are): the bending of the surface beside the edge
 std::vector<char> sharpEdges(const EdgeTable& T, const std::vector<std::uint64_t>& ignored, const CreaseOptions& opt) {
   const auto& E = T.E;
   std::vector<char> bent(E.size(), 0), sharp(E.size(), 0);
   for (std::size_t i = 0; i < E.size(); ++i)
-    bent[i] = E[i].faces == 2 && E[i].dihedral >= opt.minDihedralDeg &&
-              !std::binary_search(ignored.begin(), ignored.end(), edgeKey(E[i].a, E[i].b));
+    bent[i] = E[i].faces == 2 && E[i].dihedral >= opt.minDihedralDeg && !isIgnored(ignored, E[i]);
   std::vector<int> w;
   std::vector<double> wd;
   for (std::size_t i = 0; i < E.size(); ++i) {
@@ -108,7 +112,7 @@ double noiseLevel(const EdgeTable& T, const std::vector<std::uint64_t>& ignored,
   std::vector<double> d;
   for (std::size_t i = 0; i < T.E.size(); ++i) {
     const Edge& e = T.E[i];
-    if (e.faces == 2 && !std::binary_search(ignored.begin(), ignored.end(), edgeKey(e.a, e.b)) && !sharp[i]) d.push_back(e.dihedral);
+    if (e.faces == 2 && !isIgnored(ignored, e) && !sharp[i]) d.push_back(e.dihedral);
   }
   if (d.empty()) return 0;
   std::nth_element(d.begin(), d.begin() + std::ptrdiff_t(d.size() / 2), d.end());
