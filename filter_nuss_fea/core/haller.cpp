@@ -23,6 +23,32 @@ bool lineHit(const Tri& t, int axis, double u, double v, double& out) {
   out = (w0 * t.a[axis] + w1 * t.b[axis] + w2 * t.c[axis]) / s;
   return true;
 }
+
+constexpr int kLateralCandidates = 32;  ///< vertices tried per side, most lateral first
+
+/// the `n` vertices with the largest sg * x, largest first (of equal ones, the first in the mesh first)
+std::vector<Vec3> lateralMost(const CMeshO& m, double sg, int n) {
+  std::vector<Vec3> v;
+  for (const auto& p : m.vert)
+    if (!p.IsD()) v.push_back(toEigen(p.cP()));
+  const auto k = std::min<std::ptrdiff_t>(n, std::ptrdiff_t(v.size()));
+  std::stable_sort(v.begin(), v.end(), [sg](const Vec3& a, const Vec3& b) { return sg * a.x() > sg * b.x(); });
+  v.resize(std::size_t(k));
+  return v;
+}
+
+/// the inner surface's x on the side sg (-1 right, +1 left) along the ray {y, z fixed}: the second hit from
+/// outside among the hits on that side, or none when the ray crosses that side fewer than twice
+std::optional<double> innerWall(const std::vector<Tri>& tris, double sg, double y, double z) {
+  std::vector<double> side;
+  for (const auto& t : tris) {
+    double x;
+    if (lineHit(t, 0, y, z, x) && sg * x > 0) side.push_back(sg * x);
+  }
+  if (side.size() < 2) return std::nullopt;
+  std::partial_sort(side.begin(), side.begin() + 2, side.end(), std::greater<double>());
+  return sg * side[1];
+}
 }  // namespace
 
 std::optional<HallerMeasure> measureHaller(const CMeshO& m) {
@@ -31,23 +57,20 @@ std::optional<HallerMeasure> measureHaller(const CMeshO& m) {
     if (!f.IsD()) tris.push_back({toEigen(f.cP(0)), toEigen(f.cP(1)), toEigen(f.cP(2))});
   if (tris.empty()) return std::nullopt;
   HallerMeasure r;
-  // transverse: lateral-most vertex per side, ray along x slightly off the vertex
+  // transverse: per side, a ray along x through the lateral-most vertex (slightly off it) crosses the bone's
+  // outer and inner surface; the second hit on that side is the inner one. A vertex whose ray does not cross
+  // its side's bone twice (the tip of a sliver face, a corner the ray grazes) gives way to the next most
+  // lateral vertex.
   double xin[2];
   for (int si = 0; si < 2; ++si) {
     const double sg = si == 0 ? -1 : 1;
-    Vec3 ext(0, 0, 0);
-    double best = -std::numeric_limits<double>::max();
-    for (const auto& v : m.vert)
-      if (!v.IsD() && sg * v.cP()[0] > best) { best = sg * v.cP()[0]; ext = toEigen(v.cP()); }
-    const double y = ext.y() + 0.011, z = ext.z() + 0.013;
-    std::vector<double> xs;
-    for (const auto& t : tris) {
-      double x;
-      if (lineHit(t, 0, y, z, x)) xs.push_back(sg * x);
+    std::optional<double> inner;
+    for (const Vec3& ext : lateralMost(m, sg, kLateralCandidates)) {
+      inner = innerWall(tris, sg, ext.y() + 0.011, ext.z() + 0.013);
+      if (inner) break;
     }
-    std::sort(xs.begin(), xs.end(), std::greater<double>());
-    if (xs.size() < 2) return std::nullopt;
-    xin[si] = sg * xs[1];
+    if (!inner) return std::nullopt;
+    xin[si] = *inner;
   }
   r.xInnerRight = xin[0];
   r.xInnerLeft = xin[1];

@@ -114,6 +114,29 @@ TEST_F(RibCageCoarse, HallerIndexMeasuredOnMesh) {
   EXPECT_NEAR(h->transverse, stats.dims.chestWidth, 0.03 * stats.dims.chestWidth);
 }
 
+// A sliver face beyond the cage's side, edge-on to the transverse ray (all its vertices at one y, far in
+// front of the chest): its tip is the lateral-most vertex, but its ray crosses no bone on that side, so the
+// next most lateral vertex measures the inner diameter, as on the cage without the sliver.
+TEST_F(RibCageCoarse, HallerTransverseSkipsALateralSliver) {
+  const auto clean = measureHaller(*mesh);
+  ASSERT_TRUE(clean.has_value());
+  pectus::OwnedMesh m;
+  vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(m, *mesh);
+  float xMax = -1e30f, yMax = -1e30f;
+  for (const auto& v : m.vert) xMax = std::max(xMax, v.cP()[0]), yMax = std::max(yMax, v.cP()[1]);
+  auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, 3);
+  const float y = yMax + 50, z = float(clean->zAp);
+  vi[0].P() = CMeshO::CoordType(xMax + 5, y, z);
+  vi[1].P() = CMeshO::CoordType(xMax + 4, y, z + 1);
+  vi[2].P() = CMeshO::CoordType(xMax + 4, y, z - 1);
+  vcg::tri::Allocator<CMeshO>::AddFace(m, &vi[0], &vi[1], &vi[2]);
+  const auto sliver = measureHaller(m);
+  ASSERT_TRUE(sliver.has_value()) << "no transverse diameter: the sliver's ray was taken";
+  EXPECT_EQ(sliver->xInnerLeft, clean->xInnerLeft);
+  EXPECT_EQ(sliver->xInnerRight, clean->xInnerRight);
+  EXPECT_EQ(sliver->index, clean->index);
+}
+
 TEST_F(RibCageCoarse, EveryFaceLabelled) {
   const auto l = readFaceLabels(*mesh);
   ASSERT_TRUE(l.has_value());
