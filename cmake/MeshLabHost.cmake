@@ -1,7 +1,7 @@
 # What a pectus-meshlab plugin needs from the MeshLab that Debian ships (bookworm's 2020.09, or
 # 2021.05 and later: trixie's 2022.02, forky's 2025.07):
 #  - headers (src/common + vcglib) from the MeshLab source of the same version, unpacked by
-#    scripts/setup.sh into third_party/meshlab (2020.09) or by scripts/host_2025.sh
+#    scripts/setup.sh into third_party/meshlab (2020.09) or by scripts/host.sh
 #    (override with -DMESHLAB_SOURCE_DIR=...)
 #  - that MeshLab's libmeshlab-common.so, Qt5 and GLEW (header only)
 #  - the ABI: MESHLAB_SCALAR as MeshLab was built (Debian: float; pymeshlab: double), -fPIC,
@@ -27,7 +27,7 @@ set_property(CACHE MESHLAB_SCALAR PROPERTY STRINGS float double)
 
 if(NOT EXISTS "${MESHLAB_SOURCE_DIR}/vcglib/vcg/complex/complex.h")
   message(FATAL_ERROR "MeshLab headers not found in ${MESHLAB_SOURCE_DIR}. Run scripts/setup.sh first "
-                      "(scripts/host_2025.sh for MeshLab 2025.07).")
+                      "(scripts/host.sh for MeshLab 2022.02 and 2025.07).")
 endif()
 if(EXISTS "${MESHLAB_SOURCE_DIR}/src/common/interfaces.h")
   set(PECTUS_MESHLAB_API 2020)

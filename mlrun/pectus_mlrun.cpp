@@ -155,11 +155,11 @@ bool loadDir(PluginManager& pm, const QString& dir, bool ours) {
       const QString iid = QPluginLoader(path).metaData().value("IID").toString();
       if (iid.contains("MeshFilterInterface"))
         why = path.toStdString() + " is a plugin for MeshLab 2020.09 or earlier (interface " + iid.toStdString() +
-              "); this is " + thisMeshLab() + ": rebuild it against this MeshLab (scripts/host_2025.sh)";
+              "); this is " + thisMeshLab() + ": rebuild it against this MeshLab (scripts/host.sh)";
       else if (why.find("different version") != std::string::npos || why.find("precision") != std::string::npos ||
           why.find("scalar") != std::string::npos)
         why = path.toStdString() + " is " + builtFor(path) + "; this is " + thisMeshLab() +
-              ": rebuild it against this MeshLab (scripts/host_2025.sh)";
+              ": rebuild it against this MeshLab (scripts/host.sh)";
       if (ours) {
         std::cerr << "pectus-mlrun: plugin not loaded: " << why << "\n";
         ok = false;

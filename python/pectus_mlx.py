@@ -1,9 +1,10 @@
 """Build complete MeshLab filter scripts (.mlx) and run them headless on either MeshLab host.
 
-Standard library only. Two hosts run the scripts (`run(..., host=...)`, default $PECTUS_MESHLAB_HOST or
+Standard library only. Three hosts run the scripts (`run(..., host=...)`, default $PECTUS_MESHLAB_HOST or
 2020.09):
   - "2020.09": Debian bookworm's meshlabserver from the private prefix, under xvfb-run;
-  - "2025.07": pectus-mlrun in the Debian forky userland, through scripts/mlrun.sh.
+  - "2025.07": pectus-mlrun in the Debian forky userland, through scripts/mlrun.sh;
+  - "2022.02": pectus-mlrun in the Debian trixie userland, likewise.
 meshlabserver aborts when a parameter is missing or mistyped, so every parameter is given a type:
 
     from pectus_mlx import Filter, Float, Int, Bool, Enum, Script, run
@@ -226,7 +227,8 @@ def find_meshlabserver(prefix: str | None = None) -> str:
 XVFB_CLEANUP_ERROR = "xvfb-run: error: problem while cleaning up temporary directory"
 
 
-HOSTS = ("2020.09", "2025.07")
+HOSTS = ("2020.09", "2022.02", "2025.07")
+MLRUN_HOSTS = ("2022.02", "2025.07")  # the releases without meshlabserver: pectus-mlrun in a userland
 
 
 def default_host() -> str:
@@ -245,13 +247,13 @@ def mlrun_script() -> str:
 def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tuple] = (),
         prefix: str | None = None, timeout: float = 3600, cwd: str | None = None, env: dict | None = None,
         host: str | None = None) -> Result:
-    """Run a script headless: meshlabserver under xvfb-run (host 2020.09) or pectus-mlrun in the forky
-    userland (host 2025.07; see default_host). outputs: (path, "vc fq ...", layer_index or None); env:
+    """Run a script headless: meshlabserver under xvfb-run (host 2020.09) or pectus-mlrun in the trixie or
+    forky userland (host 2022.02 or 2025.07; see default_host). outputs: (path, "vc fq ...", layer_index or None); env:
     variables to set on top of the current environment (e.g. OMP_NUM_THREADS).
     Returns the exit code and everything printed (stdout + stderr); subprocess.TimeoutExpired on a timeout."""
     host = host or default_host()
-    if host == "2025.07":
-        cmd = [mlrun_script(), "--host", "2025.07"]
+    if host in MLRUN_HOSTS:
+        cmd = [mlrun_script(), "--host", host]
     elif host == "2020.09":
         exe = find_meshlabserver(prefix)
         # e.g. libasan.so for plugins built with AddressSanitizer (scripts/sanitize.sh e2e): meshlabserver only

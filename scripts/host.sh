@@ -1,27 +1,34 @@
 #!/usr/bin/env bash
-# Builds the plugins for Debian forky's MeshLab 2025.07 on a Debian bookworm machine (run as root):
-#  1. a forky userland in .hosts/forky (debootstrap --variant=minbase with the sid script), from the
-#     Debian mirror this machine's apt sources name;
-#  2. forky's meshlab and the build dependencies installed there;
-#  3. MeshLab's headers (src/common + vcglib) from forky's orig tarball, taken from the mirror's pool
+# Builds the plugins for a newer MeshLab on a Debian bookworm machine (run as root): MeshLab 2025.07 from
+# Debian forky, or MeshLab 2022.02 from Debian trixie.
+#  1. a userland of that suite in .hosts/<suite> (debootstrap --variant=minbase with the sid script), from
+#     the Debian mirror this machine's apt sources name;
+#  2. the suite's meshlab and the build dependencies installed there;
+#  3. MeshLab's headers (src/common + vcglib) from that version's orig tarball, taken from the mirror's pool
 #     (the matching .dsc is not always published, so `apt-get source` is not used), into
 #     .hosts/meshlab-<version>;
-#  4. the plugins, pectus-mlrun and the unit tests configured and built in build-2025.07/ by the
+#  4. the plugins, pectus-mlrun and the unit tests configured and built in build-<release>/ by the
 #     userland's compiler, the repository appearing there at its own path.
 # Every step is skipped when its result already exists; each step says what it does.
-#   scripts/host_2025.sh            # userland + headers + build
-#   scripts/host_2025.sh userland   # only steps 1-3
-#   scripts/host_2025.sh shell      # a shell inside the userland, in the repository
-#   scripts/host_2025.sh run CMD... # one command there (e.g. ctest --test-dir build-2025.07 -L unit)
-# Environment: PECTUS_HOST_DIR (default .hosts/forky), PECTUS_JOBS (default: the core count).
+#   scripts/host.sh 2025.07            # userland + headers + build (2022.02 likewise)
+#   scripts/host.sh 2025.07 userland   # only steps 1-3
+#   scripts/host.sh 2025.07 shell      # a shell inside the userland, in the repository
+#   scripts/host.sh 2025.07 run CMD... # one command there (e.g. ctest --test-dir build-2025.07 -L unit)
+# Environment: PECTUS_HOST_DIR (default .hosts/<suite>), PECTUS_JOBS (default: the core count).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-HOSTDIR="${PECTUS_HOST_DIR:-$ROOT/.hosts/forky}"
-SUITE=forky
-MLVER_WANT="2025.07"
+MLVER_WANT="${1:-}"
+case "$MLVER_WANT" in
+  2025.07) SUITE=forky; TETGEN=libtet-dev;;
+  2022.02) SUITE=trixie; TETGEN=libtet1.5-dev;;
+  *) echo "host: which MeshLab? scripts/host.sh 2025.07|2022.02 [userland|shell|run CMD...]" >&2; exit 2;;
+esac
+shift
+HOSTDIR="${PECTUS_HOST_DIR:-$ROOT/.hosts/$SUITE}"
+BUILD="build-$MLVER_WANT"
 JOBS="${PECTUS_JOBS:-$(nproc)}"
 export DEBIAN_FRONTEND=noninteractive
-say() { echo "[host-2025.07] $*"; }
+say() { echo "[host-$MLVER_WANT] $*"; }
 
 SUDO=""
 if [ "$(id -u)" != 0 ]; then SUDO="sudo"; fi
@@ -68,14 +75,14 @@ if [ ! -f "$HOSTDIR/.complete-base" ]; then
     say "installing debootstrap on this machine"
     $SUDO apt-get install -y -q --no-install-recommends debootstrap >/dev/null
   fi
-  SCRIPT=/usr/share/debootstrap/scripts/sid   # bookworm's debootstrap has no forky script; sid's works
+  SCRIPT=/usr/share/debootstrap/scripts/sid   # bookworm's debootstrap has no forky script; sid's makes either suite
   say "making a Debian $SUITE userland (minbase) in $HOSTDIR from $MIRROR (about 1-2 min, 220 MB)"
   t=$(date +%s)
   $SUDO rm -rf "$HOSTDIR"
   mkdir -p "$(dirname "$HOSTDIR")"
-  $SUDO debootstrap --variant=minbase "$SUITE" "$HOSTDIR" "$MIRROR" "$SCRIPT" > "$(dirname "$HOSTDIR")/debootstrap.log" 2>&1 || {
-    say "debootstrap failed; the last lines of $(dirname "$HOSTDIR")/debootstrap.log:"; tail -n 20 "$(dirname "$HOSTDIR")/debootstrap.log"; exit 1; }
-  # forky's Release file may be past its Valid-Until on a mirror snapshot
+  $SUDO debootstrap --variant=minbase "$SUITE" "$HOSTDIR" "$MIRROR" "$SCRIPT" > "$(dirname "$HOSTDIR")/debootstrap-$SUITE.log" 2>&1 || {
+    say "debootstrap failed; the last lines of $(dirname "$HOSTDIR")/debootstrap-$SUITE.log:"; tail -n 20 "$(dirname "$HOSTDIR")/debootstrap-$SUITE.log"; exit 1; }
+  # the suite's Release file may be past its Valid-Until on a mirror snapshot
   echo 'Acquire::Check-Valid-Until "false";' | $SUDO tee "$HOSTDIR/etc/apt/apt.conf.d/99pectus-valid-until" >/dev/null
   printf 'Types: deb\nURIs: %s\nSuites: %s\nComponents: main\nSigned-By: /usr/share/keyrings/debian-archive-keyring.gpg\n' \
     "$MIRROR" "$SUITE" | $SUDO tee "$HOSTDIR/etc/apt/sources.list.d/debian.sources" >/dev/null
@@ -86,15 +93,15 @@ fi
 
 # 2. MeshLab and the build dependencies (the same list as scripts/setup.sh's, less what only the
 #    bookworm benchmarks and docs need)
-PKGS=(meshlab g++ make cmake qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev libtet-dev
+PKGS=(meshlab g++ make cmake qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev $TETGEN
       libsuitesparse-dev libomp-dev libgtest-dev libcgal-dev liblemon-dev libnifti2-dev zlib1g-dev
       python3 xvfb xauth dpkg-dev file)
 if [ ! -f "$HOSTDIR/.complete-pkgs" ] || ! in_root dpkg-query -W "${PKGS[@]}" >/dev/null 2>&1; then
   t=$(date +%s)
-  say "installing forky's meshlab and the build dependencies in the userland (about 2 min, +1.3 GB)"
+  say "installing $SUITE's meshlab and the build dependencies in the userland (about 2 min, +1.3 GB)"
   in_root apt-get update -q >/dev/null
-  in_root apt-get install -y -q --no-install-recommends "${PKGS[@]}" > "$(dirname "$HOSTDIR")/apt.log" 2>&1 || {
-    say "apt-get install failed; the last lines of $(dirname "$HOSTDIR")/apt.log:"; tail -n 20 "$(dirname "$HOSTDIR")/apt.log"; exit 1; }
+  in_root apt-get install -y -q --no-install-recommends "${PKGS[@]}" > "$(dirname "$HOSTDIR")/apt-$SUITE.log" 2>&1 || {
+    say "apt-get install failed; the last lines of $(dirname "$HOSTDIR")/apt-$SUITE.log:"; tail -n 20 "$(dirname "$HOSTDIR")/apt-$SUITE.log"; exit 1; }
   in_root apt-get clean
   $SUDO touch "$HOSTDIR/.complete-pkgs"
   say "packages installed in $(( $(date +%s) - t )) s"
@@ -154,8 +161,8 @@ fi
 
 # 4. the build
 t=$(date +%s)
-say "configuring and building into build-2025.07/ (-j$JOBS)"
-in_ns bash -c "cd '$ROOT' && cmake -S . -B build-2025.07 -DCMAKE_BUILD_TYPE=Release \
-    -DMESHLAB_SOURCE_DIR='$(readlink -f "$HDR")' -DMESHLAB_VERSION=${UPVER%%~*} >/dev/null && \
-  cmake --build build-2025.07 -j$JOBS"
+say "configuring and building into $BUILD/ (-j$JOBS)"
+in_ns bash -c "cd '$ROOT' && cmake -S . -B $BUILD -DCMAKE_BUILD_TYPE=Release \
+    -DMESHLAB_SOURCE_DIR='$(readlink -f "$HDR")' -DMESHLAB_VERSION=${UPVER%%[~+]*} >/dev/null && \
+  cmake --build $BUILD -j$JOBS"
 say "built in $(( $(date +%s) - t )) s"

@@ -1,10 +1,11 @@
 #!/usr/bin/env bash
 # Runs a MeshLab filter script with this project's plugins, headless, on either MeshLab host, with
 # meshlabserver's arguments:
-#   scripts/mlrun.sh [--host 2020.09|2025.07] [-i in]... [-s script.mlx] [-o out [-l N] [-m vc fq ...]]...
+#   scripts/mlrun.sh [--host 2020.09|2022.02|2025.07] [-i in]... [-s script.mlx] [-o out [-l N] [-m vc fq ...]]...
 # 2020.09 (default): bookworm's meshlabserver from build/prefix, under xvfb-run.
-# 2025.07: pectus-mlrun in the Debian forky userland (.hosts/forky, build-2025.07/), through chroot. On
-#   first use it makes the userland and the build with scripts/host_2025.sh (about 10 min) and says so;
+# 2025.07: pectus-mlrun in the Debian forky userland (.hosts/forky, build-2025.07/), through chroot;
+# 2022.02: the same in the Debian trixie userland (.hosts/trixie, build-2022.02/). On first use it makes
+#   the userland and the build with scripts/host.sh (about 10 min) and says so;
 #   PECTUS_MLRUN_NO_SETUP=1 refuses instead. The repository, /tmp, the current folder and the folders of
 #   the files named by -i, -o and -s appear inside the userland at their own paths (bind mounts in a
 #   private mount namespace, gone when the command ends), so paths mean the same on both hosts.
@@ -13,7 +14,7 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 HOST=2020.09
 if [ "${1:-}" = --host ]; then
-  [ $# -ge 2 ] || { echo "mlrun: --host needs 2020.09 or 2025.07" >&2; exit 2; }
+  [ $# -ge 2 ] || { echo "mlrun: --host needs 2020.09, 2022.02 or 2025.07" >&2; exit 2; }
   HOST="$2"; shift 2
 fi
 
@@ -25,23 +26,24 @@ case "$HOST" in
     fi
     exec xvfb-run -a -s "-screen 0 1024x768x24" "$EXE" "$@"
     ;;
-  2025.07) ;;
-  *) echo "mlrun: unknown host '$HOST' (2020.09 or 2025.07)" >&2; exit 2;;
+  2025.07) SUITE=forky;;
+  2022.02) SUITE=trixie;;
+  *) echo "mlrun: unknown host '$HOST' (2020.09, 2022.02 or 2025.07)" >&2; exit 2;;
 esac
 
-HOSTDIR="${PECTUS_HOST_DIR:-$ROOT/.hosts/forky}"
-BUILD="${PECTUS_BUILD_2025:-$ROOT/build-2025.07}"
+HOSTDIR="${PECTUS_HOST_DIR:-$ROOT/.hosts/$SUITE}"
+BUILD="$ROOT/build-$HOST"
 EXE="$BUILD/bin/pectus-mlrun"
 if [ ! -f "$HOSTDIR/.complete-pkgs" ] || [ ! -x "$EXE" ]; then
   if [ "${PECTUS_MLRUN_NO_SETUP:-0}" = 1 ]; then
-    echo "mlrun: the MeshLab 2025.07 userland or build is missing ($HOSTDIR, $EXE): make them with scripts/host_2025.sh" >&2
+    echo "mlrun: the MeshLab $HOST userland or build is missing ($HOSTDIR, $EXE): make them with scripts/host.sh $HOST" >&2
     exit 2
   fi
-  echo "mlrun: first use of MeshLab 2025.07: making the forky userland and the build with scripts/host_2025.sh" >&2
-  "$ROOT/scripts/host_2025.sh" >&2
+  echo "mlrun: first use of MeshLab $HOST: making the $SUITE userland and the build with scripts/host.sh $HOST" >&2
+  "$ROOT/scripts/host.sh" "$HOST" >&2
 fi
 if [ "$(id -u)" != 0 ]; then
-  echo "mlrun: --host 2025.07 runs pectus-mlrun through chroot: run as root" >&2; exit 2
+  echo "mlrun: --host $HOST runs pectus-mlrun through chroot: run as root" >&2; exit 2
 fi
 
 # folders to show inside the userland at their own paths

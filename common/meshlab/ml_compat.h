@@ -15,7 +15,11 @@
 #include <common/mlexception.h>
 #include <common/plugins/interfaces/filter_plugin.h>
 #include <common/parameters/rich_parameter_list.h>
+#if __has_include(<common/parameters/rich_parameters.h>)
 #include <common/parameters/rich_parameters.h>
+#else  // 2021.05-2022.02: every parameter class in one header
+#include <common/parameters/rich_parameter.h>
+#endif
 #else
 #include <common/interfaces.h>
 #endif

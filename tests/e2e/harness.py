@@ -20,21 +20,24 @@ _failures: list[str] = []
 _passed = 0
 
 
-def host_2025_ready() -> bool:
-    """the forky userland and the 2025.07 build exist (scripts/host_2025.sh made them)"""
-    return (os.path.exists(os.path.join(SOURCE, ".hosts", "forky", ".complete-pkgs"))
-            and os.path.exists(os.path.join(SOURCE, "build-2025.07", "bin", "pectus-mlrun")))
+SUITES = {"2022.02": "trixie", "2025.07": "forky"}  # the Debian suite whose userland runs each release
 
 
-def need_host_2025():
-    """exit 77 (ctest: skipped) when the MeshLab 2025.07 host is not made"""
-    if not host_2025_ready():
-        print("skipped: the MeshLab 2025.07 host is not made (scripts/host_2025.sh)")
+def host_ready(release: str) -> bool:
+    """the userland and the build of a MeshLab release exist (scripts/host.sh made them)"""
+    return (os.path.exists(os.path.join(SOURCE, ".hosts", SUITES[release], ".complete-pkgs"))
+            and os.path.exists(os.path.join(SOURCE, f"build-{release}", "bin", "pectus-mlrun")))
+
+
+def need_host(release: str):
+    """exit 77 (ctest: skipped) when the MeshLab host of that release is not made"""
+    if not host_ready(release):
+        print(f"skipped: the MeshLab {release} host is not made (scripts/host.sh {release})")
         sys.exit(77)
 
 
-if mlx.default_host() == "2025.07":
-    need_host_2025()
+if mlx.default_host() in SUITES:
+    need_host(mlx.default_host())
 
 
 def workdir(name: str) -> str:
