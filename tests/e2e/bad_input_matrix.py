@@ -17,7 +17,11 @@ failed filter) saving every layer before and after it. A cell is classified as
     python3 tests/e2e/bad_input_matrix.py mga         # run some filters (kept in build/bad_input_results.json)
     python3 tests/e2e/bad_input_matrix.py --write mga # rerun some, rewrite the table with the others' last run
 ctest runs one test per group (e2e_bad_input_<group>, registered by tests/CMakeLists.txt from --groups):
-it checks its cells and compares them with the committed table. Set PECTUS_PREFIX/PECTUS_BUILD when the
+it checks its cells and compares them with the committed table. With PECTUS_MESHLAB_HOST=2025.07 (or
+2022.02) the cells run through pectus-mlrun on that release (e2e_2025_bad_input_<group>): every cell must
+give the committed outcome (error, valid result or not loaded) without a FAIL; the messages may differ where
+the host's own vcglib made the input (the generated cage), and the in-process layer comparison is left to
+the Adapter unit tests built against that release. Set PECTUS_PREFIX/PECTUS_BUILD when the
 build folder is not ./build."""
 from __future__ import annotations
 
@@ -43,6 +47,8 @@ TIMEOUT = 60.0 * float(os.environ.get("PECTUS_TIMEOUT_SCALE", "1"))  # scripts/s
 BUILD = os.environ.get("PECTUS_BUILD", os.path.join(SOURCE, "build"))
 LAYER_CHECK = os.environ.get("PECTUS_LAYER_CHECK", os.path.join(BUILD, "bin", "pectus_layer_check"))
 PLUGINS = os.environ.get("PECTUS_PLUGINS", os.path.join(BUILD, "plugins"))
+HOST = mlx.default_host()
+REFERENCE_HOST = "2020.09"  # the host whose outcomes docs/bad_input_matrix.md holds
 TIMING = re.compile(r"(?<![A-Za-z0-9_])[0-9.]+(e[-+]?[0-9]+)? ?(s|ms|seconds?)\b")  # masked in Log lines
 _NONFINITE = re.compile(rb"(?<![A-Za-z_])-?(nan|inf|infinity)(?![A-Za-z_])", re.I)
 
@@ -256,10 +262,10 @@ class Runner:
         return self._bases[name]
 
     def _make_cage(self):
-        """the coarse rib cage and its landmarks, generated once per build (cached: a rib cage takes seconds)"""
+        """the coarse rib cage and its landmarks, generated once per build and host (cached: a rib cage takes seconds)"""
         from harness import read_ply
         gen = mlx.load_script(_ex("filter_nuss_fea/examples/create_ribcage.mlx"))[0].set(edgeLength=8.0)
-        cache = os.path.join(BUILD, "bad_input_cache", hashlib.sha1(gen.xml().encode()).hexdigest()[:12])
+        cache = os.path.join(BUILD, "bad_input_cache", HOST, hashlib.sha1(gen.xml().encode()).hexdigest()[:12])
         cage, lms = os.path.join(cache, "gen_cage.ply"), os.path.join(cache, "gen_landmarks.ply")
         if not (os.path.exists(cage) and os.path.exists(lms)):
             tmp = tempfile.mkdtemp(prefix="cage-", dir=self.dir)
@@ -360,7 +366,7 @@ class Runner:
             return f"FAIL: crash (rc {r.rc}): " + " / ".join(r.stdout.strip().splitlines()[-3:])
         if not failed:
             return "FAIL: rc 255 without a LOG message: " + " / ".join(r.stdout.strip().splitlines()[-3:])
-        changed = self.layers_after_failure(f, inputs, tag)
+        changed = self.layers_after_failure(f, inputs, tag) if HOST == REFERENCE_HOST else []
         if changed is None:
             return "FAIL: meshlabserver failed but the in-process run did not: " + failed[-1]
         if changed:
@@ -457,6 +463,36 @@ def committed_rows(key: str) -> tuple:
     return rows, (summary[0] if summary else None)
 
 
+# Outcomes that differ from the reference host for a known reason of the other host, and the reason
+HOST_DIFFERENCES = [
+    # MeshLab 2021.05 and later drop the vertices with NaN or Inf coordinates (and their faces) while loading
+    # a file: the NaN and Inf cells are the filter on a cleaned layer, and the loader's warning says so
+    (lambda host, kind, o: kind in ("nan", "inf") and "vertices with NAN coords" in o,
+     "valid once the loader dropped the non-finite vertices"),
+    # forky's TetGen 1.6 refuses the coarse cage that 2025.07's vcglib decimates (a vertex a few microns from
+    # a face), which bookworm's and trixie's TetGen 1.5 mesh (docs/hosts.md)
+    (lambda host, kind, o: host == "2025.07" and "TetGen failed (error code 3)" in o,
+     "refused by TetGen 1.6 (a vertex a few microns from a face of this host's cage)"),
+]
+
+
+def check_kinds(key: str, part: str, rows: list, committed: list):
+    """on another host than the reference: each cell's outcome is of the committed kind (error, valid result,
+    not loaded), or differs for one of the HOST_DIFFERENCES; how many messages differ in their text and
+    for which known reason is printed"""
+    from harness import check
+    kinds = {r.split(" | ")[0][2:]: _short(r.split(" | ", 1)[1]) for r in committed}
+    known = {t: why for t, kind, _, o in rows for test, why in HOST_DIFFERENCES
+             if kinds.get(t) != _short(o) and test(HOST, kind, o)}
+    differ = [t for t, _, _, o in rows if kinds.get(t) != _short(o) and t not in known]
+    check(not differ, f"{filter_title(key)} ({part}) on {HOST}: every cell of the committed kind (E, V, L)",
+          "\n".join(f"{t}: committed {kinds.get(t)}, now {o}" for t, _, _, o in rows if t in differ))
+    texts = sum(1 for t, _, _, o in rows if _row(t, o) not in committed)
+    reasons = {why: sum(1 for w in known.values() if w == why) for why in set(known.values())}
+    print(f"     {filter_title(key)} ({part}) on {HOST}: {len(rows)} cells, {texts} with another message text"
+          + "".join(f"; {n} {why}" for why, n in sorted(reasons.items())))
+
+
 def run_group(group: str):
     """the e2e test of one group: runs its cells, checks them, compares them with the committed table"""
     from harness import check, finish
@@ -473,6 +509,9 @@ def run_group(group: str):
         for title, _, _, outcome in rows:
             check(not outcome.startswith("FAIL"), f"{filter_title(key)} / {title}: {outcome}")
         committed, summary = committed_rows(key)
+        if HOST != REFERENCE_HOST:
+            check_kinds(key, part, rows, committed)
+            continue
         hint = "(rerun python3 tests/e2e/bad_input_matrix.py --write)"
         stale = [_row(t, o) for t, _, _, o in rows if _row(t, o) not in committed]
         check(not stale, f"{filter_title(key)} ({part}): every cell as in docs/bad_input_matrix.md {hint}",
