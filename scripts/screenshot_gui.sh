@@ -3,10 +3,44 @@
 # and a mesh after running it from the GUI. Needs: xvfb xdotool imagemagick (installed by setup.sh
 # when SCREENSHOT_DEPS=1) and a built prefix.
 #   scripts/screenshot_gui.sh MESH.ply OUTDIR
+#   scripts/screenshot_gui.sh --host 2025.07 MESH.ply OUTDIR   # forky's MeshLab 2025.07 (scripts/host.sh 2025.07)
+# With --host 2025.07, MeshLab runs in the forky userland on this machine's Xvfb and loads the plugins of
+# build-2025.07/ from its per-user extra-plugins folder (a fresh HOME under /tmp): one picture of the
+# Filters > Quality Measure and Computations menu with this project's filters beside the mesh in the viewer.
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
-MESH="$1"; OUT="$2"; mkdir -p "$OUT"
+HOST=2020.09
+if [ "${1:-}" = --host ]; then HOST="$2"; shift 2; fi
+MESH="$(readlink -f "$1")"; OUT="$2"; mkdir -p "$OUT"
 command -v xdotool >/dev/null || apt-get install -y -q xdotool >/dev/null
+if [ "$HOST" = 2025.07 ]; then
+  # MeshLab 2025.07 skips the per-user plugins when one of its own fails to load: install the libraries
+  # its plugins need that the userland's minimal install left out
+  chroot "$ROOT/.hosts/forky" apt-get install -y -q --no-install-recommends libmuparser2v5 libqhull-r8.0 lib3ds-1-3 \
+    libopenctm1 >/dev/null
+  home="$(mktemp -d /tmp/pectus-meshlab-home.XXXX)"
+  extra="$home/.local/share/VCG/MeshLab_64bit_fp/MeshLabExtraPlugins/2025.07"
+  mkdir -p "$extra" && cp "$ROOT"/build-2025.07/plugins/*.so "$extra/"
+  export DISPLAY=:94
+  Xvfb $DISPLAY -screen 0 1280x860x24 >/dev/null 2>&1 & XPID=$!
+  "$ROOT/scripts/host.sh" 2025.07 run bash -c "mount -t proc proc /proc && HOME='$home' DISPLAY=$DISPLAY exec meshlab '$MESH'" \
+    >/dev/null 2>&1 & MPID=$!
+  trap 'pkill -x meshlab || true; kill $XPID 2>/dev/null || true; rm -rf "$home"' EXIT
+  sleep 12
+  W=$(xdotool search --name "MeshLab" | tail -1)
+  xdotool windowmove "$W" 0 0 windowsize "$W" 1280 860; sleep 1
+  # turn the cage to face the viewer, then the menu
+  xdotool mousemove 420 250 mousedown 1 sleep 0.2 mousemove 420 350 sleep 0.2 mousemove 420 420 sleep 0.2 mouseup 1; sleep 1
+  import -window root "$home/result.png"
+  xdotool mousemove 116 10 click 1; sleep 1.5
+  xdotool mousemove 200 240 sleep 0.3 mousemove 220 240; sleep 1.5
+  import -window root "$home/menu.png"
+  convert "$home/menu.png" -crop 960x860+0+0 +repage "$home/m.png"
+  convert "$home/result.png" -crop 840x830+0+0 +repage "$home/r.png"
+  convert "$home/m.png" "$home/r.png" -resize x560 +append -resize 1400x +repage "$OUT/meshlab_2025_menu_result.png"
+  echo "screenshot: $OUT/meshlab_2025_menu_result.png"
+  exit 0
+fi
 export DISPLAY=:93
 Xvfb $DISPLAY -screen 0 1280x860x24 >/dev/null 2>&1 & XPID=$!
 trap 'kill $MPID $XPID 2>/dev/null || true' EXIT
