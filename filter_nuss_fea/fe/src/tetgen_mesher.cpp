@@ -3,6 +3,8 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
+#include <iterator>
 #include <limits>
 #include <map>
 #include <numeric>
@@ -156,14 +158,35 @@ struct TetgenOutput {
 
 const char* const kTetgenAdvice = "check it is closed, not self-intersecting and without tiny features.";
 
+// TetGen 1.6, on a surface it takes for self-intersecting, writes the faces it skipped into the working
+// directory before it throws; a failed analysis leaves no such file behind (one that was there stays)
+class SkippedFacesCleanup {
+ public:
+  SkippedFacesCleanup() {
+    for (const char* f : kFiles) existed_.push_back(std::filesystem::exists(f));
+  }
+  void afterFailure() const {
+    std::error_code ec;
+    for (std::size_t i = 0; i < std::size(kFiles); ++i)
+      if (!existed_[i]) std::filesystem::remove(kFiles[i], ec);
+  }
+
+ private:
+  static constexpr const char* kFiles[] = {"tetgen-tmpfile_skipped.node", "tetgen-tmpfile_skipped.face"};
+  std::vector<bool> existed_;
+};
+
 // TetGen in this process; its errors (thrown ints) become InputError
 TetgenOutput tetgenHere(const std::string& switches, tetgenio& in) {
   tetgenio out;
+  const SkippedFacesCleanup cleanup;
   try {
     ::tetrahedralize(const_cast<char*>(switches.c_str()), &in, &out);
   } catch (int code) {
+    cleanup.afterFailure();
     throw InputError("TetGen failed (error code " + std::to_string(code) + ") on the surface: " + kTetgenAdvice);
   } catch (...) {
+    cleanup.afterFailure();
     throw InputError(std::string("TetGen failed on the surface: ") + kTetgenAdvice);
   }
   TetgenOutput r;
