@@ -7,7 +7,8 @@
 //   -i FILE       load a layer (any format MeshLab's I/O plugins read); repeatable
 //   -s FILE       apply the filters of a MeshLab filter script, in order
 //   -o FILE       save a layer after the script: -l N picks the layer (0 = first; default: the current
-//                 one), -m the attributes to save (vc vf vq vn vt fc ff fq fn wc wn wt mp; sa: as text)
+//                 one), -m the attributes to save (vc vf vq vn vt fc ff fq fn wc wn wt mp; sa: as text);
+//                 a layer the document does not have is said and not saved, as meshlabserver does
 //   -p DIR        load the filter plugins in DIR too (default: MeshLab's system plugin folder and the
 //                 plugins folder beside this program's bin/; $PECTUS_MLRUN_PLUGINS adds folders, ':'-separated)
 //   --list        print every filter loaded, with its pymeshlab name, and exit
@@ -326,10 +327,10 @@ int main(int argc, char** argv) {
 
   for (const Output& o : args.outputs) {
     MeshModel* m = o.layer < 0 ? md.mm() : layerAt(md, o.layer);
-    if (m == nullptr) {
+    if (m == nullptr) {  // as meshlabserver: said, and the other outputs still saved
       std::cerr << "pectus-mlrun: no layer " << (o.layer < 0 ? std::string("is current") : std::to_string(o.layer))
-                << " to save as " << o.path.toStdString() << " (" << md.meshNumber() << " layers)\n";
-      return 2;
+                << " to save as " << o.path.toStdString() << " (" << md.meshNumber() << " layers): not saved\n";
+      continue;
     }
     const QString ext = QFileInfo(o.path).suffix().toLower();
     IOPlugin* io = pm.outputMeshPlugin(ext);
