@@ -13,6 +13,10 @@
 //                 plugins folder beside this program's bin/; $PECTUS_MLRUN_PLUGINS adds folders, ':'-separated)
 //   --list        print every filter loaded, with its pymeshlab name, and exit
 //
+// "Change the current layer" (MeshLab 2020.09's filter, gone from 2021.05 on, where the GUI picks the
+// current layer by a click and pymeshlab by MeshSet.set_current_mesh) is carried out by the runner: a
+// script that switches layers runs on every host.
+//
 // The filters' log lines reach standard error as "LOG: <level> <text>" (MeshLab's log prints them, as it
 // did in meshlabserver). Exit status: 0 on
 // success, 255 when a filter fails (its reason is in the log; every layer is left as it was), 2 for a bad
@@ -232,6 +236,25 @@ MeshModel* layerAt(MeshDocument& md, int index) {
   return nullptr;
 }
 
+const QString kChangeLayer = "Change the current layer";
+
+/// 2020.09's "Change the current layer": its parameter "layer" is the index of the layer to make current.
+/// Returns "" or what is wrong.
+std::string changeCurrentLayer(MeshDocument& md, const std::map<QString, std::pair<QString, QString>>& raw) {
+  const auto it = raw.find("layer");
+  bool ok = false;
+  const int index = it == raw.end() ? -1 : it->second.second.toInt(&ok);
+  if (!ok || index < 0)
+    return "'" + kChangeLayer.toStdString() + "' needs a parameter 'layer' with a layer number (0 = the first layer)";
+  MeshModel* m = layerAt(md, index);
+  if (m == nullptr)
+    return "'" + kChangeLayer.toStdString() + "': the document has no layer " + std::to_string(index) + " (" +
+           std::to_string(md.meshNumber()) + " layers)";
+  md.setCurrentMesh(m->id());
+  md.Log.log(GLLogStream::FILTER, "Current layer: " + m->label().toStdString());
+  return "";
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -296,6 +319,15 @@ int main(int argc, char** argv) {
       const QString name = step.first;
       QAction* action = pm.filterAction(name);
       FilterPlugin* fp = action ? pm.getFilterPluginFromAction(action) : nullptr;
+      if (fp == nullptr && name == kChangeLayer) {
+        std::cout << "Applying filter " << name.toStdString() << "\n";
+        const std::string problem = changeCurrentLayer(md, rawStep);
+        if (!problem.empty()) {
+          std::cout << "Problem with filter: " << problem << "\n";
+          return 255;
+        }
+        continue;
+      }
       if (fp == nullptr) {
         std::cerr << "pectus-mlrun: the script names a filter no loaded plugin has: '" << name.toStdString()
                   << "' (pectus-mlrun --list shows them)\n";

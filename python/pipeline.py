@@ -204,7 +204,7 @@ def main(argv=None) -> int:
     rc, r, res = run_pipeline(out, a.age, a.haller, a.elevation, a.sex, a.quick)
     if rc != 0:
         print(res.stdout[-4000:], file=sys.stderr)
-        print(f"pipeline failed (meshlabserver exit {rc}); log in {out}/meshlabserver.log", file=sys.stderr)
+        print(f"pipeline failed (MeshLab {mlx.default_host()} exit {rc}); log in {out}/meshlabserver.log", file=sys.stderr)
         return 1
     print(table(r, a.age, a.sex, a.elevation))
     print(f"\nMGA smoothing: {r['mga']}")

@@ -73,11 +73,11 @@ def main(argv: list[str]) -> int:
     out = os.path.abspath(args[0] if args else os.path.join(ROOT, "out", f"main-{stamp}"))
     print("pectus-meshlab main job: create the rib cage of the thesis' patient 1 (M/8, pectus index 5.3) -> element "
           "quality -> MGA smoothing -> Nuss FE with the force calibrated to 44.7 mm -> thoracic volume (slice, "
-          "envelope) and pectus index before/after, through meshlabserver ...", flush=True)
+          "envelope) and pectus index before/after, through MeshLab " + pipeline.mlx.default_host() + " headless ...", flush=True)
     rc, r, res = pipeline.run_pipeline(out, quick=quick, planner=dict(levels=levels, bars=bars) if with_planner else None)
     if rc != 0:
         print(res.stdout[-4000:], file=sys.stderr)
-        print(f"pipeline failed (meshlabserver exit {rc}); log in {out}/meshlabserver.log", file=sys.stderr)
+        print(f"pipeline failed (MeshLab {pipeline.mlx.default_host()} exit {rc}); log in {out}/meshlabserver.log", file=sys.stderr)
         return 1
     print(pipeline.table(r, 8, "M", 44.7))
     print(f"\nElement quality (alpha) of the cage: mean {r['quality_mean_before']} -> {r['quality_mean_after']}, "
