@@ -176,7 +176,24 @@ class SkippedFacesCleanup {
   std::vector<bool> existed_;
 };
 
-// TetGen in this process; its errors (thrown ints) become InputError
+// TetGen's error code 3: "a self-intersection was detected"
+constexpr int kTetgenSelfIntersection = 3;
+
+// TetGen refused the surface with one of its error codes
+class TetgenRefusal : public InputError {
+ public:
+  TetgenRefusal(int code, const std::string& msg) : InputError(msg), code_(code) {}
+  int code() const { return code_; }
+
+ private:
+  int code_;
+};
+
+TetgenRefusal tetgenRefusal(int code) {
+  return {code, "TetGen failed (error code " + std::to_string(code) + ") on the surface: " + kTetgenAdvice};
+}
+
+// TetGen in this process; its errors (thrown ints) become TetgenRefusal, an InputError
 TetgenOutput tetgenHere(const std::string& switches, tetgenio& in) {
   tetgenio out;
   const SkippedFacesCleanup cleanup;
@@ -184,7 +201,7 @@ TetgenOutput tetgenHere(const std::string& switches, tetgenio& in) {
     ::tetrahedralize(const_cast<char*>(switches.c_str()), &in, &out);
   } catch (int code) {
     cleanup.afterFailure();
-    throw InputError("TetGen failed (error code " + std::to_string(code) + ") on the surface: " + kTetgenAdvice);
+    throw tetgenRefusal(code);
   } catch (...) {
     cleanup.afterFailure();
     throw InputError(std::string("TetGen failed on the surface: ") + kTetgenAdvice);
@@ -236,6 +253,7 @@ bool readAll(int fd, void* data, std::size_t n, const Deadline* deadline, bool& 
 // child that dies becomes an InputError, and so does one still running after `timeLimit` seconds (> 0),
 // which is killed. Without fork (no memory for the page tables) TetGen runs here, without a time limit.
 TetgenOutput runTetgen(const std::string& switches, tetgenio& in, double timeLimit) {
+  constexpr int kRefusedStatus = 1000;  // the child's status for TetGen's error code c: kRefusedStatus + c
   int fd[2];
   if (::pipe(fd) != 0) return tetgenHere(switches, in);
   const pid_t pid = ::fork();
@@ -253,6 +271,8 @@ TetgenOutput runTetgen(const std::string& switches, tetgenio& in, double timeLim
     TetgenOutput r;
     try {
       r = tetgenHere(switches, in);
+    } catch (const TetgenRefusal& e) {
+      status = kRefusedStatus + e.code(), msg = e.what();
     } catch (const std::exception& e) {
       status = 1, msg = e.what();
     }
@@ -302,6 +322,7 @@ TetgenOutput runTetgen(const std::string& switches, tetgenio& in, double timeLim
                      " A different maximum tet volume or tet quality may also get past it.");
   }
   if (ok && status == 1) throw InputError(msg);
+  if (ok && status >= kRefusedStatus) throw TetgenRefusal(status - kRefusedStatus, msg);
   if (!ok || status != 0 || !WIFEXITED(ws) || WEXITSTATUS(ws) != 0)
     throw InputError("TetGen's process ended without a result (exit status " + std::to_string(WIFEXITED(ws) ? WEXITSTATUS(ws) : -1) + ").");
   return r;
@@ -462,7 +483,18 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
   if (opt.radiusEdgeRatio > 0) sw << "q" << opt.radiusEdgeRatio;
   if (opt.maxVolume > 0) sw << "a" << opt.maxVolume;
   if (opt.maxAddedPoints >= 0) sw << "S" << opt.maxAddedPoints;
-  const TetgenOutput out = runTetgen(sw.str(), in, opt.timeLimitSeconds);
+  // TetGen 1.6 merges adjacent facets of one tissue where they are nearly coplanar (or where a sliver face
+  // has a small angle beside a nearly flat edge) and triangulates the merged facet anew; on a surface the exact
+  // check has found free of self-intersections, that new triangulation can cross a neighbour and TetGen
+  // refuses its own result as self-intersecting. Meshed again without merging (-M), the input triangles are
+  // kept as they are. Surfaces TetGen meshes at the first attempt (every one with TetGen 1.5) are unchanged.
+  TetgenOutput out;
+  try {
+    out = runTetgen(sw.str(), in, opt.timeLimitSeconds);
+  } catch (const TetgenRefusal& e) {
+    if (e.code() != kTetgenSelfIntersection) throw;
+    out = runTetgen(sw.str() + "M", in, opt.timeLimitSeconds);
+  }
   if (out.numTets() <= 0) throw InputError("TetGen produced no tetrahedra (is the surface closed?).");
   for (int v : out.tets)
     if (v < 0 || v >= out.numPoints()) throw InputError("TetGen returned a tetrahedron with a node out of range.");
