@@ -134,6 +134,15 @@ open(bad, "w").write(text.replace('name="maxSweeps" type="RichInt"', 'name="maxS
 r = mlx.run([grid_ply], bad, [], host=OTHER)
 check(r.rc == 2 and "'maxSweeps' is RichFloat in the script, the filter expects RichInt" in r.stdout,
       f"{OTHER}, a parameter of the wrong type: a message naming it, exit 2", f"rc {r.rc}: {r.stdout[-800:]}")
+# 2020.09's "Change the current layer", carried out by the runner: the layer named becomes current (the one
+# saved without -l); a layer the document lacks is a message and exit 255
+switch = [mlx.Filter("Change the current layer", layer=mlx.Mesh(k)) for k in (0, 2)]
+r = mlx.run([grid_ply, pts], mlx.Script(switch[:1]), [(out("current", OTHER), "", None)], host=OTHER)
+check(r.rc == 0 and len(read_ply(out("current", OTHER))["F"]) > 0,
+      f"{OTHER}, 'Change the current layer' to layer 0: the grid (not the points loaded last) is saved", f"rc {r.rc}: {r.stdout[-800:]}")
+r = mlx.run([grid_ply, pts], mlx.Script(switch[1:]), [], host=OTHER)
+check(r.rc == 255 and "has no layer 2 (2 layers)" in r.stdout, f"{OTHER}, 'Change the current layer' to a missing layer: exit 255",
+      f"rc {r.rc}: {r.stdout[-800:]}")
 # a script that does not exist
 r = mlx.run([grid_ply], os.path.join(d, "missing.mlx"), [], host=OTHER)
 check(r.rc == 2 and "cannot read the filter script" in r.stdout, f"{OTHER}, a missing script: a message, exit 2",
