@@ -245,33 +245,45 @@ void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Plac
   // vertebral column's tets when the column is in the model
   std::vector<char> fixed(mesh.nodes.size(), 0);
   const double spacing = meanEdgeLength(cage.surface);
+  // the parts of the tets at each node, to find a joint's nodes on its own rib
+  std::vector<std::vector<int>> partsAt(mesh.nodes.size());
+  for (int t = 0; t < mesh.numTets(); ++t)
+    for (int k = 0; k < mesh.nodesPerTet(); ++k) {
+      auto& p = partsAt[size_t(mesh.tets[size_t(t)][size_t(k)])];
+      if (std::find(p.begin(), p.end(), s.tetPart[size_t(t)]) == p.end()) p.push_back(s.tetPart[size_t(t)]);
+    }
   int joints = 0;
   for (const auto& l : lms) {
     const int side = l.code / 100, rib = l.code % 100;
     if (!(side == 1 || side == 2) || rib < 1 || rib > 12) continue;
     ++joints;
-    // each joint fixes the nodes within the joint radius and at least its four nearest nodes: a coarse or
-    // smoothed mesh may have fewer within the radius, and a rib held only at its joint (the floating ribs)
-    // needs three non-collinear nodes fixed; a landmark more than two mean edge lengths beyond the radius
-    // from every node is not on this cage
-    std::array<double, kMinJointNodes> nearest;
-    nearest.fill(std::numeric_limits<double>::infinity());
+    // each joint fixes the nodes within the joint radius and at least the four nodes of its own rib nearest
+    // to it (of any part if the model has no tets of that rib): a coarse or smoothed mesh may have fewer
+    // within the radius, and a rib held only at its joint (the floating ribs, separate pieces of the
+    // surface) needs three non-collinear nodes of its own fixed, not those of the rib next to it; a landmark
+    // more than two mean edge lengths beyond the radius from every node is not on this cage
+    const int part = ribPart(side, rib);
+    const bool ribInModel = std::find(s.tetPart.begin(), s.tetPart.end(), part) != s.tetPart.end();
+    double nearest = std::numeric_limits<double>::infinity();
+    std::vector<std::pair<double, int>> own;  // (distance, node) of the joint's rib, the nearest first
     for (int i = 0; i < mesh.numNodes(); ++i) {
       const double d = (mesh.nodes[i] - l.p).norm();
-      if (d < nearest.back()) nearest.back() = d, std::sort(nearest.begin(), nearest.end());
+      nearest = std::min(nearest, d);
+      const auto& p = partsAt[size_t(i)];
+      if (d <= pl.jointRadius) fixed[i] = 1;
+      if (!ribInModel || std::find(p.begin(), p.end(), part) != p.end()) own.emplace_back(d, i);
     }
-    if (nearest.front() > pl.jointRadius + 2 * spacing)
-      throw InputError("The costovertebral joint of the " + partName(1, l.code) + " at " + pointText(l.p) + " lies " + mm(nearest.front()) +
+    if (nearest > pl.jointRadius + 2 * spacing)
+      throw InputError("The costovertebral joint of the " + partName(1, l.code) + " at " + pointText(l.p) + " lies " + mm(nearest) +
                        " mm from the nearest mesh node, more than the joint radius (" + mm(pl.jointRadius) + " mm) and two mean edge lengths (" +
                        mm(2 * spacing) + " mm): the landmark layer does not belong to this cage; pick the cage's landmark layer or increase the joint radius.");
-    double radius = pl.jointRadius;
-    if (nearest.back() > radius) {
-      radius = nearest.back();
+    const size_t n = std::min<size_t>(kMinJointNodes, own.size());
+    std::partial_sort(own.begin(), own.begin() + std::ptrdiff_t(n), own.end());
+    for (size_t k = 0; k < n; ++k) fixed[size_t(own[k].second)] = 1;
+    if (n > 0 && own[n - 1].first > pl.jointRadius) {
       ++s.jointsWidened;
-      s.widestJointRadius = std::max(s.widestJointRadius, radius);
+      s.widestJointRadius = std::max(s.widestJointRadius, own[n - 1].first);
     }
-    for (int i = 0; i < mesh.numNodes(); ++i)
-      if ((mesh.nodes[i] - l.p).norm() <= radius) fixed[i] = 1;
   }
   if (joints == 0)
     throw InputError(

@@ -11,6 +11,7 @@
 #include "nuss_output.h"
 #include "tissue_join.h"
 #include "pectus/errors.h"
+#include "pectus/labels.h"
 #include "coarse_cage.h"
 #include "ribcage.h"
 
@@ -142,8 +143,8 @@ TEST(NussAnalysis, TissueModuliScaleTheCompliance) {
   EXPECT_NE(errorOf([&] { nuss::analyze(surf, model, lms, bad); }).find("Young's moduli"), std::string::npos);
 }
 
-// A joint with fewer than four mesh nodes within the joint radius (a coarse or smoothed mesh) is fixed at its
-// four nearest nodes, and counted; a joint landmark far from every node is refused.
+// A joint with fewer than four mesh nodes within the joint radius (a coarse or smoothed mesh) is fixed at the
+// four nodes of its own rib nearest to it, and counted; a joint landmark far from every node is refused.
 TEST(NussAnalysis, JointWithoutNodesWithinTheRadiusIsFixedAtItsNearestNodes) {
   const auto surf = nuss::cageFromMesh(cage().mesh);
   const auto& lms = cage().lms;
@@ -163,6 +164,20 @@ TEST(NussAnalysis, JointWithoutNodesWithinTheRadiusIsFixedAtItsNearestNodes) {
   EXPECT_GT(b.widestJointRadius, tiny.place.jointRadius);
   for (int n : b.fixedNodes) EXPECT_EQ(b.result.displacement(n).norm(), 0.0);
   EXPECT_GT(b.elevation, a.elevation);             // fewer fixed nodes: a softer cage
+  // each joint's four are nodes of its own rib (a floating rib held by the next rib's nodes would be free)
+  std::vector<char> isFixed(b.mesh.nodes.size(), 0);
+  for (int n : b.fixedNodes) isFixed[size_t(n)] = 1;
+  for (const auto& l : lms) {
+    const int side = l.code / 100, rib = l.code % 100;
+    if (!(side == 1 || side == 2) || rib < 1 || rib > 12) continue;
+    std::vector<int> own;
+    for (int t = 0; t < b.mesh.numTets(); ++t)
+      if (b.tetPart[size_t(t)] == pectus::ribPart(side, rib))
+        for (int k = 0; k < b.mesh.nodesPerTet(); ++k)
+          if (const int n = b.mesh.tets[size_t(t)][size_t(k)]; isFixed[size_t(n)]) own.push_back(n);
+    std::sort(own.begin(), own.end());
+    EXPECT_GE(std::unique(own.begin(), own.end()) - own.begin(), 4) << "joint " << l.code;
+  }
   auto far = lms;
   for (auto& l : far)
     if (l.code == 104) l.p.y() -= 100;  // 100 mm behind the right 4th rib's head, behind the whole cage
