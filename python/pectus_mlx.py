@@ -227,8 +227,17 @@ def find_meshlabserver(prefix: str | None = None) -> str:
 XVFB_CLEANUP_ERROR = "xvfb-run: error: problem while cleaning up temporary directory"
 
 
-HOSTS = ("2020.09", "2022.02", "2025.07")
-MLRUN_HOSTS = ("2022.02", "2025.07")  # the releases without meshlabserver: pectus-mlrun in a userland
+def userland_suites() -> dict:
+    """{MeshLab release: the Debian suite whose userland runs it} (scripts/meshlab_hosts.txt): the releases
+    without meshlabserver, run by pectus-mlrun"""
+    path = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts", "meshlab_hosts.txt")
+    with open(path) as fh:
+        rows = [line.split() for line in fh if line.strip() and not line.startswith("#")]
+    return {r[0]: r[1] for r in rows}
+
+
+MLRUN_HOSTS = tuple(userland_suites())
+HOSTS = ("2020.09",) + MLRUN_HOSTS
 
 
 def default_host() -> str:

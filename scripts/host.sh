@@ -18,11 +18,12 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 MLVER_WANT="${1:-}"
-case "$MLVER_WANT" in
-  2025.07) SUITE=forky; TETGEN=libtet-dev;;
-  2022.02) SUITE=trixie; TETGEN=libtet1.5-dev;;
-  *) echo "host: which MeshLab? scripts/host.sh 2025.07|2022.02 [userland|shell|run CMD...]" >&2; exit 2;;
-esac
+# the release's Debian suite and TetGen package (scripts/meshlab_hosts.txt)
+read -r SUITE TETGEN < <(awk -v r="$MLVER_WANT" '$1 == r {print $2, $3}' "$ROOT/scripts/meshlab_hosts.txt") || true
+if [ -z "${MLVER_WANT}" ] || [ -z "${SUITE:-}" ]; then
+  echo "host: which MeshLab? scripts/host.sh $(awk '!/^#/ && NF {printf "%s%s", s, $1; s="|"}' "$ROOT/scripts/meshlab_hosts.txt") [userland|shell|run CMD...]" >&2
+  exit 2
+fi
 shift
 HOSTDIR="${PECTUS_HOST_DIR:-$ROOT/.hosts/$SUITE}"
 BUILD="build-$MLVER_WANT"

@@ -26,9 +26,12 @@ case "$HOST" in
     fi
     exec xvfb-run -a -s "-screen 0 1024x768x24" "$EXE" "$@"
     ;;
-  2025.07) SUITE=forky;;
-  2022.02) SUITE=trixie;;
-  *) echo "mlrun: unknown host '$HOST' (2020.09, 2022.02 or 2025.07)" >&2; exit 2;;
+  *)  # the release's Debian suite (scripts/meshlab_hosts.txt)
+    SUITE="$(awk -v r="$HOST" '$1 == r {print $2}' "$ROOT/scripts/meshlab_hosts.txt")"
+    if [ -z "$SUITE" ]; then
+      echo "mlrun: unknown host '$HOST' (2020.09$(awk '!/^#/ && NF {printf ", %s", $1}' "$ROOT/scripts/meshlab_hosts.txt"))" >&2; exit 2
+    fi
+    ;;
 esac
 
 HOSTDIR="${PECTUS_HOST_DIR:-$ROOT/.hosts/$SUITE}"

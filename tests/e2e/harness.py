@@ -20,7 +20,7 @@ _failures: list[str] = []
 _passed = 0
 
 
-SUITES = {"2022.02": "trixie", "2025.07": "forky"}  # the Debian suite whose userland runs each release
+SUITES = mlx.userland_suites()  # the Debian suite whose userland runs each newer release
 
 
 def host_ready(release: str) -> bool:

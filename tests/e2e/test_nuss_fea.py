@@ -98,8 +98,7 @@ check(r.rc != 0 and any("reaches the target" in l for l in r.log), "unreachable 
 # labels put back on the smoothed vertices): its floating ribs are pieces of their own, and the mesh nodes
 # nearest to the joints of ribs 12 belong to ribs 11. Each joint is fixed on its own rib, so every piece is
 # held and the analysis solves (fixed at the nodes nearest to the joints, ribs 12 were free: a singular stiffness)
-DATA = os.path.join(h.SOURCE, "tests", "e2e", "data")
-r = h.run([os.path.join(DATA, "smoothed_cage_age5_landmarks.ply"), os.path.join(DATA, "smoothed_cage_age5.ply")],
+r = h.run([os.path.join(h.DATA, "smoothed_cage_age5_landmarks.ply"), os.path.join(h.DATA, "smoothed_cage_age5.ply")],
           mlx.Script([nuss_fea(landmarkLayer=0, targetElevation=5.0, analysis=1, order=1)]))
 check(r.rc == 0 and any(l.startswith("Nuss FE result") for l in r.log),
       "smoothed coarse cage with floating ribs apart: the FE solves", "\n".join(r.log[-4:]))
