@@ -122,10 +122,10 @@ TEST_F(RibCageCoarse, HallerTransverseSkipsALateralSliver) {
   ASSERT_TRUE(clean.has_value());
   pectus::OwnedMesh m;
   vcg::tri::Append<CMeshO, CMeshO>::MeshCopy(m, *mesh);
-  float xMax = -1e30f, yMax = -1e30f;
+  Scalarm xMax = -1e30f, yMax = -1e30f;  // the mesh's scalar: float or double (MESHLAB_SCALAR)
   for (const auto& v : m.vert) xMax = std::max(xMax, v.cP()[0]), yMax = std::max(yMax, v.cP()[1]);
   auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, 3);
-  const float y = yMax + 50, z = float(clean->zAp);
+  const Scalarm y = yMax + 50, z = Scalarm(clean->zAp);
   vi[0].P() = CMeshO::CoordType(xMax + 5, y, z);
   vi[1].P() = CMeshO::CoordType(xMax + 4, y, z + 1);
   vi[2].P() = CMeshO::CoordType(xMax + 4, y, z - 1);

@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <set>
 
@@ -191,8 +192,14 @@ void thoracicVolumeLeavesTheColumnOut() {
   const double eCut = vol::fergusonEnvelope(cut, range, {}).volume, eKeep = vol::fergusonEnvelope(keep, range, {}).volume;
   std::printf("slice volume: cut %.1f cm3, keep %.1f cm3 (%.1f cm3 with the column's faces); envelope: cut %.1f, keep %.1f cm3\n",
               vCut / 1000, vKeep / 1000, vAll / 1000, eCut / 1000, eKeep / 1000);
-  EXPECT_NEAR(vKeep, vCut, 0.01 * vCut);
-  EXPECT_NEAR(eKeep, eCut, 0.01 * eCut);
+  // The two cages are joined and decimated each on its own (the rib heads meet the vertebrae only where the
+  // column is kept), so their volumes differ by the preparation: 0.4-1.7 % across the hosts' vcglib and the
+  // scalar types (docs/hosts.md). The column's faces, left in, would take about 15 % away: the test tells the two
+  // apart by more than a factor of 5.
+  constexpr double kPreparation = 0.02;
+  EXPECT_NEAR(vKeep, vCut, kPreparation * vCut);
+  EXPECT_NEAR(eKeep, eCut, kPreparation * eCut);
+  EXPECT_GT(std::abs(vAll - vCut), 5 * kPreparation * vCut);
 }
 
 }  // namespace
