@@ -19,7 +19,8 @@
 
 #include "mga_smooth.h"
 #include "off_reader.h"
-#include "pectus/c1_cmesh.h"
+#include "pectus/c1_surface.h"
+#include "pectus/surface_cmesh.h"
 
 namespace sm = pectus::smooth;
 
@@ -92,7 +93,7 @@ int main(int argc, char** argv) try {
     }
   }
   CMeshO m;
-  pectus::c1::fromTriMesh(t, m);
+  pectus::toMesh(t, m);
   for (std::size_t f = 0; f < m.face.size(); ++f)
     if (fauxOf[f] >= 0) m.face[f].SetF(fauxOf[f]);
   if (quads) o.kind = pectus::ElementKind::Quads;

@@ -3,7 +3,8 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pectus/c1_cmesh.h"
+#include "pectus/c1_surface.h"
+#include "pectus/surface_cmesh.h"
 #include "pectus/c1_surface.h"
 #include "pectus/errors.h"
 
@@ -125,7 +126,7 @@ void FilterC1SurfacePlugin::runRefine(FilterContext& ctx) {
   const bool newLayer = ctx.boolean("newLayer");
   checkFaces(mm, "the current");
   ctx.progress(5, "building the C1 surface");
-  const c1::C1Surface surf(c1::toTriMesh(mm.cm), opt);
+  const c1::C1Surface surf(pectus::surfaceOf(mm.cm), opt);
   ctx.progress(40, "refining");
   std::vector<c1::Vec3> normals;
   const c1::TriMesh out = surf.refine(k, &normals);
@@ -135,7 +136,7 @@ void FilterC1SurfacePlugin::runRefine(FilterContext& ctx) {
   const std::string label = mm.label().toStdString();
   MeshModel& dst = newLayer ? ctx.addLayer(mm.label() + QString(" C1 %1x%1").arg(k)) : mm;
   CMeshO& m = newLayer ? dst.cm : ctx.modify(dst);
-  c1::fromTriMesh(out, m, &normals);
+  pectus::toMesh(out, m, &normals);
   if (!newLayer) dst.clearDataMask(MeshModel::MM_FACEFACETOPO | MeshModel::MM_VERTFACETOPO);
   vcg::tri::UpdateBounding<CMeshO>::Box(m);
   vcg::tri::UpdateNormal<CMeshO>::PerFaceNormalized(m);
@@ -152,7 +153,7 @@ void FilterC1SurfacePlugin::runProject(FilterContext& ctx) {
   checkFaces(src, "the surface");
   if (target.cm.vn == 0) throw pectus::InputError("the current layer '" + target.label().toStdString() + "' has no vertices to project");
   ctx.progress(5, "building the C1 surface");
-  const c1::C1Surface surf(c1::toTriMesh(src.cm), opt);
+  const c1::C1Surface surf(pectus::surfaceOf(src.cm), opt);
   surf.buildIndex();
   ctx.progress(20, "projecting");
   std::vector<int> idx;

@@ -5,7 +5,8 @@
 #include <vcg/complex/algorithms/update/normal.h>
 #include <vcg/complex/algorithms/update/topology.h>
 
-#include "pectus/c1_cmesh.h"
+#include "pectus/c1_surface.h"
+#include "pectus/surface_cmesh.h"
 #include "pectus/elements.h"
 #include "pectus/errors.h"
 #include "pectus/mesh_checks.h"
@@ -176,7 +177,7 @@ void FilterQuadConvertPlugin::runConvert(FilterContext& ctx) {
     throw pectus::InputError("layer '" + layer + "' already holds quads or polygons (faux edges); "
                              "convert a triangle mesh, or use 'Mesh Structure Improvement' on the quads");
   ctx.progress(5, "pairing triangles");
-  const auto tri = pectus::c1::toTriMesh(mm.cm);
+  const auto tri = pectus::surfaceOf(mm.cm);
   const auto r = pq::convertToQuads(tri, o);
 
   ctx.progress(90, "writing quads");
@@ -206,7 +207,7 @@ void FilterQuadConvertPlugin::runStructure(FilterContext& ctx) {
   const bool quads = pectus::hasFauxEdges(mm.cm);
   const auto pm = pq::fromCMesh(mm.cm, quads);
   ctx.progress(5, "building the C1 surface");
-  pectus::c1::C1Surface surface(pectus::c1::toTriMesh(mm.cm));
+  pectus::c1::C1Surface surface(pectus::surfaceOf(mm.cm));
   surface.buildIndex();
   ctx.progress(20, "structure operators");
   const auto r = pq::improveStructure(pm, &surface, o);

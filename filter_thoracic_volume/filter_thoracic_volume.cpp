@@ -335,11 +335,11 @@ void FilterThoracicVolumePlugin::runEnvelope(FilterContext& ctx) {
   for (MeshModel* mm : {c.before, c.measured}) {
     if (!mm) continue;
     const auto& s = mm == c.measured ? c.soup : c.beforeSoup;
-    std::map<std::pair<int, int>, int> edges;
-    for (const auto& f : s.F)
-      for (int k = 0; k < 3; ++k) edges[{std::min(f[k], f[(k + 1) % 3]), std::max(f[k], f[(k + 1) % 3])}]++;
-    bool closed = true;
-    for (const auto& e : edges) closed = closed && e.second == 2;
+    const pectus::Topology topo(s);
+    const bool closed =
+        topo.badFace < 0 &&
+        std::none_of(s.F.begin(), s.F.end(), [](const auto& f) { return f[0] == f[1] || f[1] == f[2] || f[2] == f[0]; }) &&
+        std::all_of(topo.edges.begin(), topo.edges.end(), [](const pectus::Topology::Edge& e) { return e.faces == 2; });
     if (closed)
       ctx.log("Layer '" + lab(*mm) + "' is closed: divergence volume " + fmt(vol::divergenceVolume(s), 6) + " mm3");
   }

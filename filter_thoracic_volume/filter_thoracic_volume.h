@@ -2,9 +2,10 @@
 // progress and errors to the host-free cores in core/. No algorithm lives here.
 #pragma once
 #include "filter_plugin.h"
+#include "pectus/surface.h"
 
 namespace pectus::vol {
-struct Soup;
+using Soup = pectus::Surface;
 struct Range;
 }  // namespace pectus::vol
 

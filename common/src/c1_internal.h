@@ -1,4 +1,4 @@
-// Internal to the C1 surface core: mesh topology (vertex->faces, edges) with the manifold checks.
+// Internal to the C1 surface core: the mesh topology's checks and the patch index.
 #pragma once
 #include <array>
 #include <vector>
@@ -7,18 +7,9 @@
 
 namespace pectus::c1 {
 
-struct Topology {
-  struct Edge {
-    int a, b;    ///< vertices, a < b
-    int f0, f1;  ///< face*3 + local edge (local edge l is opposite local vertex l); f1 = -1 on the boundary
-  };
-  /// Throws InputError for invalid indices, NaN/Inf coordinates, non-manifold edges or vertices.
-  explicit Topology(const TriMesh& m);
-  std::vector<int> vfStart, vf;             ///< CSR vertex -> faces
-  std::vector<Edge> edges;
-  std::vector<std::array<int, 3>> faceEdge; ///< per face: edge id of local edge l (-1 for a collapsed edge)
-  std::vector<char> boundary;               ///< per vertex
-};
+/// The mesh's topology (pectus/surface.h), checked for the C1 surface: throws InputError for invalid
+/// indices, NaN/Inf coordinates, duplicate faces, non-manifold edges or vertices.
+Topology checkedTopology(const TriMesh& m);
 
 /// spatial grid of the patches' bounding boxes (closestPoint)
 struct C1Surface::Index {

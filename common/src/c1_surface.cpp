@@ -50,104 +50,50 @@ Vec3 PatchJet::normal() const {
 // ------------------------------------------------------------------------------------------------
 // topology
 
-Topology::Topology(const TriMesh& m) {
-  const int nv = int(m.V.size()), nf = int(m.F.size());
-  for (int f = 0; f < nf; ++f)
-    for (int k = 0; k < 3; ++k) {
-      const int i = m.F[f][k];
-      if (i < 0 || i >= nv) {
-        std::ostringstream s;
-        s << "face " << f << " uses vertex index " << i << ", but the mesh has " << nv << " vertices";
-        throw InputError(s.str());
-      }
-    }
+Topology checkedTopology(const TriMesh& m) {
+  Topology topo(m);
+  const int nv = int(m.V.size());
+  if (topo.badFace >= 0) {
+    std::ostringstream s;
+    s << "face " << topo.badFace << " uses vertex index " << topo.badIndex << ", but the mesh has " << nv << " vertices";
+    throw InputError(s.str());
+  }
   for (int i = 0; i < nv; ++i)
-    if (!m.V[i].allFinite()) {
+    if (!m.V[std::size_t(i)].allFinite()) {
       std::ostringstream s;
       s << "vertex " << i << " has a NaN/Inf coordinate; remove it (Cleaning: Remove Unreferenced / fix the source)";
       throw InputError(s.str());
     }
-  // vertex -> faces (CSR)
-  vfStart.assign(nv + 1, 0);
-  for (const auto& f : m.F)
-    for (int k = 0; k < 3; ++k) ++vfStart[f[k] + 1];
-  for (int i = 0; i < nv; ++i) vfStart[i + 1] += vfStart[i];
-  vf.resize(vfStart[nv]);
-  {
-    std::vector<int> fill(vfStart.begin(), vfStart.end() - 1);
-    for (int f = 0; f < nf; ++f)
-      for (int k = 0; k < 3; ++k) vf[fill[m.F[f][k]]++] = f;
+  for (int e = 0; e < int(topo.edges.size()); ++e) {
+    if (topo.edges[std::size_t(e)].faces <= 2) continue;
+    const int* first = topo.edgeFacesBegin(e);
+    const int* last = topo.edgeFacesEnd(e);
+    auto sorted = [&](int f) {
+      std::array<int, 3> v{m.F[std::size_t(f)][0], m.F[std::size_t(f)][1], m.F[std::size_t(f)][2]};
+      std::sort(v.begin(), v.end());
+      return v;
+    };
+    std::ostringstream s;
+    for (const int* p = first; p != last; ++p)
+      for (const int* q = p + 1; q != last; ++q)
+        if (sorted(*p / 3) == sorted(*q / 3)) {
+          s << "faces " << *p / 3 << " and " << *q / 3
+            << " are duplicates (the same three vertices); remove them first (Cleaning: Remove Duplicate Faces)";
+          throw InputError(s.str());
+        }
+    s << "edge (" << topo.edges[std::size_t(e)].a << ", " << topo.edges[std::size_t(e)].b << ") is shared by "
+      << topo.edges[std::size_t(e)].faces << " faces (non-manifold edge); repair the mesh first (Cleaning: Repair non Manifold Edges)";
+    throw InputError(s.str());
   }
-  // edges by sorting (min, max, face*3+local)
-  std::vector<std::pair<std::uint64_t, int>> keys;
-  keys.reserve(3 * std::size_t(nf));
-  for (int f = 0; f < nf; ++f)
-    for (int l = 0; l < 3; ++l) {
-      int a = m.F[f][(l + 1) % 3], b = m.F[f][(l + 2) % 3];
-      if (a == b) continue;  // repeated vertex: the face is degenerate, the "edge" is a point
-      if (a > b) std::swap(a, b);
-      keys.push_back({(std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b), f * 3 + l});
-    }
-  std::sort(keys.begin(), keys.end());
-  faceEdge.assign(nf, {-1, -1, -1});
-  for (std::size_t i = 0; i < keys.size();) {
-    std::size_t j = i;
-    while (j < keys.size() && keys[j].first == keys[i].first) ++j;
-    if (j - i > 2) {
-      std::ostringstream s;
-      auto sorted = [&](int f) {
-        std::array<int, 3> v{m.F[f][0], m.F[f][1], m.F[f][2]};
-        std::sort(v.begin(), v.end());
-        return v;
-      };
-      for (std::size_t p = i; p < j; ++p)
-        for (std::size_t q = p + 1; q < j; ++q)
-          if (sorted(keys[p].second / 3) == sorted(keys[q].second / 3)) {
-            s << "faces " << keys[p].second / 3 << " and " << keys[q].second / 3
-              << " are duplicates (the same three vertices); remove them first (Cleaning: Remove Duplicate Faces)";
-            throw InputError(s.str());
-          }
-      s << "edge (" << (keys[i].first >> 32) << ", " << (keys[i].first & 0xffffffffu) << ") is shared by "
-        << (j - i) << " faces (non-manifold edge); repair the mesh first (Cleaning: Repair non Manifold Edges)";
-      throw InputError(s.str());
-    }
-    Edge e;
-    e.a = int(keys[i].first >> 32);
-    e.b = int(keys[i].first & 0xffffffffu);
-    e.f0 = keys[i].second;
-    e.f1 = j - i == 2 ? keys[i + 1].second : -1;
-    const int id = int(edges.size());
-    for (std::size_t q = i; q < j; ++q) faceEdge[keys[q].second / 3][keys[q].second % 3] = id;
-    edges.push_back(e);
-    i = j;
-  }
-  // boundary and manifold vertices: a manifold fan is one cycle (edges = faces) or one chain
-  // (edges = faces + 1, two boundary edges)
-  boundary.assign(nv, 0);
-  std::vector<int> vEdges(nv, 0), vBnd(nv, 0);
-  for (const auto& e : edges) {
-    ++vEdges[e.a];
-    ++vEdges[e.b];
-    if (e.f1 < 0) { ++vBnd[e.a]; ++vBnd[e.b]; }
-  }
-  for (int i = 0; i < nv; ++i) {
-    const int nfv = vfStart[i + 1] - vfStart[i];
-    if (nfv == 0) continue;
-    bool repeated = false;
-    for (int q = vfStart[i]; q < vfStart[i + 1]; ++q) {
-      const auto& F = m.F[vf[q]];
-      if (F[0] == F[1] || F[1] == F[2] || F[0] == F[2]) repeated = true;
-    }
-    if (repeated) { boundary[i] = vBnd[i] > 0; continue; }  // counted as degenerate, not judged here
-    const bool ok = (vBnd[i] == 0 && vEdges[i] == nfv) || (vBnd[i] == 2 && vEdges[i] == nfv + 1);
-    if (!ok) {
+  for (int i = 0; i < nv; ++i)
+    if (topo.nonManifoldVertex[std::size_t(i)]) {
+      const int nfv = topo.vfStart[std::size_t(i) + 1] - topo.vfStart[std::size_t(i)];
       std::ostringstream s;
       s << "vertex " << i << " is non-manifold (its " << nfv << " faces form more than one fan); repair the "
         << "mesh first (Cleaning: Repair non Manifold Vertices by splitting)";
       throw InputError(s.str());
     }
-    boundary[i] = vBnd[i] > 0;
-  }
+  return topo;
 }
 
 // ------------------------------------------------------------------------------------------------
@@ -539,7 +485,7 @@ void controlNets(const TriMesh& mesh, const std::vector<Vec3>& normals, const st
 }  // namespace
 
 void C1Surface::build(std::vector<Vec3>* given) {
-  topo_ = std::make_shared<const Topology>(mesh_);
+  topo_ = std::make_shared<const Topology>(checkedTopology(mesh_));
   const Topology& topo = *topo_;
   const int nv = int(mesh_.V.size()), nf = int(mesh_.F.size());
   const bool hf = opt_.frame == Frame::HeightField;

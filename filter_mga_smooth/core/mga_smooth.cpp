@@ -10,7 +10,8 @@
 #include <utility>
 
 #include "creases.h"
-#include "pectus/c1_cmesh.h"
+#include "pectus/c1_surface.h"
+#include "pectus/surface_cmesh.h"
 #include "pectus/c1_surface.h"
 #include "pectus/element_quality.h"
 #include "pectus/errors.h"
@@ -984,7 +985,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   // the nodes, the elements on them, and the C1 surface of the original mesh, built once (its topology
   // also gives the edges for the fixed nodes)
   std::vector<int> toM;
-  const c1::TriMesh tm = c1::toTriMesh(m, &toM);
+  const c1::TriMesh tm = pectus::surfaceOf(m, {}, &toM);
   const ElementMesh em = buildElements(m, opt.kind);
   Mesh M = buildMesh(tm, toM, em, m.vert.size());
   Result res;

@@ -8,7 +8,8 @@
 
 #include "creases.h"
 #include "mga_smooth.h"
-#include "pectus/c1_cmesh.h"
+#include "pectus/c1_surface.h"
+#include "pectus/surface_cmesh.h"
 
 using pectus::Vec3;
 namespace sm = pectus::smooth;
@@ -185,7 +186,7 @@ TEST(Creases, SmoothingKeepsCreaseNodesAndRefusesAllCreases) {
   t.V = cube.V;
   t.F = cube.F;
   CMeshO m;
-  pectus::c1::fromTriMesh(t, m);
+  pectus::toMesh(t, m);
   sm::Options o;
   o.maxSweeps = 2;
   const sm::Result r = sm::smoothMesh(m, o);
@@ -207,7 +208,7 @@ TEST(Creases, SmoothingKeepsCreaseNodesAndRefusesAllCreases) {
   t.V = c8.V;
   t.F = c8.F;
   CMeshO m8;
-  pectus::c1::fromTriMesh(t, m8);
+  pectus::toMesh(t, m8);
   try {
     sm::smoothMesh(m8, o);
     FAIL() << "a mesh that is all creases has no free node";

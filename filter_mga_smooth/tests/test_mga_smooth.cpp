@@ -9,7 +9,8 @@
 #include <random>
 
 #include "mga_smooth.h"
-#include "pectus/c1_cmesh.h"
+#include "pectus/c1_surface.h"
+#include "pectus/surface_cmesh.h"
 #include "pectus/errors.h"
 
 using pectus::Vec3;
@@ -47,7 +48,7 @@ TriMesh grid(int n, double jitter, unsigned seed, std::vector<std::array<int, 4>
 
 std::unique_ptr<CMeshO> toMesh(const TriMesh& t, bool quads = false) {
   auto m = std::make_unique<CMeshO>();
-  pectus::c1::fromTriMesh(t, *m);
+  pectus::toMesh(t, *m);
   if (quads)
     for (std::size_t f = 0; f + 1 < m->face.size(); f += 2) {
       m->face[f].SetF(2);      // (a b c): edge c-a

@@ -81,11 +81,11 @@ namespace {
 // analysed mesh moved by the same displacements (nuss_output.h, deformedSurface).
 vol::Soup measuredSurface(const CageSurface& cage, const Analysis* after = nullptr) {
   vol::Soup s;
-  s.V = cage.surface.vertices;
+  s.V = cage.surface.V;
   if (after)
     for (size_t i = 0; i < s.V.size(); ++i) s.V[i] += after->result.displacement(static_cast<int>(i));
-  for (size_t f = 0; f < cage.surface.faces.size(); ++f)
-    if (cage.facePart[f] != kVertebralColumn) s.F.push_back(cage.surface.faces[f]);
+  for (size_t f = 0; f < cage.surface.F.size(); ++f)
+    if (cage.facePart[f] != kVertebralColumn) s.F.push_back(cage.surface.F[f]);
   return s;
 }
 }  // namespace

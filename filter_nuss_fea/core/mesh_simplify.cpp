@@ -5,7 +5,7 @@
 
 #include <vcg/complex/append.h>
 
-#include "self_intersections.h"
+#include "pectus/surface_cmesh.h"
 
 #include <algorithm>
 #include <cmath>

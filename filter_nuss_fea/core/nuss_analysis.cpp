@@ -106,9 +106,9 @@ CageSurface cageFromMesh(const CMeshO& m) {
     if (!used[i]) { ++c.unreferencedVertices; continue; }
     const int r = find(parent, int(i));
     if (compact[r] < 0) {
-      compact[r] = static_cast<int>(c.surface.vertices.size());
+      compact[r] = static_cast<int>(c.surface.V.size());
       const auto& p = m.vert[r].cP();
-      c.surface.vertices.emplace_back(p[0], p[1], p[2]);
+      c.surface.V.emplace_back(p[0], p[1], p[2]);
     }
   }
   c.nodeOfVertex.assign(m.vert.size(), -1);
@@ -134,7 +134,7 @@ CageSurface cageFromMesh(const CMeshO& m) {
     auto key = faces[f];
     std::sort(key.begin(), key.end());
     if (c.weldedFaces > 0 && seen[key] == 2) { ++c.weldedFaces; continue; }  // a collapsed tent leaves a doubled face
-    c.surface.faces.push_back(faces[f]);
+    c.surface.F.push_back(faces[f]);
     c.surface.faceTissue.push_back(tissue[f]);
     c.facePart.push_back(part[f]);
   }
@@ -156,11 +156,11 @@ namespace {
 // surface vertices (= mesh nodes 0..nv-1) of faces with a given predicate, within r of c
 std::vector<int> surfaceNodesNear(const CageSurface& cage, const Vector3d& c, double r,
                                   const std::function<bool(size_t)>& facePred) {
-  std::vector<char> take(cage.surface.vertices.size(), 0);
-  for (size_t f = 0; f < cage.surface.faces.size(); ++f) {
+  std::vector<char> take(cage.surface.V.size(), 0);
+  for (size_t f = 0; f < cage.surface.F.size(); ++f) {
     if (!facePred(f)) continue;
-    for (int v : cage.surface.faces[f])
-      if ((cage.surface.vertices[v] - c).norm() <= r) take[v] = 1;
+    for (int v : cage.surface.F[f])
+      if ((cage.surface.V[v] - c).norm() <= r) take[v] = 1;
   }
   std::vector<int> out;
   for (size_t v = 0; v < take.size(); ++v)
@@ -172,10 +172,10 @@ std::vector<int> surfaceNodesNear(const CageSurface& cage, const Vector3d& c, do
 int nearestVertexOfPart(const CageSurface& cage, int part, const Vector3d& p, int tissue = 0) {
   int best = -1;
   double bd = 1e300;
-  for (size_t f = 0; f < cage.surface.faces.size(); ++f) {
+  for (size_t f = 0; f < cage.surface.F.size(); ++f) {
     if (cage.facePart[f] != part || (tissue && cage.surface.faceTissue[f] != tissue)) continue;
-    for (int v : cage.surface.faces[f]) {
-      const double d = (cage.surface.vertices[v] - p).squaredNorm();
+    for (int v : cage.surface.F[f]) {
+      const double d = (cage.surface.V[v] - p).squaredNorm();
       if (d < bd) bd = d, best = v;
     }
   }
@@ -192,11 +192,11 @@ Vector3d barExit(const CageSurface& cage, const std::vector<Landmark>& lms, int 
   Vector3d mid = Vector3d::Zero();
   for (int rib : {space, space + 1}) {
     const int part = ribPart(side, rib);
-    std::vector<char> on(cage.surface.vertices.size(), 0);
+    std::vector<char> on(cage.surface.V.size(), 0);
     double xmax = -1;
-    for (size_t f = 0; f < cage.surface.faces.size(); ++f)
+    for (size_t f = 0; f < cage.surface.F.size(); ++f)
       if (cage.facePart[f] == part && cage.surface.faceTissue[f] == int(Tissue::Bone))
-        for (int v : cage.surface.faces[f]) on[v] = 1, xmax = std::max(xmax, std::abs(cage.surface.vertices[v].x()));
+        for (int v : cage.surface.F[f]) on[v] = 1, xmax = std::max(xmax, std::abs(cage.surface.V[v].x()));
     if (xmax < 0)
       throw InputError("No bar exit landmark for intercostal space " + std::to_string(space) + " on the " + sideName + " (code " +
                        std::to_string(barExitLandmark(side, space)) + ") and the cage has no " + partName(int(Tissue::Bone), part) +
@@ -204,7 +204,7 @@ Vector3d barExit(const CageSurface& cage, const std::vector<Landmark>& lms, int 
     Vector3d c = Vector3d::Zero();
     int n = 0;
     for (size_t v = 0; v < on.size(); ++v)
-      if (on[v] && std::abs(cage.surface.vertices[v].x()) >= xmax - 10.0) c += cage.surface.vertices[v], ++n;
+      if (on[v] && std::abs(cage.surface.V[v].x()) >= xmax - 10.0) c += cage.surface.V[v], ++n;
     mid += 0.5 * c / n;
   }
   return mid;
@@ -224,9 +224,9 @@ constexpr int kMinJointNodes = 4;  // fixed nodes per costovertebral joint, at l
 // mm: the mean length of the faces' edges (an edge of two faces counted twice)
 double meanEdgeLength(const fe::SurfaceMesh& s) {
   double sum = 0;
-  for (const auto& f : s.faces)
-    for (int k = 0; k < 3; ++k) sum += (s.vertices[size_t(f[k])] - s.vertices[size_t(f[(k + 1) % 3])]).norm();
-  return sum / double(std::max<std::size_t>(3 * s.faces.size(), 1));
+  for (const auto& f : s.F)
+    for (int k = 0; k < 3; ++k) sum += (s.V[size_t(f[k])] - s.V[size_t(f[(k + 1) % 3])]).norm();
+  return sum / double(std::max<std::size_t>(3 * s.F.size(), 1));
 }
 
 // the fixed nodes, the Fe nodes and the four Fsr patches, into s (s.mesh: the tet mesh of cage)
@@ -306,7 +306,7 @@ void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const
   auto sternumFace = [&](size_t f) { return cage.surface.faceTissue[f] == int(Tissue::Sternum); };
   const Vector3d sp = lowerSternumEnd(lms, pl, "the elevating force goes there");
   bool anySternum = false;
-  for (size_t f = 0; f < cage.surface.faces.size() && !anySternum; ++f) anySternum = sternumFace(f);
+  for (size_t f = 0; f < cage.surface.F.size() && !anySternum; ++f) anySternum = sternumFace(f);
   if (!anySternum) throw InputError("The cage has no sternum faces (tissue code 3): the elevating force acts on the sternum.");
   s.sternumNodes = surfaceNodesNear(cage, sp, pl.sternumLoadRadius, sternumFace);
   if (s.sternumNodes.empty())
@@ -325,7 +325,7 @@ void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const
         const int v = nearestVertexOfPart(cage, part, *exit, int(Tissue::Bone));
         const std::string name = partName(int(Tissue::Bone), part);
         if (v < 0) throw InputError("The cage has no bone faces of the " + name + ": the rib support force of the" + bar + " bar exit goes there.");
-        const Vector3d c = cage.surface.vertices[v];
+        const Vector3d c = cage.surface.V[v];
         auto nodes = surfaceNodesNear(cage, c, pl.ribSupportRadius, [&](size_t f) { return cage.facePart[f] == part; });
         if ((c - *exit).norm() > 40)
           throw InputError("The " + name + " is " + mm((c - *exit).norm(), 0) + " mm from the" + bar + " bar exit " + pointText(*exit) +
@@ -348,10 +348,10 @@ void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const
   const double z2 = sp.z() + 0.5 * (exits2[0].z() + exits2[1].z() - exits1[0].z() - exits1[1].z());
   Vector3d c2 = Vector3d::Zero();
   int nBand = 0;
-  for (size_t f = 0; f < cage.surface.faces.size(); ++f)
+  for (size_t f = 0; f < cage.surface.F.size(); ++f)
     if (sternumFace(f))
-      for (int v : cage.surface.faces[f])
-        if (std::abs(cage.surface.vertices[v].z() - z2) <= pl.sternumLoadRadius) c2 += cage.surface.vertices[v], ++nBand;
+      for (int v : cage.surface.F[f])
+        if (std::abs(cage.surface.V[v].z() - z2) <= pl.sternumLoadRadius) c2 += cage.surface.V[v], ++nBand;
   if (nBand == 0)
     throw InputError("The second bar (intercostal space " + std::to_string(pl.secondSpace) + ") crosses the midline at z = " + mm(z2) +
                      " mm, where the cage has no sternum: choose a space whose bar meets the sternum.");
@@ -508,21 +508,21 @@ ChestLine chestLine(const CageSurface& cage, const std::vector<Landmark>& lms, c
   checkRadii(pl);
   const Vector3d end = lowerSternumEnd(lms, pl, "the chest line is measured there");
   const Vector3d dir = pl.direction.normalized();
-  const auto& V = cage.surface.vertices;
+  const auto& V = cage.surface.V;
   // 1. the sternum's anterior surface near its lower end
   std::optional<Vector3d> front;
-  for (size_t f = 0; f < cage.surface.faces.size(); ++f)
+  for (size_t f = 0; f < cage.surface.F.size(); ++f)
     if (cage.surface.faceTissue[f] == int(Tissue::Sternum))
-      for (int v : cage.surface.faces[f])
+      for (int v : cage.surface.F[f])
         if ((V[v] - end).norm() <= pl.sternumLoadRadius && (!front || dir.dot(V[v]) > dir.dot(*front))) front = V[v];
   if (!front)
     throw InputError("No sternum surface lies within " + mm(pl.sternumLoadRadius) + " mm of the lower sternum end " + pointText(end) +
                      ": the chest line depth is measured from the sternum's anterior surface there.");
   // 2. the most anterior cage point on each side of the sternum, in a slab around the lower end's level
   std::optional<Vector3d> side[2];
-  for (size_t f = 0; f < cage.surface.faces.size(); ++f) {
+  for (size_t f = 0; f < cage.surface.F.size(); ++f) {
     if (cage.facePart[f] == kVertebralColumn || cage.surface.faceTissue[f] == int(Tissue::Sternum)) continue;
-    for (int v : cage.surface.faces[f]) {
+    for (int v : cage.surface.F[f]) {
       if (std::abs(V[v].z() - end.z()) > kChestLineSlab) continue;
       const double dx = V[v].x() - end.x();
       if (std::abs(dx) <= kChestLineGap) continue;

@@ -13,7 +13,7 @@
 #include "mesh_simplify.h"
 #include "pectus/errors.h"
 #include "ribcage_model.h"
-#include "self_intersections.h"
+#include "pectus/surface_cmesh.h"
 
 namespace pectus::ribcage {
 

@@ -23,6 +23,7 @@
 #include <wrap/io_trimesh/import_ply.h>
 
 #include "label_volume.h"
+#include "pectus/surface_cmesh.h"
 #include "pectus/errors.h"
 
 namespace fs = std::filesystem;
@@ -141,20 +142,17 @@ std::vector<std::string> splitLines(const std::string& text) {
 // ------------------------------------------------------------------------------------------------
 // a triangle soup as a file gives it, then one finishing step for every format
 
-struct Soup {
-  std::vector<std::array<double, 3>> v;
-  std::vector<std::array<int, 3>> f;
-};
+using Soup = pectus::Surface;
 
 void finish(const std::string& path, Soup& s, CMeshO& out, MeshFileStats& st) {
-  st.trianglesRead = int(s.f.size());
+  st.trianglesRead = int(s.F.size());
   // faces with a non-finite corner are dropped (they would poison every later computation)
-  std::vector<char> finite(s.v.size());
-  for (std::size_t i = 0; i < s.v.size(); ++i)
-    finite[i] = std::isfinite(s.v[i][0]) && std::isfinite(s.v[i][1]) && std::isfinite(s.v[i][2]);
+  std::vector<char> finite(s.V.size());
+  for (std::size_t i = 0; i < s.V.size(); ++i)
+    finite[i] = std::isfinite(s.V[i][0]) && std::isfinite(s.V[i][1]) && std::isfinite(s.V[i][2]);
   std::vector<std::array<int, 3>> faces;
-  faces.reserve(s.f.size());
-  for (const auto& f : s.f) {
+  faces.reserve(s.F.size());
+  for (const auto& f : s.F) {
     if (finite[std::size_t(f[0])] && finite[std::size_t(f[1])] && finite[std::size_t(f[2])])
       faces.push_back(f);
     else
@@ -168,16 +166,16 @@ void finish(const std::string& path, Soup& s, CMeshO& out, MeshFileStats& st) {
   // merge vertices at the same position (as vcg's RemoveDuplicateVertex: equal in the mesh's float
   // scalar), keeping the first one's order; vertices no face uses are not carried over
   std::map<std::array<Scalarm, 3>, int> at;
-  std::vector<int> map(s.v.size(), -1);
+  std::vector<int> map(s.V.size(), -1);
   std::vector<Point3m> pos;
-  std::vector<char> used(s.v.size(), 0);
+  std::vector<char> used(s.V.size(), 0);
   for (const auto& f : faces)
     for (int k : f) used[std::size_t(k)] = 1;
   int referenced = 0;
-  for (std::size_t i = 0; i < s.v.size(); ++i) {
+  for (std::size_t i = 0; i < s.V.size(); ++i) {
     if (!used[i]) continue;
     ++referenced;
-    const std::array<Scalarm, 3> key{Scalarm(s.v[i][0]), Scalarm(s.v[i][1]), Scalarm(s.v[i][2])};
+    const std::array<Scalarm, 3> key{Scalarm(s.V[i][0]), Scalarm(s.V[i][1]), Scalarm(s.V[i][2])};
     auto it = at.find(key);
     if (it == at.end()) {
       it = at.emplace(key, int(pos.size())).first;
@@ -185,7 +183,7 @@ void finish(const std::string& path, Soup& s, CMeshO& out, MeshFileStats& st) {
     }
     map[i] = it->second;
   }
-  st.unreferencedVertices = int(s.v.size()) - referenced;
+  st.unreferencedVertices = int(s.V.size()) - referenced;
   st.mergedVertices = referenced - int(pos.size());
 
   out.Clear();
@@ -223,14 +221,14 @@ void readStl(const std::string& path, Soup& s, MeshFileStats& st) {
   if (binarySize) {
     st.format = "binary STL";
     const std::uint32_t n = le32(&data[80]);
-    s.v.reserve(std::size_t(n) * 3);
-    s.f.reserve(n);
+    s.V.reserve(std::size_t(n) * 3);
+    s.F.reserve(n);
     for (std::uint32_t i = 0; i < n; ++i) {
       const char* p = &data[84 + 50 * std::size_t(i) + 12];  // after the normal
       for (int k = 0; k < 3; ++k)
-        s.v.push_back({double(leFloat(p + 12 * k)), double(leFloat(p + 12 * k + 4)), double(leFloat(p + 12 * k + 8))});
+        s.V.push_back({double(leFloat(p + 12 * k)), double(leFloat(p + 12 * k + 4)), double(leFloat(p + 12 * k + 8))});
       const int b = int(3 * i);
-      s.f.push_back({b, b + 1, b + 2});
+      s.F.push_back({b, b + 1, b + 2});
     }
     return;
   }
@@ -260,13 +258,13 @@ void readStl(const std::string& path, Soup& s, MeshFileStats& st) {
       std::array<double, 3> p{};
       if (t.size() < 4 || !parseFloat(t[1], p[0]) || !parseFloat(t[2], p[1]) || !parseFloat(t[3], p[2]))
         throw InputError(where() + "a vertex needs three numbers: '" + trim(lines[ln]) + "'");
-      corners.push_back(int(s.v.size()));
-      s.v.push_back(p);
+      corners.push_back(int(s.V.size()));
+      s.V.push_back({p[0], p[1], p[2]});
     } else if (k == "endfacet") {
       if (!inFacet) throw InputError(where() + "'endfacet' without 'facet'");
       if (corners.size() < 3)
         throw InputError(where() + "a facet with " + std::to_string(corners.size()) + " vertices (3 needed)");
-      for (std::size_t c = 1; c + 1 < corners.size(); ++c) s.f.push_back({corners[0], corners[c], corners[c + 1]});
+      for (std::size_t c = 1; c + 1 < corners.size(); ++c) s.F.push_back({corners[0], corners[c], corners[c + 1]});
       inFacet = false;
     } else if (k == "endsolid") {
       if (inFacet) throw InputError(where() + "'endsolid' inside a facet");
@@ -310,7 +308,7 @@ void readObj(const std::string& path, Soup& s, MeshFileStats& st) {
       std::array<double, 3> p{};
       if (t.size() < 4 || !parseFloat(t[1], p[0]) || !parseFloat(t[2], p[1]) || !parseFloat(t[3], p[2]))
         throw InputError(where() + "a vertex needs three numbers: '" + trim(line) + "'");
-      s.v.push_back(p);  // a 4th value (w) or colours after x y z are ignored
+      s.V.push_back({p[0], p[1], p[2]});  // a 4th value (w) or colours after x y z are ignored
     } else if (t[0] == "f" || t[0] == "fo") {
       if (t.size() < 4)
         throw InputError(where() + "a face needs at least 3 vertices: '" + trim(line) + "'");
@@ -321,10 +319,10 @@ void readObj(const std::string& path, Soup& s, MeshFileStats& st) {
         if (!parseInt(v, k) || k == 0)
           throw InputError(where() + "bad vertex index '" + t[i] + "' (indices start at 1; negative ones count back)");
         if (k < 0) {
-          k += (long long)(s.v.size()) + 1;  // relative to the vertices read so far
+          k += (long long)(s.V.size()) + 1;  // relative to the vertices read so far
           if (k < 1)
             throw InputError(where() + "vertex index " + v + " refers before the first vertex (" +
-                             std::to_string(s.v.size()) + " vertices defined before this line)");
+                             std::to_string(s.V.size()) + " vertices defined before this line)");
         }
         idx.push_back(k);
       }
@@ -339,32 +337,18 @@ void readObj(const std::string& path, Soup& s, MeshFileStats& st) {
     std::array<int, 3> f{};
     for (int k = 0; k < 3; ++k) {
       const long long v = faces[i][std::size_t(k)];
-      if (v > (long long)(s.v.size()))
+      if (v > (long long)(s.V.size()))
         throw InputError("file '" + path + "' line " + std::to_string(faceLine[i]) + ": face refers to vertex " +
-                         std::to_string(v) + " but the file has " + std::to_string(s.v.size()) + " vertices");
+                         std::to_string(v) + " but the file has " + std::to_string(s.V.size()) + " vertices");
       f[std::size_t(k)] = int(v - 1);
     }
-    s.f.push_back(f);
+    s.F.push_back(f);
   }
 }
 
 // ------------------------------------------------------------------------------------------------
 // PLY and OFF through vcglib's importers
 
-void fromMesh(const CMeshO& m, Soup& s) {
-  std::vector<int> idx(m.vert.size(), -1);
-  for (std::size_t i = 0; i < m.vert.size(); ++i) {
-    if (m.vert[i].IsD()) continue;
-    idx[i] = int(s.v.size());
-    const auto& p = m.vert[i].cP();
-    s.v.push_back({double(p[0]), double(p[1]), double(p[2])});
-  }
-  for (const auto& f : m.face) {
-    if (f.IsD()) continue;
-    s.f.push_back({idx[std::size_t(vcg::tri::Index(m, f.cV(0)))], idx[std::size_t(vcg::tri::Index(m, f.cV(1)))],
-                   idx[std::size_t(vcg::tri::Index(m, f.cV(2)))]});
-  }
-}
 
 void readPly(const std::string& path, Soup& s, MeshFileStats& st) {
   st.format = "PLY";
@@ -373,7 +357,7 @@ void readPly(const std::string& path, Soup& s, MeshFileStats& st) {
   const int err = vcg::tri::io::ImporterPLY<CMeshO>::Open(m, path.c_str(), mask);
   if (vcg::tri::io::ImporterPLY<CMeshO>::ErrorCritical(err))
     throw InputError("file '" + path + "' cannot be read as PLY: " + vcg::tri::io::ImporterPLY<CMeshO>::ErrorMsg(err));
-  fromMesh(m, s);
+  s = surfaceOf(m);
 }
 
 void readOff(const std::string& path, Soup& s, MeshFileStats& st) {
@@ -383,7 +367,7 @@ void readOff(const std::string& path, Soup& s, MeshFileStats& st) {
   const int err = vcg::tri::io::ImporterOFF<CMeshO>::Open(m, path.c_str(), mask);
   if (err != 0)
     throw InputError("file '" + path + "' cannot be read as OFF: " + vcg::tri::io::ImporterOFF<CMeshO>::ErrorMsg(err));
-  fromMesh(m, s);
+  s = surfaceOf(m);
 }
 
 // ------------------------------------------------------------------------------------------------

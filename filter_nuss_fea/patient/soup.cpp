@@ -39,35 +39,7 @@ Soup soupOfSurfaceMesh(const Mesh& m) {
   }
   return out;
 }
-
-int findRoot(std::vector<int>& p, int i) {
-  while (p[std::size_t(i)] != i) i = p[std::size_t(i)] = p[std::size_t(p[std::size_t(i)])];
-  return i;
-}
 }  // namespace
-
-Soup soupOf(const CMeshO& m) {
-  Soup s;
-  std::vector<int> id(m.vert.size(), -1);
-  for (const auto& f : m.face) {
-    if (f.IsD()) continue;
-    std::array<int, 3> t{};
-    bool finite = true;
-    for (int k = 0; k < 3; ++k) {
-      const std::size_t v = std::size_t(vcg::tri::Index(m, f.cV(k)));
-      const Vec3 p = toEigen(m.vert[v].cP());
-      if (!p.allFinite()) finite = false;
-      t[std::size_t(k)] = int(v);
-    }
-    if (!finite) continue;
-    for (int& v : t) {
-      if (id[std::size_t(v)] < 0) id[std::size_t(v)] = int(s.V.size()), s.V.push_back(toEigen(m.vert[std::size_t(v)].cP()));
-      v = id[std::size_t(v)];
-    }
-    s.F.push_back(t);
-  }
-  return s;
-}
 
 void weld(Soup& s) {
   std::map<std::tuple<double, double, double>, int> at;
@@ -104,24 +76,13 @@ void append(Soup& to, const Soup& s) {
 }
 
 std::vector<Soup> components(const Soup& s) {
-  std::vector<int> p(s.V.size());
-  std::iota(p.begin(), p.end(), 0);
-  for (const auto& f : s.F) {
-    const int a = findRoot(p, f[0]);
-    for (int k = 1; k < 3; ++k) {
-      const int b = findRoot(p, f[std::size_t(k)]);
-      if (a != b) p[std::size_t(b)] = a;
-    }
-  }
-  std::map<int, std::size_t> index;
-  std::vector<Soup> out;
-  std::vector<std::map<int, int>> vmap;
-  for (const auto& f : s.F) {
-    const int r = findRoot(p, f[0]);
-    auto [it, fresh] = index.emplace(r, out.size());
-    if (fresh) out.emplace_back(), vmap.emplace_back();
-    Soup& c = out[it->second];
-    auto& vm = vmap[it->second];
+  std::vector<int> faceComponent;
+  std::vector<Soup> out(std::size_t(Topology(s).components(faceComponent)));
+  std::vector<std::map<int, int>> vmap(out.size());
+  for (std::size_t fi = 0; fi < s.F.size(); ++fi) {
+    const auto& f = s.F[fi];
+    Soup& c = out[std::size_t(faceComponent[fi])];
+    auto& vm = vmap[std::size_t(faceComponent[fi])];
     std::array<int, 3> g{};
     for (int k = 0; k < 3; ++k) {
       const auto [jt, nv] = vm.emplace(f[std::size_t(k)], int(c.V.size()));
@@ -269,17 +230,6 @@ Soup alphaWrap(const Soup& s, double alpha, double offset) {
   CGAL::Surface_mesh<Point> w;
   CGAL::alpha_wrap_3(pts, tris, alpha, offset, w);
   return soupOfSurfaceMesh(w);
-}
-
-void toMesh(const Soup& s, CMeshO& m) {
-  m.Clear();
-  auto vi = vcg::tri::Allocator<CMeshO>::AddVertices(m, s.V.size());
-  for (const auto& p : s.V) vi->P() = toPoint(p), ++vi;
-  auto fi = vcg::tri::Allocator<CMeshO>::AddFaces(m, s.F.size());
-  for (const auto& f : s.F) {
-    for (int k = 0; k < 3; ++k) fi->V(k) = &m.vert[std::size_t(f[std::size_t(k)])];
-    ++fi;
-  }
 }
 
 }  // namespace pectus::patient

@@ -8,17 +8,20 @@
 #include <Eigen/Dense>
 
 #include "pectus/cmesh.h"
+#include "pectus/surface_cmesh.h"
 
 namespace pectus::patient {
 
-struct Soup {
-  std::vector<Eigen::Vector3d> V;
-  std::vector<std::array<int, 3>> F;
-  bool empty() const { return F.empty(); }
-};
+/// The cores' surface type (pectus/surface.h)
+using Soup = pectus::Surface;
 
-/// The live faces of m (faces touching a non-finite vertex are dropped)
-Soup soupOf(const CMeshO& m);
+/// The live faces of m (faces touching a non-finite vertex are dropped) and the vertices they use
+inline Soup soupOf(const CMeshO& m) {
+  SurfaceOf how;
+  how.vertices = SurfaceOf::Vertices::UsedByFaces;
+  how.skipNonFiniteFaces = true;
+  return surfaceOf(m, how);
+}
 /// Vertices at exactly the same position merged, faces repeating a vertex and unused vertices dropped
 void weld(Soup& s);
 void append(Soup& to, const Soup& s);
@@ -41,7 +44,5 @@ int closeHoles(Soup& s);
 std::string defects(const Soup& s);
 /// CGAL's alpha wrap (detail alpha, offset; mm): a closed, 2-manifold, outward-oriented surface
 Soup alphaWrap(const Soup& s, double alpha, double offset);
-
-void toMesh(const Soup& s, CMeshO& m);
 
 }  // namespace pectus::patient

@@ -35,7 +35,7 @@ nuss::Options coarse() {
 
 TEST(NussAnalysis, LinearModelLoadsSupportsCalibrationAndBadInput) {
   const auto surf = nuss::cageFromMesh(cage().mesh);
-  ASSERT_GT(surf.surface.faces.size(), 3000u);
+  ASSERT_GT(surf.surface.F.size(), 3000u);
   const auto& lms = cage().lms;
 
   auto o = coarse();
@@ -210,8 +210,8 @@ TEST(NussAnalysis, MicroEdgesAreWelded) {
   add(2, 3, 4);  // degenerate after welding 3-4
   writeFaceLabels(m, std::vector<int>(m.face.size(), 1), std::vector<int>(m.face.size(), 101));
   const auto c = nuss::cageFromMesh(m);
-  EXPECT_EQ(c.surface.vertices.size(), 4u);
-  EXPECT_EQ(c.surface.faces.size(), 4u);
+  EXPECT_EQ(c.surface.V.size(), 4u);
+  EXPECT_EQ(c.surface.F.size(), 4u);
   EXPECT_EQ(c.nodeOfVertex[3], c.nodeOfVertex[4]);
   EXPECT_EQ(c.weldedFaces, 2);
 }
@@ -254,7 +254,7 @@ TEST(NussAnalysis, TissueLayersJoinedIntoTheCagesVolume) {
   for (int t = 0; t < ref.mesh.numTets(); ++t) vRef += ref.mesh.tetVolume(t);
   std::printf("[tissue layers] %zu faces, volume %.1f cm3 (layers %.1f, labelled cage %.1f), TET4 elevation %.3f mm vs labelled cage "
               "%.3f mm (%d vs %d tets)\n",
-              surf.surface.faces.size(), st.unionVolume / 1000, st.sumVolume / 1000, vRef / 1000, a.elevation, ref.elevation,
+              surf.surface.F.size(), st.unionVolume / 1000, st.sumVolume / 1000, vRef / 1000, a.elevation, ref.elevation,
               a.mesh.numTets(), ref.mesh.numTets());
   EXPECT_NEAR(st.unionVolume, vRef, 0.03 * vRef);
   EXPECT_GT(a.elevation, 0);

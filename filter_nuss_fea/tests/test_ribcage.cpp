@@ -12,7 +12,7 @@
 #include "pectus/labels.h"
 #include "pectus/mesh_checks.h"
 #include "ribcage.h"
-#include "self_intersections.h"
+#include "pectus/surface_cmesh.h"
 
 using namespace pectus;
 using namespace pectus::ribcage;

@@ -57,9 +57,9 @@ TEST(TissueJoin, OverlappingBoxesGiveTheUnionVolumeSplitInTheMiddleOfTheOverlap)
   fe::checkSurfaceForTetgen(cage.surface);  // closed, not self-intersecting
 
   // faces on the rib's box are bone of part 105 (the joint nearest to the unlabelled piece), the rest cartilage
-  for (std::size_t f = 0; f < cage.surface.faces.size(); ++f) {
+  for (std::size_t f = 0; f < cage.surface.F.size(); ++f) {
     Eigen::Vector3d c = Eigen::Vector3d::Zero();
-    for (int v : cage.surface.faces[f]) c += cage.surface.vertices[std::size_t(v)] / 3;
+    for (int v : cage.surface.F[f]) c += cage.surface.V[std::size_t(v)] / 3;
     EXPECT_EQ(cage.surface.faceTissue[f], c.x() <= 20 + 1e-6 ? int(Tissue::Bone) : int(Tissue::Cartilage)) << f;
     EXPECT_EQ(cage.facePart[f], ribPart(1, 5));
   }

@@ -120,7 +120,7 @@ int main(int argc, char** argv) {
     std::printf("faces=%zu tets=%d nodes=%d order=%d dofs=%d force=%.2f elevation=%.3f compliance=%.5f "
                 "maxStress=%.3f maxStrain=%.4f strainCart=%.4f strainBone=%.5f maxStressAll=%.3f nlSolves=%d newton=%d factor=%d "
                 "tCage=%.2f tMesh=%.2f tSolve=%.2f material=%s calibration=%s eBone=%.1f eCartilage=%.3f\n",
-                surf.surface.faces.size(), a.mesh.numTets(), a.mesh.numNodes(), a.mesh.order,
+                surf.surface.F.size(), a.mesh.numTets(), a.mesh.numNodes(), a.mesh.order,
                 3 * a.mesh.numNodes() - 3 * int(a.fixedNodes.size()), a.force, a.elevation, a.linearCompliance,
                 a.maxStress, a.maxStrain, a.maxStrainCartilage, a.maxStrainBone, a.maxStressAll, a.nonlinearSolves,
                 a.newtonIterations, a.factorizations, tCage, a.secondsMesh, a.secondsSolve, fe::materialModelName(o.material),

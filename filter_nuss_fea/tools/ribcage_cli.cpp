@@ -15,7 +15,7 @@
 #include "haller.h"
 #include "pectus/mesh_checks.h"
 #include "ribcage.h"
-#include "self_intersections.h"
+#include "pectus/surface_cmesh.h"
 
 using namespace pectus;
 using namespace pectus::ribcage;

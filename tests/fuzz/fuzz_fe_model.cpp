@@ -46,29 +46,29 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
   try {
     const auto cage = nuss::cageFromMesh(m);
     Eigen::AlignedBox3d box;
-    for (const auto& v : cage.surface.vertices) box.extend(v);
+    for (const auto& v : cage.surface.V) box.extend(v);
     to.maxVolume = tetFraction * box.sizes().prod();
-    PECTUS_FUZZ_CHECK(cage.surface.faces.size() == cage.surface.faceTissue.size());
-    PECTUS_FUZZ_CHECK(cage.facePart.size() == cage.surface.faces.size());
+    PECTUS_FUZZ_CHECK(cage.surface.F.size() == cage.surface.faceTissue.size());
+    PECTUS_FUZZ_CHECK(cage.facePart.size() == cage.surface.F.size());
     PECTUS_FUZZ_CHECK(cage.nodeOfVertex.size() == m.vert.size());
     // the feature a TetGen failure's message names: a valid vertex, an edge or a face it is not a corner of,
     // no larger than the median edge
     const fe::SurfaceFeature sf = fe::smallestFeature(cage.surface);
     if (sf.vertex >= 0) {
-      const int nsv = int(cage.surface.vertices.size());
+      const int nsv = int(cage.surface.V.size());
       PECTUS_FUZZ_CHECK(sf.vertex < nsv && (sf.face < 0) == (sf.other >= 0));
-      PECTUS_FUZZ_CHECK(sf.face < 0 || sf.face < int(cage.surface.faces.size()));
+      PECTUS_FUZZ_CHECK(sf.face < 0 || sf.face < int(cage.surface.F.size()));
       if (sf.face >= 0)
-        for (int v : cage.surface.faces[std::size_t(sf.face)]) PECTUS_FUZZ_CHECK(v != sf.vertex);
+        for (int v : cage.surface.F[std::size_t(sf.face)]) PECTUS_FUZZ_CHECK(v != sf.vertex);
       PECTUS_FUZZ_CHECK(sf.other < nsv);
       PECTUS_FUZZ_CHECK(!(sf.size > sf.medianEdge) && !(sf.size < 0));
     }
     std::vector<int> tetFace;
     const auto tm = fe::tetrahedralize(cage.surface, to, &tetFace);
     const int nn = tm.numNodes();
-    PECTUS_FUZZ_CHECK(nn >= int(cage.surface.vertices.size()));
-    for (std::size_t i = 0; i < cage.surface.vertices.size(); ++i)
-      PECTUS_FUZZ_CHECK((tm.nodes[i] - cage.surface.vertices[i]).norm() <= 1e-9 * (1 + cage.surface.vertices[i].norm()));
+    PECTUS_FUZZ_CHECK(nn >= int(cage.surface.V.size()));
+    for (std::size_t i = 0; i < cage.surface.V.size(); ++i)
+      PECTUS_FUZZ_CHECK((tm.nodes[i] - cage.surface.V[i]).norm() <= 1e-9 * (1 + cage.surface.V[i].norm()));
     PECTUS_FUZZ_CHECK(tm.tissue.size() == tm.tets.size() && tetFace.size() == tm.tets.size());
     std::vector<char> inTet(std::size_t(nn), 0);
     for (int t = 0; t < tm.numTets(); ++t) {
@@ -76,10 +76,10 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
         PECTUS_FUZZ_CHECK(tm.tets[t][k] >= 0 && tm.tets[t][k] < nn);
         inTet[std::size_t(tm.tets[t][k])] = 1;
       }
-      PECTUS_FUZZ_CHECK(tetFace[t] >= 0 && tetFace[t] < int(cage.surface.faces.size()));
+      PECTUS_FUZZ_CHECK(tetFace[t] >= 0 && tetFace[t] < int(cage.surface.F.size()));
       PECTUS_FUZZ_CHECK(tm.tetVolume(t) > 0);
     }
-    for (std::size_t i = 0; i < cage.surface.vertices.size(); ++i) PECTUS_FUZZ_CHECK(inTet[i]);
+    for (std::size_t i = 0; i < cage.surface.V.size(); ++i) PECTUS_FUZZ_CHECK(inTet[i]);
     const auto bf = fe::boundaryFaces(tm);
     PECTUS_FUZZ_CHECK(tm.tets.empty() || !bf.empty());
   } catch (const InputError&) {

@@ -9,7 +9,8 @@
 #pragma once
 #include <Eigen/Core>
 
-#include "pectus/c1_cmesh.h"
+#include "pectus/c1_surface.h"
+#include "pectus/surface_cmesh.h"
 
 #include <array>
 #include <cmath>
@@ -185,7 +186,7 @@ inline c1::TriMesh triMesh(const Mesh& m) { return {m.V, m.F}; }
 /// The mesh as MeshLab holds it (indices must be valid: CMeshO stores pointers); `quads`: a grid's cell
 /// pairs become quads (shared diagonal faux in both triangles, as MeshLab's OFF importer sets it).
 inline void toCMesh(const Mesh& m, CMeshO& cm, bool quads) {
-  c1::fromTriMesh(triMesh(m), cm);
+  pectus::toMesh(triMesh(m), cm);
   if (quads && m.grid)
     for (std::size_t f = 0; f + 1 < cm.face.size(); f += 2) {
       cm.face[f].SetF(2);      // (v0 v1 v2): edge v2-v0

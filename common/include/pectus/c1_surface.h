@@ -41,17 +41,14 @@
 #include <string>
 #include <vector>
 
+#include "pectus/surface.h"
+
 namespace pectus::c1 {
 
 using Vec3 = Eigen::Vector3d;
 using Vec2 = Eigen::Vector2d;
 
-struct Topology;  // internal (c1_internal.h)
-
-struct TriMesh {
-  std::vector<Vec3> V;
-  std::vector<std::array<int, 3>> F;
-};
+using TriMesh = pectus::Surface;  ///< the cores' triangle surface (pectus/surface.h)
 
 enum class GradientMethod {
   QuadraticFit,      ///< per vertex: weighted LSQ quadratic over the 2-ring in the vertex frame

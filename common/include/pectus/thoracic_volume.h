@@ -13,14 +13,12 @@
 #include <Eigen/Dense>
 
 #include "pectus/cmesh.h"
+#include "pectus/surface.h"
 
 namespace pectus::vol {
 
-/// A triangle soup in double precision (what every core here reads)
-struct Soup {
-  std::vector<Eigen::Vector3d> V;
-  std::vector<std::array<int, 3>> F;
-};
+/// A triangle soup in double precision (what every core here reads): the cores' surface type
+using Soup = pectus::Surface;
 /// Live faces of m (vertex indices of the vcg vertex vector), without the faces labelled as the vertebral
 /// column (part kVertebralColumn of labels.h: the column a prepared patient cage keeps as the FE support);
 /// throws InputError on NaN coordinates.

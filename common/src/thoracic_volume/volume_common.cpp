@@ -4,30 +4,22 @@
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
+#include "pectus/surface_cmesh.h"
 #include "pectus/thoracic_volume.h"
 
 namespace pectus::vol {
 
 Soup soupFromMesh(const CMeshO& m, const std::string& layer) {
-  Soup s;
-  s.V.resize(m.vert.size());
-  for (std::size_t i = 0; i < m.vert.size(); ++i) {
-    s.V[i] = toEigen(m.vert[i].cP());
-    if (!m.vert[i].IsD() && !s.V[i].allFinite())
+  for (const auto& v : m.vert)
+    if (!v.IsD() && !toEigen(v.cP()).allFinite())
       throw InputError("layer '" + layer + "' has NaN or infinite vertex coordinates; clean it first");
-  }
-  s.F.reserve(m.face.size());
   // a vertebral column kept in a prepared cage is left out: the volume is the one inside the ribs, the same
   // whether the column was kept or cut away (labels.h, kVertebralColumn)
   const auto labels = readFaceLabels(m);
-  for (std::size_t i = 0; i < m.face.size(); ++i) {
-    const auto& f = m.face[i];
-    if (f.IsD() || (labels && labels->part[i] == kVertebralColumn)) continue;
-    std::array<int, 3> t;
-    for (int k = 0; k < 3; ++k) t[k] = int(vcg::tri::Index(m, f.cV(k)));
-    s.F.push_back(t);
-  }
-  return s;
+  SurfaceOf how;
+  how.vertices = SurfaceOf::Vertices::All;
+  if (labels) how.keepFace = [&](std::size_t i) { return labels->part[i] != kVertebralColumn; };
+  return surfaceOf(m, how);
 }
 
 double divergenceVolume(const Soup& s) {

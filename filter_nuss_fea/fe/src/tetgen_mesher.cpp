@@ -40,15 +40,15 @@ struct Grid {
 
   void build(const SurfaceMesh& s) {
     Eigen::AlignedBox3d box;
-    for (const auto& v : s.vertices) box.extend(v);
+    for (const auto& v : s.V) box.extend(v);
     const Vector3d ext = box.sizes().cwiseMax(1e-9);
     const double vol = ext.prod();
-    h = std::cbrt(vol / std::max<size_t>(1, s.faces.size()));
+    h = std::cbrt(vol / std::max<size_t>(1, s.F.size()));
     h = std::max(h, ext.maxCoeff() / 200.0);
     lo = box.min() - Vector3d::Constant(1e-6 * ext.maxCoeff());
     for (int d = 0; d < 3; ++d) n[d] = std::max(1, static_cast<int>(std::ceil((ext(d) + 2e-6 * ext.maxCoeff()) / h)));
     cells.assign(static_cast<size_t>(n[0]) * n[1] * n[2], {});
-    for (int f = 0; f < static_cast<int>(s.faces.size()); ++f) {
+    for (int f = 0; f < static_cast<int>(s.F.size()); ++f) {
       int a[3], b[3];
       range(s, f, a, b);
       for (int k = a[2]; k <= b[2]; ++k)
@@ -61,7 +61,7 @@ struct Grid {
   void range(const SurfaceMesh& s, int f, int a[3], int b[3]) const {
     for (int d = 0; d < 3; ++d) {
       double mn = 1e300, mx = -1e300;
-      for (int v : s.faces[f]) mn = std::min(mn, s.vertices[v](d)), mx = std::max(mx, s.vertices[v](d));
+      for (int v : s.F[f]) mn = std::min(mn, s.V[v](d)), mx = std::max(mx, s.V[v](d));
       a[d] = clampc(mn, d);
       b[d] = clampc(mx, d);
     }
@@ -102,8 +102,8 @@ int nearestFace(const SurfaceMesh& s, const Grid& grid, const Vector3d& p, doubl
   auto visit = [&](int i, int j, int k) {
     for (int f : grid.cells[grid.idx(i, j, k)]) {
       if (skip(f)) continue;
-      const auto& F = s.faces[f];
-      const double d = (closestOnTriangle(p, s.vertices[F[0]], s.vertices[F[1]], s.vertices[F[2]]) - p).squaredNorm();
+      const auto& F = s.F[f];
+      const double d = (closestOnTriangle(p, s.V[F[0]], s.V[F[1]], s.V[F[2]]) - p).squaredNorm();
       if (d < best2) best2 = d, bestF = f;
     }
   };
@@ -138,10 +138,10 @@ std::string smallFeatureHint(const SurfaceMesh& s) {
   m.precision(3);
   m << " The surface's smallest feature, a likely cause: ";
   if (f.face < 0)
-    m << "the edge between vertices " << f.vertex << " and " << f.other << " (at " << s.vertices[f.vertex].transpose()
+    m << "the edge between vertices " << f.vertex << " and " << f.other << " (at " << s.V[f.vertex].transpose()
       << " mm) is " << f.size << " mm long";
   else
-    m << "vertex " << f.vertex << " (at " << s.vertices[f.vertex].transpose() << " mm) is " << f.size << " mm from face "
+    m << "vertex " << f.vertex << " (at " << s.V[f.vertex].transpose() << " mm) is " << f.size << " mm from face "
       << f.face << ", which it is not a corner of";
   m << ", against a median edge of " << f.medianEdge
     << " mm. Merge close vertices (Cleaning and Repairing > Merge Close Vertices) or remove the tiny faces there.";
@@ -334,12 +334,12 @@ TetgenOutput runTetgen(const std::string& switches, tetgenio& in, double timeLim
 /// the coordinates of the points it keeps, so they are matched exactly. Throws InputError if a surface
 /// vertex is not among them.
 std::vector<int> inputVerticesFirst(const SurfaceMesh& s, const TetgenOutput& out) {
-  const int nv = static_cast<int>(s.vertices.size()), np = out.numPoints();
+  const int nv = static_cast<int>(s.V.size()), np = out.numPoints();
   const double* pointlist = out.points.data();
   std::vector<int> node(np, -1);
   bool identity = np >= nv;
   for (int i = 0; i < nv && identity; ++i)
-    for (int d = 0; d < 3; ++d) identity = identity && pointlist[3 * i + d] == s.vertices[i](d);
+    for (int d = 0; d < 3; ++d) identity = identity && pointlist[3 * i + d] == s.V[i](d);
   if (identity) {
     std::iota(node.begin(), node.end(), 0);
     return node;
@@ -347,10 +347,10 @@ std::vector<int> inputVerticesFirst(const SurfaceMesh& s, const TetgenOutput& ou
   std::map<std::array<double, 3>, int> at;  // output point by its exact coordinates (the first of equal ones)
   for (int j = np - 1; j >= 0; --j) at[{pointlist[3 * j], pointlist[3 * j + 1], pointlist[3 * j + 2]}] = j;
   for (int i = 0; i < nv; ++i) {
-    const auto it = at.find({s.vertices[i](0), s.vertices[i](1), s.vertices[i](2)});
+    const auto it = at.find({s.V[i](0), s.V[i](1), s.V[i](2)});
     if (it == at.end() || node[it->second] >= 0) {
       std::ostringstream msg;
-      msg << "TetGen left out surface vertex " << i << " (at " << s.vertices[i].transpose() << " mm): it coincides with "
+      msg << "TetGen left out surface vertex " << i << " (at " << s.V[i].transpose() << " mm): it coincides with "
           << (it == at.end() ? "another vertex" : "vertex " + std::to_string(node[it->second]))
           << " or lies outside the volume. Merge close vertices (e.g. MeshLab's 'Merge Close Vertices') and remove "
              "unreferenced ones.";
@@ -367,38 +367,37 @@ std::vector<int> inputVerticesFirst(const SurfaceMesh& s, const TetgenOutput& ou
 }  // namespace
 
 std::optional<std::pair<int, int>> findSelfIntersection(const SurfaceMesh& s) {
-  const auto pairs = pectus::selfIntersections(s.vertices, s.faces);
+  const auto pairs = pectus::selfIntersections(s.V, s.F);
   if (pairs.empty()) return std::nullopt;
   return std::make_pair(pairs.front().a, pairs.front().b);
 }
 
 void checkSurfaceForTetgen(const SurfaceMesh& s) {
-  const int nv = static_cast<int>(s.vertices.size());
-  if (s.faces.size() < 4) throw InputError("The surface has fewer than 4 triangles: it cannot bound a volume.");
-  if (s.faceTissue.size() != s.faces.size())
+  const int nv = static_cast<int>(s.V.size());
+  if (s.F.size() < 4) throw InputError("The surface has fewer than 4 triangles: it cannot bound a volume.");
+  if (s.faceTissue.size() != s.F.size())
     throw InputError("The surface needs one tissue label per face (" + std::to_string(s.faceTissue.size()) + " labels for " +
-                     std::to_string(s.faces.size()) + " faces).");
-  std::map<std::pair<int, int>, int> edges;
-  for (size_t f = 0; f < s.faces.size(); ++f) {
-    const auto& F = s.faces[f];
+                     std::to_string(s.F.size()) + " faces).");
+  for (size_t f = 0; f < s.F.size(); ++f) {
+    const auto& F = s.F[f];
     for (int i = 0; i < 3; ++i) {
       if (F[i] < 0 || F[i] >= nv) throw InputError("Face " + std::to_string(f) + " has an invalid vertex index.");
       if (F[i] == F[(i + 1) % 3]) throw InputError("Face " + std::to_string(f) + " is degenerate (repeated vertex).");
       if (s.faceTissue[f] <= 0) throw InputError("Face " + std::to_string(f) + " has no tissue label.");
     }
-    for (int i = 0; i < 3; ++i) edges[std::minmax(F[i], F[(i + 1) % 3])]++;
   }
-  for (const auto& e : edges)
-    if (e.second != 2) {
+  const Topology topo(s);
+  for (const auto& e : topo.edges)
+    if (e.faces != 2) {
       std::ostringstream m;
-      m << "The surface is not closed: the edge between vertices " << e.first.first << " and " << e.first.second << " (at "
-        << s.vertices[e.first.first].transpose() << ") belongs to " << e.second
+      m << "The surface is not closed: the edge between vertices " << e.a << " and " << e.b << " (at "
+        << s.V[e.a].transpose() << ") belongs to " << e.faces
         << " face(s) instead of 2. Close the holes / remove non-manifold edges before meshing.";
       throw InputError(m.str());
     }
   if (auto p = findSelfIntersection(s)) {
-    const auto& a = s.faces[p->first];
-    const Vector3d c = (s.vertices[a[0]] + s.vertices[a[1]] + s.vertices[a[2]]) / 3;
+    const auto& a = s.F[p->first];
+    const Vector3d c = (s.V[a[0]] + s.V[a[1]] + s.V[a[2]]) / 3;
     std::ostringstream m;
     if (p->first == p->second)
       m << "Face " << p->first << " is degenerate: its three corners are collinear (near " << c.transpose()
@@ -424,14 +423,14 @@ std::vector<int> nearestFaces(const SurfaceMesh& s, const std::vector<Vector3d>&
 
 SurfaceFeature smallestFeature(const SurfaceMesh& s) {
   SurfaceFeature r;
-  const int nv = static_cast<int>(s.vertices.size());
+  const int nv = static_cast<int>(s.V.size());
   std::vector<double> lengths;
-  lengths.reserve(3 * s.faces.size());
-  for (const auto& F : s.faces)
+  lengths.reserve(3 * s.F.size());
+  for (const auto& F : s.F)
     for (int i = 0; i < 3; ++i) {
       const int a = F[i], b = F[(i + 1) % 3];
       if (a < 0 || b < 0 || a >= nv || b >= nv) continue;
-      const double l = (s.vertices[a] - s.vertices[b]).norm();
+      const double l = (s.V[a] - s.V[b]).norm();
       lengths.push_back(l);
       if (l < r.size) r.size = l, r.vertex = std::min(a, b), r.other = std::max(a, b), r.face = -1;
     }
@@ -439,8 +438,8 @@ SurfaceFeature smallestFeature(const SurfaceMesh& s) {
   std::nth_element(lengths.begin(), lengths.begin() + lengths.size() / 2, lengths.end());
   r.medianEdge = lengths[lengths.size() / 2];
   std::vector<std::vector<int>> facesOf(static_cast<size_t>(nv));
-  for (int f = 0; f < static_cast<int>(s.faces.size()); ++f)
-    for (int v : s.faces[f])
+  for (int f = 0; f < static_cast<int>(s.F.size()); ++f)
+    for (int v : s.F[f])
       if (v >= 0 && v < nv) facesOf[v].push_back(f);
   Grid grid;
   grid.build(s);
@@ -448,7 +447,7 @@ SurfaceFeature smallestFeature(const SurfaceMesh& s) {
     if (facesOf[v].empty()) continue;
     const auto& own = facesOf[v];
     double best2 = 0;
-    const int f = nearestFace(s, grid, s.vertices[v], r.size, [&](int g) { return std::find(own.begin(), own.end(), g) != own.end(); }, best2);
+    const int f = nearestFace(s, grid, s.V[v], r.size, [&](int g) { return std::find(own.begin(), own.end(), g) != own.end(); }, best2);
     if (f >= 0 && std::sqrt(best2) < r.size) r.size = std::sqrt(best2), r.vertex = v, r.other = -1, r.face = f;
   }
   return r;
@@ -459,14 +458,14 @@ namespace {
 TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<int>* tetFace) {
   tetgenio in;
   in.firstnumber = 0;
-  in.numberofpoints = static_cast<int>(s.vertices.size());
-  in.pointlist = new REAL[3 * s.vertices.size()];
-  for (size_t i = 0; i < s.vertices.size(); ++i)
-    for (int d = 0; d < 3; ++d) in.pointlist[3 * i + d] = s.vertices[i](d);
-  in.numberoffacets = static_cast<int>(s.faces.size());
-  in.facetlist = new tetgenio::facet[s.faces.size()];
-  in.facetmarkerlist = new int[s.faces.size()];
-  for (size_t f = 0; f < s.faces.size(); ++f) {
+  in.numberofpoints = static_cast<int>(s.V.size());
+  in.pointlist = new REAL[3 * s.V.size()];
+  for (size_t i = 0; i < s.V.size(); ++i)
+    for (int d = 0; d < 3; ++d) in.pointlist[3 * i + d] = s.V[i](d);
+  in.numberoffacets = static_cast<int>(s.F.size());
+  in.facetlist = new tetgenio::facet[s.F.size()];
+  in.facetmarkerlist = new int[s.F.size()];
+  for (size_t f = 0; f < s.F.size(); ++f) {
     tetgenio::facet& fc = in.facetlist[f];
     tetgenio::init(&fc);
     fc.numberofpolygons = 1;
@@ -474,7 +473,7 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
     tetgenio::init(&fc.polygonlist[0]);
     fc.polygonlist[0].numberofvertices = 3;
     fc.polygonlist[0].vertexlist = new int[3];
-    for (int k = 0; k < 3; ++k) fc.polygonlist[0].vertexlist[k] = s.faces[f][k];
+    for (int k = 0; k < 3; ++k) fc.polygonlist[0].vertexlist[k] = s.F[f][k];
     in.facetmarkerlist[f] = s.faceTissue[f];
   }
   std::ostringstream sw;
@@ -506,7 +505,7 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
     m.nodes[node[i]] = Vector3d(out.points[3 * i], out.points[3 * i + 1], out.points[3 * i + 2]);
   m.tets.resize(out.numTets());
   std::vector<Vector3d> centroids(out.numTets());
-  std::vector<char> inTet(s.vertices.size(), 0);
+  std::vector<char> inTet(s.V.size(), 0);
   for (int t = 0; t < out.numTets(); ++t) {
     std::array<int, 10> e{};
     for (int k = 0; k < 4; ++k) {
@@ -527,7 +526,7 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
   for (size_t i = 0; i < inTet.size(); ++i)
     if (!inTet[i]) {
       std::ostringstream msg;
-      msg << "Surface vertex " << i << " (at " << s.vertices[i].transpose() << " mm) is in no tetrahedron: it lies outside "
+      msg << "Surface vertex " << i << " (at " << s.V[i].transpose() << " mm) is in no tetrahedron: it lies outside "
           << "the meshed volume. Remove it (e.g. MeshLab's 'Remove Unreferenced Vertices').";
       throw InputError(msg.str());
     }

@@ -25,13 +25,13 @@ SurfaceMesh boxSurface(const Vector3d& o, const Vector3d& size, int nx, int ny, 
     for (int k = 0; k < 3; ++k) {
       auto it = remap.find(f.n[k]);
       if (it == remap.end()) {
-        it = remap.emplace(f.n[k], static_cast<int>(s.vertices.size())).first;
-        s.vertices.push_back(o + m.nodes[f.n[k]]);
+        it = remap.emplace(f.n[k], static_cast<int>(s.V.size())).first;
+        s.V.push_back(o + m.nodes[f.n[k]]);
       }
       F[k] = it->second;
-      c += s.vertices[F[k]] / 3;
+      c += s.V[F[k]] / 3;
     }
-    s.faces.push_back(F);
+    s.F.push_back(F);
     s.faceTissue.push_back(c.z() < zSplit ? 1 : 2);
   }
   return s;
@@ -39,9 +39,9 @@ SurfaceMesh boxSurface(const Vector3d& o, const Vector3d& size, int nx, int ny, 
 
 SurfaceMesh merge(const SurfaceMesh& a, const SurfaceMesh& b) {
   SurfaceMesh s = a;
-  const int off = static_cast<int>(a.vertices.size());
-  s.vertices.insert(s.vertices.end(), b.vertices.begin(), b.vertices.end());
-  for (auto f : b.faces) s.faces.push_back({f[0] + off, f[1] + off, f[2] + off});
+  const int off = static_cast<int>(a.V.size());
+  s.V.insert(s.V.end(), b.V.begin(), b.V.end());
+  for (auto f : b.F) s.F.push_back({f[0] + off, f[1] + off, f[2] + off});
   s.faceTissue.insert(s.faceTissue.end(), b.faceTissue.begin(), b.faceTissue.end());
   return s;
 }
@@ -60,7 +60,7 @@ TEST(FeMesher, OverlappingShellsAreReportedWithAFacePair) {
   const SurfaceMesh s = merge(a, b);
   auto p = findSelfIntersection(s);
   ASSERT_TRUE(p.has_value());
-  const int na = static_cast<int>(a.faces.size());
+  const int na = static_cast<int>(a.F.size());
   EXPECT_TRUE((p->first < na) != (p->second < na)) << p->first << " " << p->second;
   try {
     checkSurfaceForTetgen(s);
@@ -79,11 +79,11 @@ TEST(FeMesher, FoldedVertexIsASelfIntersection) {
   SurfaceMesh s = boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 100);
   // push the centre vertex of the top face (z = 10) through the bottom face
   int top = -1;
-  for (size_t i = 0; i < s.vertices.size(); ++i)
-    if ((s.vertices[i] - Vector3d(5, 5, 10)).norm() < 1e-9) top = static_cast<int>(i);
+  for (size_t i = 0; i < s.V.size(); ++i)
+    if ((s.V[i] - Vector3d(5, 5, 10)).norm() < 1e-9) top = static_cast<int>(i);
   ASSERT_GE(top, 0);
   EXPECT_FALSE(findSelfIntersection(s).has_value());
-  s.vertices[top].z() = -3;
+  s.V[top].z() = -3;
   EXPECT_TRUE(findSelfIntersection(s).has_value());
 }
 
@@ -92,13 +92,13 @@ TEST(FeMesher, CollinearFaceIsNamedBeforeTetgen) {
   // move the centre vertex of the top face onto the line through two of its neighbours: its faces there
   // become collinear (zero area) without any face crossing another
   int top = -1;
-  for (size_t i = 0; i < s.vertices.size(); ++i)
-    if ((s.vertices[i] - Vector3d(5, 5, 10)).norm() < 1e-9) top = static_cast<int>(i);
+  for (size_t i = 0; i < s.V.size(); ++i)
+    if ((s.V[i] - Vector3d(5, 5, 10)).norm() < 1e-9) top = static_cast<int>(i);
   ASSERT_GE(top, 0);
-  for (const auto& f : s.faces)  // onto the midpoint of the opposite edge of one of its faces (the top stays flat)
+  for (const auto& f : s.F)  // onto the midpoint of the opposite edge of one of its faces (the top stays flat)
     for (int k = 0; k < 3; ++k)
       if (f[k] == top) {
-        s.vertices[top] = 0.5 * (s.vertices[f[(k + 1) % 3]] + s.vertices[f[(k + 2) % 3]]);
+        s.V[top] = 0.5 * (s.V[f[(k + 1) % 3]] + s.V[f[(k + 2) % 3]]);
         goto moved;
       }
 moved:
@@ -115,7 +115,7 @@ moved:
 
 TEST(FeMesher, OpenSurfaceIsAnError) {
   SurfaceMesh s = boxSurface({0, 0, 0}, {10, 10, 10}, 2, 2, 2, 100);
-  s.faces.pop_back();
+  s.F.pop_back();
   s.faceTissue.pop_back();
   try {
     tetrahedralize(s);
@@ -133,19 +133,19 @@ TEST(FeMesher, SurfaceVertexIsNodeOfTheSameIndex) {
   TetgenOptions o;
   o.maxVolume = 20;
   SurfaceMesh inside = box;  // a point in no face inside the volume: TetGen meshes it
-  inside.vertices.insert(inside.vertices.begin() + 3, Vector3d(5, 2.5, 5));
-  for (auto& f : inside.faces)
+  inside.V.insert(inside.V.begin() + 3, Vector3d(5, 2.5, 5));
+  for (auto& f : inside.F)
     for (int& v : f) v += v >= 3;
   const TetMesh m = tetrahedralize(inside, o);
   std::vector<int> inTet(m.nodes.size(), 0);
   for (const auto& t : m.tets)
     for (int k = 0; k < 4; ++k) ++inTet[t[k]];
-  for (size_t i = 0; i < inside.vertices.size(); ++i) {
-    EXPECT_EQ((m.nodes[i] - inside.vertices[i]).norm(), 0.0) << "vertex " << i;
+  for (size_t i = 0; i < inside.V.size(); ++i) {
+    EXPECT_EQ((m.nodes[i] - inside.V[i]).norm(), 0.0) << "vertex " << i;
     EXPECT_GT(inTet[i], 0) << "vertex " << i;
   }
   SurfaceMesh outside = inside;  // outside the volume: TetGen drops it
-  outside.vertices[3] = Vector3d(30, 5, 5);
+  outside.V[3] = Vector3d(30, 5, 5);
   try {
     tetrahedralize(outside, o);
     FAIL() << "no throw";
@@ -172,7 +172,7 @@ TEST(FeMesher, TetgenBoxLabelsVolumeAndSeriesBar) {
   }
   EXPECT_NEAR(vol, 4000.0, 1e-6);
   EXPECT_EQ(wrong, 0);
-  for (size_t i = 0; i < s.vertices.size(); ++i) EXPECT_EQ((m.nodes[i] - s.vertices[i]).norm(), 0.0);
+  for (size_t i = 0; i < s.V.size(); ++i) EXPECT_EQ((m.nodes[i] - s.V[i]).norm(), 0.0);
 
   // bar in tension: bone half and a 10x softer half in series, rollers at z = 0
   o.order = 2;
@@ -219,7 +219,7 @@ const std::vector<std::array<int, 3>> kUvSphere14Faces = {
 // child process, so that is an InputError here and not the end of the program (and of MeshLab).
 static SurfaceMesh pinchedSphere() {
   SurfaceMesh s;
-  s.vertices = {
+  s.V = {
       {0, 0, -1.340268611907959}, {0.76586496829986572, 0.2011294811964035, -0.8185495138168335},
       {-0.2011294811964035, 0.76586496829986572, -0.8185495138168335}, {-0.76586496829986572,
       -0.2011294811964035, -0.8185495138168335}, {-0.059666760265827179, -0.58226418495178223,
@@ -230,8 +230,8 @@ static SurfaceMesh pinchedSphere() {
       {-1.5512948436935403e-07, 5.9070521274406929e-07, 1.0612711776047945e-06}, {-0.59070521593093872,
       -0.15512949228286743, 1.0612711906433105}, {1.5512948468576033e-25, -5.9070520880531568e-25,
       1.0612711418728368e-24}, {0, 0, 1.340268611907959},};
-  s.faces = kUvSphere14Faces;
-  s.faceTissue.assign(s.faces.size(), 1);
+  s.F = kUvSphere14Faces;
+  s.faceTissue.assign(s.F.size(), 1);
   return s;
 }
 
@@ -258,7 +258,7 @@ TEST(FeMesher, TetgenAssertionIsAnErrorNotAnAbort) {
 // at the time limit and the call is an InputError.
 TEST(FeMesher, TetgenThatDoesNotFinishIsStoppedAtTheTimeLimit) {
   SurfaceMesh s;
-  s.vertices = {
+  s.V = {
       {0, 0, -1.340268611907959}, {0.76586496829986572, 0.2011294811964035, -0.8185495138168335},
       {-0.2011294811964035, 0.76586496829986572, -0.8185495138168335}, {-0.76586496829986572,
       -0.2011294811964035, -0.8185495138168335}, {-0.23156355321407318, -0.50754857063293457,
@@ -269,8 +269,8 @@ TEST(FeMesher, TetgenThatDoesNotFinishIsStoppedAtTheTimeLimit) {
       {-1.5539733055902616e-07, 5.917250973652699e-07, 1.0601795565889915e-06}, {-0.59070521593093872,
       -0.15512949228286743, 1.0612711906433105}, {1.5512948468576033e-25, -5.9070520880531568e-25,
       1.0612711418728368e-24}, {0, 0, 1.340268611907959},};
-  s.faces = kUvSphere14Faces;
-  s.faceTissue.assign(s.faces.size(), 1);
+  s.F = kUvSphere14Faces;
+  s.faceTissue.assign(s.F.size(), 1);
   TetgenOptions o;
   o.radiusEdgeRatio = 1.2;
   o.maxVolume = 0.034099013459653119;
@@ -297,15 +297,15 @@ TEST(FeMesher, MaxAddedPointsBoundsTheMesh) {
   o.maxVolume = 4.0;
   o.maxAddedPoints = 30;
   const TetMesh m = tetrahedralize(s, o);
-  EXPECT_GE(m.numNodes(), int(s.vertices.size()));
-  EXPECT_LE(m.numNodes(), int(s.vertices.size()) + 30);
+  EXPECT_GE(m.numNodes(), int(s.V.size()));
+  EXPECT_LE(m.numNodes(), int(s.V.size()) + 30);
   double vol = 0, largest = 0;
   for (int t = 0; t < m.numTets(); ++t) vol += m.tetVolume(t), largest = std::max(largest, m.tetVolume(t));
   EXPECT_NEAR(vol, 4000.0, 1e-6);
   EXPECT_GT(largest, 4.0);  // the bound is not reached: the cap stops the refinement
-  for (size_t i = 0; i < s.vertices.size(); ++i) EXPECT_EQ((m.nodes[i] - s.vertices[i]).norm(), 0.0);
+  for (size_t i = 0; i < s.V.size(); ++i) EXPECT_EQ((m.nodes[i] - s.V[i]).norm(), 0.0);
   o.maxAddedPoints = -1;
-  EXPECT_GT(tetrahedralize(s, o).numNodes(), int(s.vertices.size()) + 30);
+  EXPECT_GT(tetrahedralize(s, o).numNodes(), int(s.V.size()) + 30);
 }
 
 // smallestFeature: a box's is one of its edges; two boxes 1e-5 mm apart nearly touch (a vertex of one is
@@ -322,9 +322,9 @@ TEST(FeMesher, SmallestFeatureFindsNearTouchingSheetsAndPinches) {
   EXPECT_NEAR(f.size, 1e-5, 1e-9);
   ASSERT_GE(f.face, 0);
   EXPECT_EQ(f.other, -1);
-  const int nva = static_cast<int>(a.vertices.size()), nfa = static_cast<int>(a.faces.size());
+  const int nva = static_cast<int>(a.V.size()), nfa = static_cast<int>(a.F.size());
   EXPECT_NE(f.vertex < nva, f.face < nfa);  // the vertex of one box, the face of the other
-  EXPECT_NEAR(std::abs(ab.vertices[f.vertex].x() - 10), 0.0, 1e-5 + 1e-12);
+  EXPECT_NEAR(std::abs(ab.V[f.vertex].x() - 10), 0.0, 1e-5 + 1e-12);
 
   const SurfaceFeature p = smallestFeature(pinchedSphere());
   EXPECT_LT(p.size, 1.2e-6);

@@ -7,13 +7,13 @@
 #include <vector>
 
 #include "pectus/fe/tet_mesh.h"
+#include "pectus/surface.h"
 
 namespace pectus::fe {
 
-struct SurfaceMesh {
-  std::vector<Eigen::Vector3d> vertices;     ///< mm
-  std::vector<std::array<int, 3>> faces;     ///< oriented or not; must form closed 2-manifold shells
-  std::vector<int> faceTissue;               ///< per face tissue label (pectus::Tissue)
+/// The surface to mesh (V in mm; F oriented or not, forming closed 2-manifold shells) with a tissue per face
+struct SurfaceMesh : pectus::Surface {
+  std::vector<int> faceTissue;  ///< per face tissue label (pectus::Tissue)
 };
 
 struct TetgenOptions {

@@ -1,0 +1,141 @@
+#include "pectus/surface.h"
+
+#include <algorithm>
+#include <cstdint>
+#include <numeric>
+#include <utility>
+
+namespace pectus {
+
+namespace {
+int findRoot(std::vector<int>& p, int i) {
+  while (p[std::size_t(i)] != i) i = p[std::size_t(i)] = p[std::size_t(p[std::size_t(i)])];
+  return i;
+}
+}  // namespace
+
+Topology::Topology(const Surface& m) {
+  const int nv = int(m.V.size()), nf = int(m.F.size());
+  // 1. every index in range, or nothing else is built
+  for (int f = 0; f < nf && badFace < 0; ++f)
+    for (int k = 0; k < 3; ++k) {
+      const int i = m.F[std::size_t(f)][std::size_t(k)];
+      if (i < 0 || i >= nv) {
+        badFace = f;
+        badIndex = i;
+        break;
+      }
+    }
+  if (badFace >= 0) return;
+
+  // 2. vertex -> faces (CSR)
+  vfStart.assign(std::size_t(nv) + 1, 0);
+  for (const auto& f : m.F)
+    for (int k = 0; k < 3; ++k) ++vfStart[std::size_t(f[std::size_t(k)]) + 1];
+  for (int i = 0; i < nv; ++i) vfStart[std::size_t(i) + 1] += vfStart[std::size_t(i)];
+  vf.resize(std::size_t(vfStart[std::size_t(nv)]));
+  {
+    std::vector<int> fill(vfStart.begin(), vfStart.end() - 1);
+    for (int f = 0; f < nf; ++f)
+      for (int k = 0; k < 3; ++k) vf[std::size_t(fill[std::size_t(m.F[std::size_t(f)][std::size_t(k)])]++)] = f;
+  }
+
+  // 3. edges: one sort of (min, max, face*3 + local); local edge l is opposite local vertex l
+  std::vector<std::pair<std::uint64_t, int>> keys;
+  keys.reserve(3 * std::size_t(nf));
+  for (int f = 0; f < nf; ++f)
+    for (int l = 0; l < 3; ++l) {
+      int a = m.F[std::size_t(f)][std::size_t((l + 1) % 3)], b = m.F[std::size_t(f)][std::size_t((l + 2) % 3)];
+      if (a == b) continue;  // repeated vertex: the face is degenerate, the "edge" is a point
+      if (a > b) std::swap(a, b);
+      keys.push_back({(std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b), f * 3 + l});
+    }
+  std::sort(keys.begin(), keys.end());
+  faceEdge.assign(std::size_t(nf), {-1, -1, -1});
+  edgeFace.reserve(keys.size());
+  edgeFaceStart.push_back(0);
+  for (std::size_t i = 0; i < keys.size();) {
+    std::size_t j = i;
+    while (j < keys.size() && keys[j].first == keys[i].first) ++j;
+    Edge e;
+    e.a = int(keys[i].first >> 32);
+    e.b = int(keys[i].first & 0xffffffffu);
+    e.f0 = keys[i].second;
+    e.f1 = j - i >= 2 ? keys[i + 1].second : -1;
+    e.faces = int(j - i);
+    const int id = int(edges.size());
+    for (std::size_t q = i; q < j; ++q) {
+      faceEdge[std::size_t(keys[q].second / 3)][std::size_t(keys[q].second % 3)] = id;
+      edgeFace.push_back(keys[q].second);
+    }
+    edgeFaceStart.push_back(int(edgeFace.size()));
+    edges.push_back(e);
+    i = j;
+  }
+
+  // 4. boundary and manifold vertices: a manifold fan is one cycle (edges = faces) or one chain
+  //    (edges = faces + 1, two boundary edges)
+  boundary.assign(std::size_t(nv), 0);
+  nonManifoldVertex.assign(std::size_t(nv), 0);
+  std::vector<int> vEdges(std::size_t(nv), 0), vBnd(std::size_t(nv), 0);
+  for (const auto& e : edges) {
+    ++vEdges[std::size_t(e.a)];
+    ++vEdges[std::size_t(e.b)];
+    if (e.f1 < 0) { ++vBnd[std::size_t(e.a)]; ++vBnd[std::size_t(e.b)]; }
+  }
+  for (int i = 0; i < nv; ++i) {
+    const std::size_t si = std::size_t(i);
+    const int nfv = vfStart[si + 1] - vfStart[si];
+    boundary[si] = vBnd[si] > 0;
+    if (nfv == 0) continue;
+    bool repeated = false;
+    for (int q = vfStart[si]; q < vfStart[si + 1]; ++q) {
+      const auto& F = m.F[std::size_t(vf[std::size_t(q)])];
+      if (F[0] == F[1] || F[1] == F[2] || F[0] == F[2]) repeated = true;
+    }
+    if (repeated) continue;  // counted as degenerate, not judged here
+    const bool ok = (vBnd[si] == 0 && vEdges[si] == nfv) || (vBnd[si] == 2 && vEdges[si] == nfv + 1);
+    nonManifoldVertex[si] = !ok;
+  }
+}
+
+std::size_t Topology::boundaryEdges() const {
+  return std::size_t(std::count_if(edges.begin(), edges.end(), [](const Edge& e) { return e.faces == 1; }));
+}
+
+std::size_t Topology::nonManifoldEdges() const {
+  return std::size_t(std::count_if(edges.begin(), edges.end(), [](const Edge& e) { return e.faces > 2; }));
+}
+
+bool Topology::closedManifold() const {
+  if (badFace >= 0 || edges.empty()) return false;
+  for (const auto& e : edges)
+    if (e.faces != 2) return false;
+  return std::none_of(nonManifoldVertex.begin(), nonManifoldVertex.end(), [](char c) { return c != 0; });
+}
+
+int Topology::components(std::vector<int>& faceComponent) const {
+  const int nf = int(faceEdge.size()), nv = int(boundary.size());
+  std::vector<int> parent(boundary.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  // faces sharing a vertex are connected: union the vertices of each face
+  std::vector<int> firstVertex(std::size_t(nf), -1);
+  for (int v = 0; v < nv; ++v)
+    for (int q = vfStart[std::size_t(v)]; q < vfStart[std::size_t(v) + 1]; ++q) {
+      const int f = vf[std::size_t(q)];
+      int& r = firstVertex[std::size_t(f)];
+      if (r < 0) r = v;
+      else parent[std::size_t(findRoot(parent, v))] = findRoot(parent, r);
+    }
+  faceComponent.assign(std::size_t(nf), -1);
+  std::vector<int> id(std::size_t(nv), -1);
+  int n = 0;
+  for (int f = 0; f < nf; ++f) {
+    const int r = findRoot(parent, firstVertex[std::size_t(f)]);
+    if (id[std::size_t(r)] < 0) id[std::size_t(r)] = n++;
+    faceComponent[std::size_t(f)] = id[std::size_t(r)];
+  }
+  return n;
+}
+
+}  // namespace pectus

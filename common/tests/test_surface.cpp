@@ -1,0 +1,174 @@
+// The cores' surface type: its topology (edges, boundary, manifold, components) and the one conversion
+// from and to CMeshO with its index maps.
+#include <gtest/gtest.h>
+
+#include <vcg/complex/complex.h>
+
+#include <cmath>
+#include <limits>
+
+#include "pectus/surface.h"
+#include "pectus/surface_cmesh.h"
+
+namespace {
+using pectus::Surface;
+using pectus::Topology;
+using V3 = Eigen::Vector3d;
+
+Surface tetrahedron(const V3& o = V3::Zero()) {
+  Surface s;
+  s.V = {o, o + V3(1, 0, 0), o + V3(0, 1, 0), o + V3(0, 0, 1)};
+  s.F = {{0, 2, 1}, {0, 1, 3}, {1, 2, 3}, {0, 3, 2}};
+  return s;
+}
+
+Surface twoTetrahedra() {
+  Surface a = tetrahedron(), b = tetrahedron(V3(5, 0, 0));
+  for (auto& p : b.V) a.V.push_back(p);
+  for (auto f : b.F) a.F.push_back({f[0] + 4, f[1] + 4, f[2] + 4});
+  return a;
+}
+}  // namespace
+
+TEST(Topology, ClosedTetrahedron) {
+  const Surface s = tetrahedron();
+  const Topology t(s);
+  EXPECT_EQ(t.badFace, -1);
+  ASSERT_EQ(t.edges.size(), 6u);
+  for (const auto& e : t.edges) {
+    EXPECT_LT(e.a, e.b);
+    EXPECT_EQ(e.faces, 2);
+    EXPECT_GE(e.f1, 0);
+  }
+  EXPECT_EQ(t.boundaryEdges(), 0u);
+  EXPECT_EQ(t.nonManifoldEdges(), 0u);
+  EXPECT_TRUE(t.closedManifold());
+  for (int v = 0; v < 4; ++v) {
+    EXPECT_EQ(t.vfStart[std::size_t(v) + 1] - t.vfStart[std::size_t(v)], 3) << v;
+    EXPECT_FALSE(t.boundary[std::size_t(v)]);
+    EXPECT_FALSE(t.nonManifoldVertex[std::size_t(v)]);
+  }
+  // local edge l of face f is opposite its local vertex l
+  for (int f = 0; f < 4; ++f)
+    for (int l = 0; l < 3; ++l) {
+      const auto& e = t.edges[std::size_t(t.faceEdge[std::size_t(f)][std::size_t(l)])];
+      const int a = s.F[std::size_t(f)][std::size_t((l + 1) % 3)], b = s.F[std::size_t(f)][std::size_t((l + 2) % 3)];
+      EXPECT_EQ(std::min(a, b), e.a);
+      EXPECT_EQ(std::max(a, b), e.b);
+    }
+}
+
+TEST(Topology, OpenSurfaceHasBoundary) {
+  Surface s = tetrahedron();
+  s.F.pop_back();
+  const Topology t(s);
+  EXPECT_EQ(t.boundaryEdges(), 3u);
+  EXPECT_FALSE(t.closedManifold());
+  int onBoundary = 0;
+  for (char b : t.boundary) onBoundary += b;
+  EXPECT_EQ(onBoundary, 3);
+  for (char n : t.nonManifoldVertex) EXPECT_FALSE(n);
+}
+
+TEST(Topology, IndexOutOfRangeStopsTheBuild) {
+  Surface s = tetrahedron();
+  s.F[2][1] = 7;
+  const Topology t(s);
+  EXPECT_EQ(t.badFace, 2);
+  EXPECT_EQ(t.badIndex, 7);
+  EXPECT_TRUE(t.edges.empty());
+  EXPECT_FALSE(t.closedManifold());
+}
+
+TEST(Topology, NonManifoldEdgeAndVertex) {
+  Surface fin = tetrahedron();
+  fin.V.push_back(V3(1, 1, -1));
+  fin.F.push_back({0, 1, 4});  // a third face on edge (0, 1)
+  const Topology t(fin);
+  EXPECT_EQ(t.nonManifoldEdges(), 1u);
+  for (int e = 0; e < int(t.edges.size()); ++e)
+    if (t.edges[std::size_t(e)].faces == 3) {
+      EXPECT_EQ(t.edges[std::size_t(e)].a, 0);
+      EXPECT_EQ(t.edges[std::size_t(e)].b, 1);
+      EXPECT_EQ(t.edgeFacesEnd(e) - t.edgeFacesBegin(e), 3);
+    }
+  EXPECT_FALSE(t.closedManifold());
+
+  Surface bowtie;  // two triangles sharing only vertex 0
+  bowtie.V = {V3(0, 0, 0), V3(1, 0, 0), V3(1, 1, 0), V3(-1, 0, 0), V3(-1, -1, 0)};
+  bowtie.F = {{0, 1, 2}, {0, 3, 4}};
+  const Topology b(bowtie);
+  EXPECT_TRUE(b.nonManifoldVertex[0]);
+  for (int v = 1; v < 5; ++v) EXPECT_FALSE(b.nonManifoldVertex[std::size_t(v)]) << v;
+}
+
+TEST(Topology, ComponentsInFaceOrder) {
+  Surface s = twoTetrahedra();
+  std::swap(s.F[0], s.F[4]);  // the second piece's face comes first
+  std::vector<int> comp;
+  EXPECT_EQ(Topology(s).components(comp), 2);
+  ASSERT_EQ(comp.size(), 8u);
+  EXPECT_EQ(comp[0], 0);
+  EXPECT_EQ(comp[1], 1);
+  EXPECT_EQ(comp[4], 1);
+  EXPECT_EQ(comp[7], 0);
+}
+
+TEST(SurfaceOf, IndexMapsAndVertexChoices) {
+  pectus::OwnedMesh m;
+  pectus::toMesh(twoTetrahedra(), m);
+  ASSERT_EQ(m.vn, 8);
+  ASSERT_EQ(m.fn, 8);
+  // delete the first piece's faces and its vertex 1; make vertex 6 non-finite
+  for (int f = 0; f < 4; ++f) vcg::tri::Allocator<CMeshO>::DeleteFace(m, m.face[std::size_t(f)]);
+  vcg::tri::Allocator<CMeshO>::DeleteVertex(m, m.vert[1]);
+  m.vert[6].P()[0] = std::numeric_limits<Scalarm>::quiet_NaN();
+
+  std::vector<int> vOf, fOf;
+  const Surface live = pectus::surfaceOf(m, {}, &vOf, &fOf);
+  EXPECT_EQ(live.V.size(), 7u);
+  EXPECT_EQ(vOf, (std::vector<int>{0, 2, 3, 4, 5, 6, 7}));
+  EXPECT_EQ(fOf, (std::vector<int>{4, 5, 6, 7}));
+  EXPECT_EQ(live.F[0], (std::array<int, 3>{3, 5, 4}));  // m.vert 4, 6, 5
+
+  pectus::SurfaceOf all;
+  all.vertices = pectus::SurfaceOf::Vertices::All;
+  const Surface a = pectus::surfaceOf(m, all);
+  EXPECT_EQ(a.V.size(), 8u);
+  EXPECT_EQ(a.F[0], (std::array<int, 3>{4, 6, 5}));
+
+  pectus::SurfaceOf used;
+  used.vertices = pectus::SurfaceOf::Vertices::UsedByFaces;
+  used.skipNonFiniteFaces = true;  // three of the four faces touch vertex 6
+  const Surface u = pectus::surfaceOf(m, used, &vOf, &fOf);
+  ASSERT_EQ(u.F.size(), 1u);
+  EXPECT_EQ(fOf, (std::vector<int>{5}));
+  EXPECT_EQ(vOf, (std::vector<int>{4, 5, 7}));  // the order face 5 = (4, 5, 7) uses them
+  EXPECT_EQ(u.F[0], (std::array<int, 3>{0, 1, 2}));
+
+  pectus::SurfaceOf some;
+  some.keepFace = [](std::size_t f) { return f != 6; };
+  EXPECT_EQ(pectus::surfaceOf(m, some).F.size(), 3u);
+}
+
+TEST(SurfaceOf, RoundTripThroughCMeshO) {
+  const Surface s = tetrahedron(V3(1.5, -2, 3));
+  pectus::OwnedMesh m;
+  const std::vector<V3> normals(4, V3(0, 0, 1));
+  pectus::toMesh(s, m, &normals);
+  EXPECT_EQ(m.vert[2].N()[2], Scalarm(1));
+  const Surface back = pectus::surfaceOf(m);
+  EXPECT_EQ(back.F, s.F);
+  for (std::size_t i = 0; i < s.V.size(); ++i) EXPECT_LT((back.V[i] - s.V[i]).norm(), 1e-6);
+}
+
+TEST(SurfaceOf, SelfIntersectingFacesOfACMeshO) {
+  pectus::OwnedMesh m;
+  pectus::toMesh(twoTetrahedra(), m);
+  EXPECT_TRUE(pectus::selfIntersectingFaces(m).empty());
+  Surface crossing = twoTetrahedra();
+  for (std::size_t i = 4; i < 8; ++i) crossing.V[i] -= V3(4.8, -0.1, -0.1);  // the second pierces the first
+  pectus::OwnedMesh c;
+  pectus::toMesh(crossing, c);
+  EXPECT_FALSE(pectus::selfIntersectingFaces(c).empty());
+}
