@@ -24,10 +24,10 @@ Vec3 triNormal(const c1::TriMesh& m, const std::array<int, 3>& t) {
 }  // namespace
 
 std::vector<Candidate> quadCandidates(const c1::TriMesh& tri, const ConvertOptions& o) {
-  std::unordered_map<std::uint64_t, std::vector<int>> edgeFaces;
-  edgeFaces.reserve(tri.F.size() * 2);
-  for (int f = 0; f < int(tri.F.size()); ++f)
-    for (int k = 0; k < 3; ++k) edgeFaces[edgeKey(tri.F[f][k], tri.F[f][(k + 1) % 3])].push_back(f);
+  const Topology topo(tri);
+  if (topo.badFace >= 0) throw InputError("face " + std::to_string(topo.badFace) + " uses vertex index " +
+                                          std::to_string(topo.badIndex) + ", but the mesh has " +
+                                          std::to_string(tri.V.size()) + " vertices");
   const double cosMax = std::cos(o.maxDihedralDeg * M_PI / 180.0);
   const double minQ = std::max(0.0, o.minQuality);
   std::vector<Candidate> out;
@@ -35,9 +35,10 @@ std::vector<Candidate> quadCandidates(const c1::TriMesh& tri, const ConvertOptio
     const auto& t = tri.F[f];
     for (int k = 0; k < 3; ++k) {
       const int a = t[k], b = t[(k + 1) % 3], c = t[(k + 2) % 3];
-      const auto& nb = edgeFaces.at(edgeKey(a, b));
-      if (nb.size() != 2) continue;
-      const int g = nb[0] == f ? nb[1] : nb[0];
+      const int id = topo.faceEdge[std::size_t(f)][std::size_t((k + 2) % 3)];  // edge (a, b): opposite corner k + 2
+      if (id < 0 || topo.edges[std::size_t(id)].faces != 2) continue;
+      const int g0 = topo.edges[std::size_t(id)].f0 / 3, g1 = topo.edges[std::size_t(id)].f1 / 3;
+      const int g = g0 == f ? g1 : g0;
       if (g <= f) continue;  // each pair once
       const auto& u = tri.F[g];
       int d = -1;
