@@ -12,7 +12,8 @@ struct Topology {
     int a, b;    ///< vertices, a < b
     int f0, f1;  ///< face*3 + local edge (local edge l is opposite local vertex l); f1 = -1 on the boundary
   };
-  /// Throws InputError for invalid indices, NaN/Inf coordinates, non-manifold edges or vertices.
+  /// Throws TopologyError for invalid indices, duplicate faces, non-manifold edges or vertices, InputError
+  /// for NaN/Inf coordinates.
   explicit Topology(const TriMesh& m);
   std::vector<int> vfStart, vf;             ///< CSR vertex -> faces
   std::vector<Edge> edges;

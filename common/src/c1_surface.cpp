@@ -58,7 +58,7 @@ Topology::Topology(const TriMesh& m) {
       if (i < 0 || i >= nv) {
         std::ostringstream s;
         s << "face " << f << " uses vertex index " << i << ", but the mesh has " << nv << " vertices";
-        throw InputError(s.str());
+        throw TopologyError(s.str());
       }
     }
   for (int i = 0; i < nv; ++i)
@@ -105,11 +105,11 @@ Topology::Topology(const TriMesh& m) {
           if (sorted(keys[p].second / 3) == sorted(keys[q].second / 3)) {
             s << "faces " << keys[p].second / 3 << " and " << keys[q].second / 3
               << " are duplicates (the same three vertices); remove them first (Cleaning: Remove Duplicate Faces)";
-            throw InputError(s.str());
+            throw TopologyError(s.str());
           }
       s << "edge (" << (keys[i].first >> 32) << ", " << (keys[i].first & 0xffffffffu) << ") is shared by "
         << (j - i) << " faces (non-manifold edge); repair the mesh first (Cleaning: Repair non Manifold Edges)";
-      throw InputError(s.str());
+      throw TopologyError(s.str());
     }
     Edge e;
     e.a = int(keys[i].first >> 32);
@@ -144,7 +144,7 @@ Topology::Topology(const TriMesh& m) {
       std::ostringstream s;
       s << "vertex " << i << " is non-manifold (its " << nfv << " faces form more than one fan); repair the "
         << "mesh first (Cleaning: Repair non Manifold Vertices by splitting)";
-      throw InputError(s.str());
+      throw TopologyError(s.str());
     }
     boundary[i] = vBnd[i] > 0;
   }
@@ -813,7 +813,7 @@ TriMesh planarMesh(const std::vector<Vec2>& xy, const std::vector<double>& f, co
   m.F = tris;
   for (auto& t : m.F) {  // counter-clockwise in the plane
     for (int k = 0; k < 3; ++k)
-      if (t[k] < 0 || t[k] >= int(xy.size())) throw InputError("triangle uses a point index out of range");
+      if (t[k] < 0 || t[k] >= int(xy.size())) throw TopologyError("triangle uses a point index out of range");
     const Vec2 a = xy[t[0]], b = xy[t[1]], c = xy[t[2]];
     if ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x() < 0) std::swap(t[1], t[2]);
   }
