@@ -114,7 +114,7 @@ PolyMesh splitToQuads(const PolyMesh& m, const PlaceFn& place, std::size_t* newN
 
 ConvertResult convertToQuads(const c1::TriMesh& tri, const ConvertOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (tri.F.empty()) throw InputError("the mesh has no triangle to convert");
+  if (tri.F.empty()) throw TopologyError("the mesh has no triangle to convert");
   // (unchecked, a NaN vertex, used or not, would go through into the output, a bad index would be read out
   // of range, and a triangle with a repeated vertex would go through as a leftover element with that vertex
   // twice)
@@ -124,7 +124,7 @@ ConvertResult convertToQuads(const c1::TriMesh& tri, const ConvertOptions& o) {
   const auto cand = quadCandidates(tri, o);
   r.candidates = cand.size();
   if (cand.empty())
-    throw InputError("no two adjacent triangles make an acceptable quad (isolated triangles, inconsistent "
+    throw TopologyError("no two adjacent triangles make an acceptable quad (isolated triangles, inconsistent "
                      "orientation, every pair beyond the dihedral limit or below the minimum quality): nothing to convert");
   std::vector<WeightedEdge> edges;
   edges.reserve(cand.size());
