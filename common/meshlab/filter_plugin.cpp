@@ -246,11 +246,11 @@ std::string FilterPluginBase::runFilter(int id, MeshDocument& md, const RichPara
       ctx.commit();
       ctx.progress(100, "done");
       return {};
-    } catch (const InputError& e) {
+    } catch (const InputError& e) {  // and its kinds TopologyError, SolverFailure, IOError (pectus/errors.h)
       failure = e.what();
     } catch (const std::bad_alloc&) {
       failure = "out of memory";
-    } catch (const std::exception& e) {
+    } catch (const std::exception& e) {  // pectus::InternalError too
       failure = std::string("internal error: ") + e.what();
     } catch (...) {
       failure = "unknown internal error";

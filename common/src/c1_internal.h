@@ -7,8 +7,8 @@
 
 namespace pectus::c1 {
 
-/// The mesh's topology (pectus/surface.h), checked for the C1 surface: throws InputError for invalid
-/// indices, NaN/Inf coordinates, duplicate faces, non-manifold edges or vertices.
+/// The mesh's topology (pectus/surface.h), checked for the C1 surface: throws TopologyError for invalid
+/// indices, duplicate faces, non-manifold edges or vertices, InputError for NaN/Inf coordinates.
 Topology checkedTopology(const TriMesh& m);
 
 /// spatial grid of the patches' bounding boxes (closestPoint)

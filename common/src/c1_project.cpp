@@ -56,7 +56,7 @@ void C1Surface::buildIndex() const {
   if (index_) return;
   auto ix = std::make_unique<Index>();
   const int nf = int(mesh_.F.size());
-  if (nf == 0) throw InputError("closest point: the surface has no faces");
+  if (nf == 0) throw TopologyError("closest point: the surface has no faces");
   ix->bmin.resize(nf);
   ix->bmax.resize(nf);
   ix->lo = Vec3::Constant(std::numeric_limits<double>::max());

@@ -56,7 +56,7 @@ Topology checkedTopology(const TriMesh& m) {
   if (topo.badFace >= 0) {
     std::ostringstream s;
     s << "face " << topo.badFace << " uses vertex index " << topo.badIndex << ", but the mesh has " << nv << " vertices";
-    throw InputError(s.str());
+    throw TopologyError(s.str());
   }
   for (int i = 0; i < nv; ++i)
     if (!m.V[std::size_t(i)].allFinite()) {
@@ -79,11 +79,11 @@ Topology checkedTopology(const TriMesh& m) {
         if (sorted(*p / 3) == sorted(*q / 3)) {
           s << "faces " << *p / 3 << " and " << *q / 3
             << " are duplicates (the same three vertices); remove them first (Cleaning: Remove Duplicate Faces)";
-          throw InputError(s.str());
+          throw TopologyError(s.str());
         }
     s << "edge (" << topo.edges[std::size_t(e)].a << ", " << topo.edges[std::size_t(e)].b << ") is shared by "
       << topo.edges[std::size_t(e)].faces << " faces (non-manifold edge); repair the mesh first (Cleaning: Repair non Manifold Edges)";
-    throw InputError(s.str());
+    throw TopologyError(s.str());
   }
   for (int i = 0; i < nv; ++i)
     if (topo.nonManifoldVertex[std::size_t(i)]) {
@@ -91,7 +91,7 @@ Topology checkedTopology(const TriMesh& m) {
       std::ostringstream s;
       s << "vertex " << i << " is non-manifold (its " << nfv << " faces form more than one fan); repair the "
         << "mesh first (Cleaning: Repair non Manifold Vertices by splitting)";
-      throw InputError(s.str());
+      throw TopologyError(s.str());
     }
   return topo;
 }
@@ -759,7 +759,7 @@ TriMesh planarMesh(const std::vector<Vec2>& xy, const std::vector<double>& f, co
   m.F = tris;
   for (auto& t : m.F) {  // counter-clockwise in the plane
     for (int k = 0; k < 3; ++k)
-      if (t[k] < 0 || t[k] >= int(xy.size())) throw InputError("triangle uses a point index out of range");
+      if (t[k] < 0 || t[k] >= int(xy.size())) throw TopologyError("triangle uses a point index out of range");
     const Vec2 a = xy[t[0]], b = xy[t[1]], c = xy[t[2]];
     if ((b - a).x() * (c - a).y() - (b - a).y() * (c - a).x() < 0) std::swap(t[1], t[2]);
   }

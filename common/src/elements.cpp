@@ -54,12 +54,12 @@ ElementMesh buildElements(const CMeshO& m, ElementKind kind) {
       for (int k = 0; k < 3; ++k) e.v[k] = vi(f, k);
     } else {
       if (nfaux > 1)
-        throw InputError("face " + std::to_string(fi) + " has " + std::to_string(nfaux) +
+        throw TopologyError("face " + std::to_string(fi) + " has " + std::to_string(nfaux) +
                          " faux edges: the layer holds polygons with more than four sides, not quads");
       const int a = vi(f, faux), b = vi(f, (faux + 1) % 3), c = vi(f, (faux + 2) % 3);
       const EdgeMap::Faces nb = edges.faces(a, b);
       if (nb.size() != 2)
-        throw InputError("face " + std::to_string(fi) + " has a faux edge " +
+        throw TopologyError("face " + std::to_string(fi) + " has a faux edge " +
                          (nb.size() < 2 ? std::string("on the boundary") : std::string("shared by more than two faces")) +
                          ": not a valid quad");
       const int gi = nb[0] == int(fi) ? nb[1] : nb[0];
@@ -71,7 +71,7 @@ ElementMesh buildElements(const CMeshO& m, ElementKind kind) {
         if (g.IsF(k)) ++gfaux;
       }
       if (d < 0 || gfaux != 1)
-        throw InputError("faces " + std::to_string(fi) + " and " + std::to_string(gi) +
+        throw TopologyError("faces " + std::to_string(fi) + " and " + std::to_string(gi) +
                          " do not form a quad (their faux edges do not match)");
       // f = (a,b,c) with faux edge a-b; g holds b-a and its far vertex d: boundary a, d, b, c
       e.nv = 4;

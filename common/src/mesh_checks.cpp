@@ -80,24 +80,24 @@ MeshReport inspectMesh(const CMeshO& m) {
 MeshReport requireMesh(const CMeshO& m, const MeshRequirements& req, const std::string& layer) {
   MeshReport r = inspectMesh(m);
   const std::string L = "layer '" + layer + "': ";
-  if (req.faces && r.vertices == 0) throw InputError(L + "the layer is empty (no vertices)");
+  if (req.faces && r.vertices == 0) throw TopologyError(L + "the layer is empty (no vertices)");
   if (req.faces && r.faces == 0)
-    throw InputError(L + "the layer has " + std::to_string(r.vertices) + " vertices but no faces (a point cloud); a surface mesh is needed");
+    throw TopologyError(L + "the layer has " + std::to_string(r.vertices) + " vertices but no faces (a point cloud); a surface mesh is needed");
   if (req.finite && r.nonFiniteVertices)
     throw InputError(L + std::to_string(r.nonFiniteVertices) + " vertices have NaN or infinite coordinates; remove them first");
   if (req.edgeManifold && r.duplicateFaces)
-    throw InputError(L + std::to_string(r.duplicateFaces) +
+    throw TopologyError(L + std::to_string(r.duplicateFaces) +
                      " duplicate faces (the same three vertices as another face); run 'Remove Duplicate Faces' first");
   if (req.edgeManifold && r.nonManifoldEdges)
-    throw InputError(L + std::to_string(r.nonManifoldEdges) +
+    throw TopologyError(L + std::to_string(r.nonManifoldEdges) +
                      " non-manifold edges (shared by three or more faces); run 'Repair non Manifold Edges' first");
   if (req.vertexManifold && r.nonManifoldVertices)
-    throw InputError(L + std::to_string(r.nonManifoldVertices) +
+    throw TopologyError(L + std::to_string(r.nonManifoldVertices) +
                      " non-manifold vertices; run 'Repair non Manifold Vertices by splitting' first");
   if (req.noDegenerate && r.degenerateFaces)
-    throw InputError(L + std::to_string(r.degenerateFaces) + " zero-area faces; run 'Remove Zero Area Faces' first");
+    throw TopologyError(L + std::to_string(r.degenerateFaces) + " zero-area faces; run 'Remove Zero Area Faces' first");
   if (req.closed && r.boundaryEdges)
-    throw InputError(L + "the surface is open (" + std::to_string(r.boundaryEdges) + " boundary edges); a closed (watertight) surface is needed");
+    throw TopologyError(L + "the surface is open (" + std::to_string(r.boundaryEdges) + " boundary edges); a closed (watertight) surface is needed");
   return r;
 }
 

@@ -5,10 +5,12 @@
 #include <memory>
 #include <stdexcept>
 
+#include "pectus/errors.h"
+
 namespace pectus::mga {
 
 int substringLength(double interval, double accuracy) {
-  if (!(accuracy > 0) || !(interval > 0)) throw std::invalid_argument("MGA: accuracy and interval must be positive");
+  if (!(accuracy > 0) || !(interval > 0)) throw InternalError("MGA: accuracy and interval must be positive");
   const double steps = interval / accuracy;
   int nl = 1;
   double p = 2.0;  // 2^nl (doubling is exact)
@@ -183,8 +185,8 @@ struct DepthGuard {
 
 Result optimize(const std::vector<Range>& ranges, const std::function<double(const std::vector<double>&)>& fitness,
                 const Options& opt, const std::vector<double>* seedPoint) {
-  if (opt.population < 3) throw std::invalid_argument("MGA: population must be at least 3");
-  if (ranges.empty()) throw std::invalid_argument("MGA: no design parameter");
+  if (opt.population < 3) throw InternalError("MGA: population must be at least 3");
+  if (ranges.empty()) throw InternalError("MGA: no design parameter");
   std::unique_ptr<Workspace> own;
   Workspace& ws = tlDepth == 0 ? tlWorkspace : *(own = std::make_unique<Workspace>());
   const DepthGuard depth;
@@ -194,7 +196,7 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
   codec.maxv.clear();
   codec.total = 0;
   for (const auto& r : ranges) {
-    if (!(r.hi > r.lo)) throw std::invalid_argument("MGA: empty parameter range");
+    if (!(r.hi > r.lo)) throw InternalError("MGA: empty parameter range");
     codec.len.push_back(substringLength(r.hi - r.lo, opt.accuracy));
     codec.maxv.push_back(double(std::uint64_t(1) << codec.len.back()) - 1.0);
     codec.total += codec.len.back();

@@ -39,11 +39,13 @@ struct Result {
 
 /// Substring length for a parameter interval `a` and accuracy `acc`: the smallest nl with
 /// a/acc <= 2^nl - 1, i.e. 2^(nl-1) < a/acc <= 2^nl of eq. 1-1 (at least 1 bit).
+/// Throws pectus::InternalError unless both are positive (callers check their parameters first).
 int substringLength(double interval, double accuracy);
 
 /// Runs the micro-GA. `fitness` gets the decoded parameters; higher is better.
 /// `seedPoint` (optional, size = ranges.size()) is encoded into the first individual, so the search
 /// starts from a known solution (e.g. the node's current position) and can never end worse than it.
+/// Throws pectus::InternalError for a population below 3, no range or an empty range (callers check first).
 Result optimize(const std::vector<Range>& ranges, const std::function<double(const std::vector<double>&)>& fitness,
                 const Options& opt, const std::vector<double>* seedPoint = nullptr);
 

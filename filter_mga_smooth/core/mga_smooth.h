@@ -142,8 +142,8 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
 
 /// Smooths with opt.method. Nodes are the live vertices of `m`. `userFixed` (per m.vert index, empty = none): 1 = keep fixed.
 /// Moves that make the surface cross itself are undone at the end (restoreCrossings).
-/// Throws InputError for bad parameters, a mesh without faces, NaN coordinates, non-manifold input
-/// (edge or vertex), invalid quads, or a mesh with no free node.
+/// Throws InputError for bad parameters, NaN coordinates or a mesh with no free node, TopologyError
+/// (requireMesh, buildElements) for a mesh without faces, non-manifold input (edge or vertex) or invalid quads.
 /// Fixed-node classes are counted once, in the order boundary, feature, singular, user.
 Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& userFixed = {});
 

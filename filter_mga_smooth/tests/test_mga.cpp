@@ -3,6 +3,7 @@
 #include <cmath>
 
 #include "mga.h"
+#include "pectus/errors.h"
 
 using namespace pectus::mga;
 
@@ -11,7 +12,7 @@ TEST(Mga, SubstringLengthFollowsEq1_1) {
   EXPECT_EQ(substringLength(1.0, 1e-3), 10);   // 512 < 1000 <= 1023
   EXPECT_EQ(substringLength(0.5, 1e-3), 9);    // 256 < 500 <= 511
   EXPECT_EQ(substringLength(10.0, 1e-3), 14);  // 8192 < 10000 <= 16383
-  EXPECT_THROW(substringLength(1.0, 0.0), std::invalid_argument);
+  EXPECT_THROW(substringLength(1.0, 0.0), pectus::InternalError);
 }
 
 TEST(Mga, FindsTheMaximumOfASmoothFunctionOverManySeeds) {
@@ -73,10 +74,10 @@ TEST(Mga, RejectsNonsense) {
   Options o;
   o.population = 2;
   auto f = [](const std::vector<double>&) { return 0.0; };
-  EXPECT_THROW(optimize({{0, 1}}, f, o), std::invalid_argument);
+  EXPECT_THROW(optimize({{0, 1}}, f, o), pectus::InternalError);
   o.population = 5;
   o.accuracy = 0;
-  EXPECT_THROW(optimize({{0, 1}}, f, o), std::invalid_argument);
+  EXPECT_THROW(optimize({{0, 1}}, f, o), pectus::InternalError);
   o.accuracy = 1e-3;
-  EXPECT_THROW(optimize({{1, 1}}, f, o), std::invalid_argument);
+  EXPECT_THROW(optimize({{1, 1}}, f, o), pectus::InternalError);
 }

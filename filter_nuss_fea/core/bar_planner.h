@@ -69,7 +69,7 @@ struct Plan {
 /// non-positive target; and as the analysis does for anything it refuses.
 Plan planBars(const CageSurface& cage, const std::vector<Landmark>& landmarks, const PlanOptions& opt);
 
-/// One line per row, comma-separated, quoted where needed; throws InputError when it cannot be written.
+/// One line per row, comma-separated, quoted where needed; throws IOError when it cannot be written.
 void writePlanCsv(const std::string& path, const Plan& plan);
 /// The table as fixed-width text lines (header first), for the Log and the main job.
 std::vector<std::string> planTable(const Plan& plan);

@@ -5,6 +5,7 @@
 
 #include <vcg/complex/append.h>
 
+#include "pectus/errors.h"
 #include "pectus/surface_cmesh.h"
 
 #include <algorithm>
@@ -232,8 +233,8 @@ int decimateEmbedded(CMeshO& m, int targetFaces, double edgeLength) {
     const std::vector<int> si = selfIntersectingFaces(m);
     if (si.empty()) return attempt;
     if (everywhere)
-      throw std::runtime_error("the decimated surface intersects itself (" + std::to_string(si.size()) +
-                               " faces); use another edge length");
+      throw InternalError("the decimated surface intersects itself (" + std::to_string(si.size()) +
+                          " faces); use another edge length");
     for (int f : si) {
       vcg::Box3<Scalarm> b;
       for (int k = 0; k < 3; ++k) b.Add(m.face[std::size_t(f)].P(k));

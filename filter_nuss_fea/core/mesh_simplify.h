@@ -15,7 +15,7 @@ void decimateQuadric(CMeshO& m, int targetFaces, double embeddingCell = 0, const
 /// quadric decimation, checked; while the result intersects itself it is redone from the input with the
 /// embedding guard around every place that folded so far (a collapse that would make two faces cross there
 /// is refused; exact predicates); the last attempt guards every collapse. `edgeLength` (mm) sizes the
-/// guard's grid and boxes. Returns the number of attempts redone; throws std::runtime_error if even the
+/// guard's grid and boxes. Returns the number of attempts redone; throws pectus::InternalError if even the
 /// fully guarded decimation intersects itself.
 int decimateEmbedded(CMeshO& m, int targetFaces, double edgeLength);
 }

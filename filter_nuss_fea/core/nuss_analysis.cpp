@@ -62,7 +62,7 @@ std::string Location::describe() const {
 }
 
 CageSurface cageFromMesh(const CMeshO& m) {
-  if (m.fn == 0) throw InputError("The layer has no faces: the Nuss FE analysis needs the closed, labelled rib cage surface.");
+  if (m.fn == 0) throw TopologyError("The layer has no faces: the Nuss FE analysis needs the closed, labelled rib cage surface.");
   const auto labels = readFaceLabels(m);
   if (!labels)
     throw InputError(
@@ -76,7 +76,7 @@ CageSurface cageFromMesh(const CMeshO& m) {
       throw InputError("Vertex " + std::to_string(i) + " has a non-finite coordinate.");
   }
   if (const std::size_t dup = inspectMesh(m).duplicateFaces)
-    throw InputError(std::to_string(dup) + " duplicate faces (the same three vertices as another face): remove them "
+    throw TopologyError(std::to_string(dup) + " duplicate faces (the same three vertices as another face): remove them "
                      "(Cleaning: Remove Duplicate Faces); a closed surface has each face once.");
   // weld micro-edges (shorter than 1e-3 x the mean edge length: marching-cubes / STL slivers that
   // TetGen cannot mesh) by collapsing them; faces that become degenerate or doubled are dropped
@@ -393,7 +393,7 @@ int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, co
   for (int t = 0; t < mesh.numTets(); ++t) compTet.emplace(find(parent, mesh.tets[t][0]), t);
   for (const auto& [root, t] : compTet)
     if (!fixedIn.count(root))
-      throw InputError("A part of the model is not held by any costovertebral joint or the vertebral column (the connected piece containing the " +
+      throw TopologyError("A part of the model is not held by any costovertebral joint or the vertebral column (the connected piece containing the " +
                        partName(mesh.tissue[t], tetPart[t]) +
                        "): the system would be singular. Connect it to the cage, remove it, or add its joint landmark.");
   // pieces that hang on the rest by a node or an edge only (tets sharing no face with it) turn about that
@@ -420,7 +420,7 @@ int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, co
     if (!h) {
       int n = 0;
       for (int t = 0; t < mesh.numTets(); ++t) n += find(tp, t) == root;
-      throw InputError("A piece of the model (" + std::to_string(n) + " tets of the " + partName(mesh.tissue[root], tetPart[root]) +
+      throw TopologyError("A piece of the model (" + std::to_string(n) + " tets of the " + partName(mesh.tissue[root], tetPart[root]) +
                        " near " + pointText(mesh.centroid(root)) +
                        ") hangs on the rest by a single node or edge, no tet face: it turns freely about it and the system "
                        "would be singular. The surface is too coarse there (a thin part a few elements across, or two parts "
@@ -432,7 +432,7 @@ int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, co
     for (int k = 0; k < mesh.nodesPerTet(); ++k) used[t[k]] = 1;
   for (int n = 0; n < mesh.numNodes(); ++n)
     if (!used[n])
-      throw InputError("Node " + std::to_string(n) + " at " + pointText(mesh.nodes[n]) +
+      throw TopologyError("Node " + std::to_string(n) + " at " + pointText(mesh.nodes[n]) +
                        " belongs to no tetrahedron (TetGen left this surface vertex out): the system would be singular. "
                        "Remove near-duplicate vertices there (Cleaning: Merge Close Vertices) or use another edge length.");
   return static_cast<int>(compTet.size());
@@ -632,6 +632,8 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
   fe::Result lin1;
   try {
     lin1 = solver.solveLinear(1.0);
+  } catch (const SolverFailure& e) {  // the same kind, the message with the slivers that may cause it
+    throw SolverFailure(std::string(e.what()) + slivers(a));
   } catch (const InputError& e) {
     throw InputError(std::string(e.what()) + slivers(a));
   }
@@ -692,7 +694,7 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
       s << "No converged state reaches the target displacement " << opt.targetElevation << " mm: driving the sternum up, "
         << "the nonlinear solve stops converging beyond " << last.second << " mm at " << last.first << " N (" << e.what()
         << "). Lower the target, or check the model where it deforms most (an element inverting at the load).";
-      throw InputError(s.str());
+      throw SolverFailure(s.str());
     }
     ++a.nonlinearSolves;
     a.newtonIterations += a.result.newtonIterations;
@@ -706,7 +708,7 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
       std::ostringstream s;
       s << "No force up to " << opt.maxForce << " N reaches the target displacement " << opt.targetElevation << " mm (it takes "
         << a.force << " N). Lower the target or raise the maximum force.";
-      throw InputError(s.str());
+      throw SolverFailure(s.str());
     }
     fe::CalibrationResult c;
     c.force = a.force;

@@ -45,7 +45,8 @@ struct CageSurface {
   /// rule of the joined tissue layers (tissue_join.h)
   std::function<void(fe::TetMesh&, std::vector<int>& tetPart)> labelTets;
 };
-/// Throws InputError when m has no faces, non-finite coordinates or no tissue labels (labels.h).
+/// Throws TopologyError when m has no faces or duplicate faces, InputError for non-finite coordinates or no
+/// tissue labels (labels.h).
 CageSurface cageFromMesh(const CMeshO& m);
 
 struct Placement {
@@ -179,7 +180,7 @@ struct Model {
   std::vector<int> tetPart;  ///< anatomical part of each tet (of its nearest surface face)
   double secondsMesh = 0;
 };
-/// Tetrahedralises the cage; throws InputError for an open or self-intersecting surface.
+/// Tetrahedralises the cage; throws TopologyError for an open or self-intersecting surface (fe::tetrahedralize).
 Model buildModel(const CageSurface& cage, const fe::TetgenOptions& mesh);
 
 struct Analysis {
@@ -215,8 +216,9 @@ struct Analysis {
 };
 
 /// Runs the analysis: tetrahedralise, place the BCs/loads, solve (calibrating if asked), post-process.
-/// Throws InputError with a message naming what to fix (open/self-intersecting surface, missing labels
-/// or landmarks, a part without fixed nodes, unreachable target, Newton failure).
+/// Throws InputError with a message naming what to fix: TopologyError for an open/self-intersecting surface
+/// or a part without fixed nodes, SolverFailure for a singular system, a Newton failure or a target no force
+/// up to the maximum reaches, InputError itself for missing labels or landmarks or an unreachable target.
 Analysis analyze(const CageSurface& cage, const std::vector<Landmark>& landmarks, const Options& opt);
 /// The same on a model built before (opt.mesh is not used; the model's mesh is copied into the result).
 Analysis analyze(const CageSurface& cage, const Model& model, const std::vector<Landmark>& landmarks, const Options& opt);

@@ -45,12 +45,12 @@ void writeOutputs(const OutputFiles& files, const Analysis& a, const Options& op
 
 std::FILE* openOutput(const std::string& path) {
   std::FILE* f = std::fopen(path.c_str(), "w");
-  if (!f) throw InputError("Cannot write '" + path + "': check the folder exists and is writable.");
+  if (!f) throw IOError("Cannot write '" + path + "': check the folder exists and is writable.");
   return f;
 }
 
 void closeOutput(std::FILE* f, const std::string& path) {
-  if (std::fclose(f) != 0) throw InputError("Cannot finish writing '" + path + "'.");
+  if (std::fclose(f) != 0) throw IOError("Cannot finish writing '" + path + "'.");
 }
 
 void writeCurveCsv(const std::string& path, const Analysis& a) {

@@ -31,7 +31,7 @@ OutputFiles filesAt(const std::string& base, int pathSide = 1, int pathRib = 5);
 /// step of the final Fe (10 at least), the sternal patch's nodes printed, a heading that names Fe.
 fe::InpOptions inpOptions(const Analysis& a, const Options& opt);
 
-/// Writes every file of `files` that has a path, at the analysis' final force. Throws InputError naming
+/// Writes every file of `files` that has a path, at the analysis' final force. Throws IOError naming
 /// the path when one cannot be written.
 void writeOutputs(const OutputFiles& files, const Analysis& a, const Options& opt);
 
@@ -40,10 +40,10 @@ void writeOutputs(const OutputFiles& files, const Analysis& a, const Options& op
 void writeCurveCsv(const std::string& path, const Analysis& a);
 void writeRibPathCsv(const std::string& path, const std::vector<PathSample>& samples);
 
-/// Opens `path` for writing; throws InputError naming it when it cannot be created. Every file of the
+/// Opens `path` for writing; throws IOError naming it when it cannot be created. Every file of the
 /// analysis and of the bar planner is opened here.
 std::FILE* openOutput(const std::string& path);
-/// Closes a file opened by openOutput; throws InputError naming the path when the data did not reach it.
+/// Closes a file opened by openOutput; throws IOError naming the path when the data did not reach it.
 void closeOutput(std::FILE* f, const std::string& path);
 
 /// The deformed surface of an analysis: `out` becomes a copy of `analysed` (the mesh `cage` was made from

@@ -104,9 +104,9 @@ double transverse(const CageModel& m, const CageField& f, double* xin = nullptr)
     }
     const Vec3 o(sg * (bestExt + 5), sup.y(), sup.z()), dir(-sg, 0, 0);
     double sIn = 0, sOut = 0;
-    if (!firstHit(f, o, dir, 50, sIn)) throw std::runtime_error("rib cage: lateral extreme not found");
+    if (!firstHit(f, o, dir, 50, sIn)) throw InternalError("rib cage: lateral extreme not found");
     const Vec3 o2 = o + (sIn + 0.05) * dir;
-    if (!firstHit(f, o2, dir, 60, sOut, false)) throw std::runtime_error("rib cage: inner rib surface not found");
+    if (!firstHit(f, o2, dir, 60, sOut, false)) throw InternalError("rib cage: inner rib surface not found");
     x[si] = (o2 + sOut * dir).x();
   }
   if (xin) { xin[0] = x[0]; xin[1] = x[1]; }

@@ -96,9 +96,9 @@ Solid toSolid(const TissueLayer& l, Tissue tissue) {
     polys.push_back(poly);
     s.part.push_back(labels ? labels->part[f] : 0);
   }
-  if (polys.empty()) throw InputError("Layer '" + l.name + "' has no faces: each tissue layer must be a closed surface.");
+  if (polys.empty()) throw TopologyError("Layer '" + l.name + "' has no faces: each tissue layer must be a closed surface.");
   if (!PMP::orient_polygon_soup(pts, polys) || !PMP::is_polygon_soup_a_polygon_mesh(polys))
-    throw InputError("Layer '" + l.name + "' is not a 2-manifold surface (an edge in more than two faces): repair it "
+    throw TopologyError("Layer '" + l.name + "' is not a 2-manifold surface (an edge in more than two faces): repair it "
                      "(e.g. Filters > Cleaning and Repairing > Repair non Manifold Edges) before the analysis.");
   PMP::polygon_soup_to_polygon_mesh(pts, polys, s.mesh);
   if (!CGAL::is_closed(s.mesh)) {
@@ -106,7 +106,7 @@ Solid toSolid(const TissueLayer& l, Tissue tissue) {
     Point at;
     for (auto h : halfedges(s.mesh))
       if (is_border(h, s.mesh)) at = s.mesh.point(target(h, s.mesh)), ++border;
-    throw InputError("Layer '" + l.name + "' is open (" + std::to_string(border) + " border edges, e.g. at " + where(at) +
+    throw TopologyError("Layer '" + l.name + "' is open (" + std::to_string(border) + " border edges, e.g. at " + where(at) +
                      "): each tissue layer must be a closed surface; close its holes (Filters > Remeshing > Close Holes) "
                      "or export the segmentation as closed surfaces.");
   }
@@ -115,7 +115,7 @@ Solid toSolid(const TissueLayer& l, Tissue tissue) {
   std::vector<std::array<int, 3>> soupTris;
   for (const auto& q : polys) soupTris.push_back({int(q[0]), int(q[1]), int(q[2])});
   if (const auto pairs = selfIntersections(soupPts, soupTris); !pairs.empty())
-    throw InputError("Layer '" + l.name + "' intersects itself (" + std::to_string(pairs.size()) + " face pairs, e.g. near " +
+    throw TopologyError("Layer '" + l.name + "' intersects itself (" + std::to_string(pairs.size()) + " face pairs, e.g. near " +
                      where(pts[polys[std::size_t(pairs.front().a)][0]]) +
                      "): repair it (Filters > Cleaning and Repairing > Select Self Intersecting Faces shows where).");
   PMP::orient_to_bound_a_volume(s.mesh);
@@ -216,7 +216,7 @@ CageSurface joinTissueLayers(const std::vector<TissueLayer>& layers, const std::
     Mesh b = (*solids)[order[k]].mesh;  // corefinement changes both operands
     sum += PMP::volume(b);
     if (!PMP::corefine_and_compute_union(u, b, u))
-      throw InputError("Joining layer '" + (*solids)[order[k]].name +
+      throw TopologyError("Joining layer '" + (*solids)[order[k]].name +
                        "' to the others gives a non-manifold surface (the layers touch along an edge or at a vertex only): "
                        "let the touching tissues overlap a little, or merge those layers.");
   }

@@ -43,9 +43,9 @@ struct JoinStats {
 };
 
 /// Joins the layers into `joined` (labelled: writeFaceLabels) and returns its CageSurface with labelTets
-/// set (containment rule above). Throws InputError naming the layer when one has no faces, is open,
-/// non-manifold or self-intersecting, when a layer's tissue cannot be told, when there is no bone or no
-/// cartilage layer, or when the union fails.
+/// set (containment rule above). Throws TopologyError naming the layer when one has no faces, is open,
+/// non-manifold or self-intersecting, or when the union is non-manifold; InputError for a non-finite
+/// coordinate, when a layer's tissue cannot be told, or when there is no bone or no cartilage layer.
 CageSurface joinTissueLayers(const std::vector<TissueLayer>& layers, const std::vector<Landmark>& landmarks, CMeshO& joined,
                              JoinStats* stats = nullptr);
 

@@ -91,10 +91,10 @@ const char* kKnown = "STL, OBJ, PLY, OFF (.stl .obj .ply .off) or NIfTI (.nii .n
 
 std::string readAll(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("cannot open file '" + path + "'");
+  if (!in) throw IOError("cannot open file '" + path + "'");
   std::ostringstream s;
   s << in.rdbuf();
-  if (in.bad()) throw InputError("cannot read file '" + path + "'");
+  if (in.bad()) throw IOError("cannot read file '" + path + "'");
   return s.str();
 }
 
@@ -159,7 +159,7 @@ void finish(const std::string& path, Soup& s, CMeshO& out, MeshFileStats& st) {
       ++st.nonFiniteFaces;
   }
   if (faces.empty())
-    throw InputError("file '" + path + "' has no faces" +
+    throw TopologyError("file '" + path + "' has no faces" +
                      (st.nonFiniteFaces ? " with finite coordinates (" + grouped(st.nonFiniteFaces) +
                                               " faces with NaN or infinite coordinates)"
                                         : std::string()));
@@ -234,10 +234,10 @@ void readStl(const std::string& path, Soup& s, MeshFileStats& st) {
   }
   if (!solid) {
     if (data.size() >= 84)
-      throw InputError("file '" + path + "' is not an STL file: it does not start with 'solid' (ASCII) and its size, " +
+      throw IOError("file '" + path + "' is not an STL file: it does not start with 'solid' (ASCII) and its size, " +
                        grouped((long long)data.size()) + " bytes, is not 84 + 50 x " + grouped(le32(&data[80])) +
                        " triangles (binary); the file is truncated or not STL");
-    throw InputError("file '" + path + "' is not an STL file (" + grouped((long long)data.size()) +
+    throw IOError("file '" + path + "' is not an STL file (" + grouped((long long)data.size()) +
                      " bytes, neither 'solid ...' text nor a binary STL)");
   }
   st.format = "ASCII STL";
@@ -250,35 +250,35 @@ void readStl(const std::string& path, Soup& s, MeshFileStats& st) {
     const std::string k = lower(t[0]);
     auto where = [&] { return "file '" + path + "' line " + std::to_string(ln + 1) + ": "; };
     if (k == "facet") {
-      if (inFacet) throw InputError(where() + "'facet' before the previous facet's 'endfacet'");
+      if (inFacet) throw IOError(where() + "'facet' before the previous facet's 'endfacet'");
       inFacet = true;
       corners.clear();
     } else if (k == "vertex") {
-      if (!inFacet) throw InputError(where() + "'vertex' outside a facet");
+      if (!inFacet) throw IOError(where() + "'vertex' outside a facet");
       std::array<double, 3> p{};
       if (t.size() < 4 || !parseFloat(t[1], p[0]) || !parseFloat(t[2], p[1]) || !parseFloat(t[3], p[2]))
-        throw InputError(where() + "a vertex needs three numbers: '" + trim(lines[ln]) + "'");
+        throw IOError(where() + "a vertex needs three numbers: '" + trim(lines[ln]) + "'");
       corners.push_back(int(s.V.size()));
       s.V.push_back({p[0], p[1], p[2]});
     } else if (k == "endfacet") {
-      if (!inFacet) throw InputError(where() + "'endfacet' without 'facet'");
+      if (!inFacet) throw IOError(where() + "'endfacet' without 'facet'");
       if (corners.size() < 3)
-        throw InputError(where() + "a facet with " + std::to_string(corners.size()) + " vertices (3 needed)");
+        throw IOError(where() + "a facet with " + std::to_string(corners.size()) + " vertices (3 needed)");
       for (std::size_t c = 1; c + 1 < corners.size(); ++c) s.F.push_back({corners[0], corners[c], corners[c + 1]});
       inFacet = false;
     } else if (k == "endsolid") {
-      if (inFacet) throw InputError(where() + "'endsolid' inside a facet");
+      if (inFacet) throw IOError(where() + "'endsolid' inside a facet");
       ended = true;
     } else if (k == "solid") {
       ended = false;  // files with several solids
     } else if (k == "outer" || k == "endloop") {
       // structure only
     } else {
-      throw InputError(where() + "unexpected '" + t[0] + "' in an ASCII STL file");
+      throw IOError(where() + "unexpected '" + t[0] + "' in an ASCII STL file");
     }
   }
   if (inFacet || !ended)
-    throw InputError("file '" + path + "' ends " + (inFacet ? "inside a facet" : "without 'endsolid'") +
+    throw IOError("file '" + path + "' ends " + (inFacet ? "inside a facet" : "without 'endsolid'") +
                      ": the file is truncated");
 }
 
@@ -307,21 +307,21 @@ void readObj(const std::string& path, Soup& s, MeshFileStats& st) {
     if (t[0] == "v") {
       std::array<double, 3> p{};
       if (t.size() < 4 || !parseFloat(t[1], p[0]) || !parseFloat(t[2], p[1]) || !parseFloat(t[3], p[2]))
-        throw InputError(where() + "a vertex needs three numbers: '" + trim(line) + "'");
+        throw IOError(where() + "a vertex needs three numbers: '" + trim(line) + "'");
       s.V.push_back({p[0], p[1], p[2]});  // a 4th value (w) or colours after x y z are ignored
     } else if (t[0] == "f" || t[0] == "fo") {
       if (t.size() < 4)
-        throw InputError(where() + "a face needs at least 3 vertices: '" + trim(line) + "'");
+        throw IOError(where() + "a face needs at least 3 vertices: '" + trim(line) + "'");
       std::vector<long long> idx;
       for (std::size_t i = 1; i < t.size(); ++i) {
         const std::string v = t[i].substr(0, t[i].find('/'));  // i, i/t, i//n, i/t/n
         long long k = 0;
         if (!parseInt(v, k) || k == 0)
-          throw InputError(where() + "bad vertex index '" + t[i] + "' (indices start at 1; negative ones count back)");
+          throw IOError(where() + "bad vertex index '" + t[i] + "' (indices start at 1; negative ones count back)");
         if (k < 0) {
           k += (long long)(s.V.size()) + 1;  // relative to the vertices read so far
           if (k < 1)
-            throw InputError(where() + "vertex index " + v + " refers before the first vertex (" +
+            throw IOError(where() + "vertex index " + v + " refers before the first vertex (" +
                              std::to_string(s.V.size()) + " vertices defined before this line)");
         }
         idx.push_back(k);
@@ -338,7 +338,7 @@ void readObj(const std::string& path, Soup& s, MeshFileStats& st) {
     for (int k = 0; k < 3; ++k) {
       const long long v = faces[i][std::size_t(k)];
       if (v > (long long)(s.V.size()))
-        throw InputError("file '" + path + "' line " + std::to_string(faceLine[i]) + ": face refers to vertex " +
+        throw IOError("file '" + path + "' line " + std::to_string(faceLine[i]) + ": face refers to vertex " +
                          std::to_string(v) + " but the file has " + std::to_string(s.V.size()) + " vertices");
       f[std::size_t(k)] = int(v - 1);
     }
@@ -356,7 +356,7 @@ void readPly(const std::string& path, Soup& s, MeshFileStats& st) {
   int mask = 0;
   const int err = vcg::tri::io::ImporterPLY<CMeshO>::Open(m, path.c_str(), mask);
   if (vcg::tri::io::ImporterPLY<CMeshO>::ErrorCritical(err))
-    throw InputError("file '" + path + "' cannot be read as PLY: " + vcg::tri::io::ImporterPLY<CMeshO>::ErrorMsg(err));
+    throw IOError("file '" + path + "' cannot be read as PLY: " + vcg::tri::io::ImporterPLY<CMeshO>::ErrorMsg(err));
   s = surfaceOf(m);
 }
 
@@ -366,7 +366,7 @@ void readOff(const std::string& path, Soup& s, MeshFileStats& st) {
   int mask = 0;
   const int err = vcg::tri::io::ImporterOFF<CMeshO>::Open(m, path.c_str(), mask);
   if (err != 0)
-    throw InputError("file '" + path + "' cannot be read as OFF: " + vcg::tri::io::ImporterOFF<CMeshO>::ErrorMsg(err));
+    throw IOError("file '" + path + "' cannot be read as OFF: " + vcg::tri::io::ImporterOFF<CMeshO>::ErrorMsg(err));
   s = surfaceOf(m);
 }
 
@@ -612,8 +612,8 @@ void readMeshFile(const std::string& path, CMeshO& out, MeshFileStats& stats) {
   stats = MeshFileStats{};
   out.Clear();
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError("file '" + path + "' does not exist");
-  if (!fs::is_regular_file(path, ec)) throw InputError("'" + path + "' is not a file");
+  if (!fs::exists(path, ec)) throw IOError("file '" + path + "' does not exist");
+  if (!fs::is_regular_file(path, ec)) throw IOError("'" + path + "' is not a file");
   Soup s;
   switch (kindOf(path)) {
     case Kind::Stl: readStl(path, s, stats); break;
@@ -621,9 +621,9 @@ void readMeshFile(const std::string& path, CMeshO& out, MeshFileStats& stats) {
     case Kind::Ply: readPly(path, s, stats); break;
     case Kind::Off: readOff(path, s, stats); break;
     case Kind::Nifti:
-      throw InputError("file '" + path + "' is a NIfTI label map, not a mesh: import it with 'Import CT Segmentation'");
+      throw IOError("file '" + path + "' is a NIfTI label map, not a mesh: import it with 'Import CT Segmentation'");
     case Kind::Unknown:
-      throw InputError("file '" + path + "' has an unknown extension '" + fs::path(path).extension().string() +
+      throw IOError("file '" + path + "' has an unknown extension '" + fs::path(path).extension().string() +
                        "': give " + kKnown);
   }
   finish(path, s, out, stats);
@@ -639,7 +639,7 @@ std::vector<Structure> importSegmentation(const std::string& path, const ImportO
   if (opt.minVoxels < 0) throw InputError("minimum voxel count must be >= 0, got " + std::to_string(opt.minVoxels));
   std::error_code ec;
   if (trim(path).empty()) throw InputError("no path given: give a segmentation file or a folder of them");
-  if (!fs::exists(path, ec)) throw InputError("'" + path + "' does not exist: give a segmentation file or a folder of them");
+  if (!fs::exists(path, ec)) throw IOError("'" + path + "' does not exist: give a segmentation file or a folder of them");
 
   std::vector<std::string> files, other;
   const bool folder = fs::is_directory(path, ec);
@@ -652,19 +652,19 @@ std::vector<Structure> importSegmentation(const std::string& path, const ImportO
       else
         other.push_back(n + (e.is_directory(ec2) ? "/" : ""));
     }
-    if (ec) throw InputError("cannot list folder '" + path + "': " + ec.message());
+    if (ec) throw IOError("cannot list folder '" + path + "': " + ec.message());
     std::sort(files.begin(), files.end());
     std::sort(other.begin(), other.end());
     if (files.empty()) {
       std::string found;
       for (std::size_t i = 0; i < other.size() && i < 10; ++i) found += (i ? ", " : "") + other[i];
       if (other.size() > 10) found += ", ... (" + std::to_string(other.size()) + " in all)";
-      throw InputError("folder '" + path + "' has no " + kKnown + " file; found " +
+      throw IOError("folder '" + path + "' has no " + kKnown + " file; found " +
                        (other.empty() ? std::string("nothing") : found));
     }
   } else {
     if (kindOf(path) == Kind::Unknown)
-      throw InputError("file '" + path + "' has an unknown extension '" + fs::path(path).extension().string() +
+      throw IOError("file '" + path + "' has an unknown extension '" + fs::path(path).extension().string() +
                        "': give " + kKnown + ", or a folder of them");
     files.push_back(path);
   }

@@ -32,8 +32,8 @@ struct ImportReport {
   std::vector<std::string> lines;   ///< what was read, one line per file or label (for the Log)
 };
 
-/// Reads one mesh file into `out` (cleared first). Throws InputError naming the file and the problem
-/// (missing, unknown extension, unreadable, no faces).
+/// Reads one mesh file into `out` (cleared first). Throws IOError naming the file and the problem
+/// (missing, unknown extension, unreadable), TopologyError when it has no faces.
 void readMeshFile(const std::string& path, CMeshO& out);
 
 /// What readMeshFile did besides reading. Vertices at the same position are merged (STL stores none
@@ -67,8 +67,9 @@ int countComponents(const CMeshO& m);
 std::string describe(const Structure& s);
 
 /// A file (mesh or NIfTI) or a folder (every mesh and NIfTI file in it, sorted by name; other files are
-/// skipped and listed). Structures come in file order, labels ascending. Throws InputError when nothing
-/// can be read, naming the path and what was looked for.
+/// skipped and listed). Structures come in file order, labels ascending. Throws IOError when the path is
+/// missing, cannot be listed or holds no readable file, InputError when nothing can be imported from what
+/// was read, naming the path and what was looked for.
 std::vector<Structure> importSegmentation(const std::string& path, const ImportOptions& opt = {},
                                           ImportReport* report = nullptr,
                                           const std::function<void(int, const char*)>& progress = {});

@@ -152,7 +152,7 @@ bool isGz(const std::string& path) {
 
 std::map<int, std::string> readLabelTable(const std::string& path) {
   std::ifstream in(path, std::ios::binary);
-  if (!in) throw InputError("label table '" + path + "' cannot be opened: check the path");
+  if (!in) throw IOError("label table '" + path + "' cannot be opened: check the path");
   std::stringstream ss;
   ss << in.rdbuf();
   const std::string text = ss.str();
@@ -208,7 +208,7 @@ std::map<int, std::string> readLabelTable(const std::string& path) {
     }
   }
   if (names.empty())
-    throw InputError("label table '" + path +
+    throw IOError("label table '" + path +
                      "' has no entries: write one label a line ('1 rib_left_1' or '1,rib_left_1') or a JSON object {\"1\": \"rib_left_1\"}");
   return names;
 }
@@ -292,7 +292,7 @@ void convert(const void* data, std::size_t n, double slope, double inter, const 
       s.precision(6);
       s << "'" << path << "' is not a label map: voxel (" << ii << ", " << j << ", " << k << ") holds " << v
         << "; a label map holds integer labels (export the segmentation as labels, not as probabilities or a CT image)";
-      throw InputError(s.str());
+      throw IOError(s.str());
     }
     out[i] = std::int32_t(v);
   }
@@ -302,21 +302,21 @@ void convert(const void* data, std::size_t n, double slope, double inter, const 
 
 LabelVolume readNifti(const std::string& path) {
   std::error_code ec;
-  if (!fs::exists(path, ec)) throw InputError("NIfTI file '" + path + "' not found: check the path");
-  if (fs::is_directory(path, ec)) throw InputError("'" + path + "' is a folder, not a NIfTI file");
+  if (!fs::exists(path, ec)) throw IOError("NIfTI file '" + path + "' not found: check the path");
+  if (fs::is_directory(path, ec)) throw IOError("'" + path + "' is a folder, not a NIfTI file");
   quietNifti();
   NimPtr nim(nifti_image_read(path.c_str(), 1));
   if (!nim || !nim->data)
-    throw InputError("'" + path + "' cannot be read as NIfTI (not a .nii/.nii.gz file, truncated or damaged); export the label map as NIfTI-1 or NIfTI-2");
+    throw IOError("'" + path + "' cannot be read as NIfTI (not a .nii/.nii.gz file, truncated or damaged); export the label map as NIfTI-1 or NIfTI-2");
   const int ndim = int(nim->dim[0]);
   if (ndim < 3 || nim->nx < 1 || nim->ny < 1 || nim->nz < 1)
-    throw InputError("'" + path + "' is " + std::to_string(ndim) + "-D; a label map must be a 3-D volume");
+    throw IOError("'" + path + "' is " + std::to_string(ndim) + "-D; a label map must be a 3-D volume");
   for (int d = 4; d <= std::min(ndim, 7); ++d)
     if (nim->dim[d] > 1)
-      throw InputError("'" + path + "' holds " + std::to_string(nim->dim[d]) + " volumes along dimension " + std::to_string(d) +
+      throw IOError("'" + path + "' holds " + std::to_string(nim->dim[d]) + " volumes along dimension " + std::to_string(d) +
                        "; a label map must be one 3-D volume (export one segmentation, or one mask per structure)");
   if (nim->nx > std::numeric_limits<int>::max() || nim->ny > std::numeric_limits<int>::max() || nim->nz > std::numeric_limits<int>::max())
-    throw InputError("'" + path + "' is too large");
+    throw IOError("'" + path + "' is too large");
   LabelVolume v;
   v.dims = {int(nim->nx), int(nim->ny), int(nim->nz)};
   const std::size_t n = std::size_t(nim->nx) * std::size_t(nim->ny) * std::size_t(nim->nz);
@@ -331,7 +331,7 @@ LabelVolume readNifti(const std::string& path) {
     case DT_FLOAT32: convert<float>(nim->data, n, slope, inter, path, v.dims, v.labels); break;
     case DT_FLOAT64: convert<double>(nim->data, n, slope, inter, path, v.dims, v.labels); break;
     default:
-      throw InputError("'" + path + "' stores " + datatypeName(nim->datatype) +
+      throw IOError("'" + path + "' stores " + datatypeName(nim->datatype) +
                        " voxels; a label map must be integer (uint8, int8, int16, uint16, int32, uint32) or integer-valued float32/float64");
   }
 
@@ -356,7 +356,7 @@ LabelVolume readNifti(const std::string& path) {
   a.topRows<3>() *= unit;
   a.row(3) << 0, 0, 0, 1;
   if (!a.allFinite() || std::abs(a.topLeftCorner<3, 3>().determinant()) < 1e-12)
-    throw InputError("'" + path + "' has no usable voxel-to-world transform (its sform/qform is singular); fix the header's voxel sizes and orientation");
+    throw IOError("'" + path + "' has no usable voxel-to-world transform (its sform/qform is singular); fix the header's voxel sizes and orientation");
   v.voxelToMm = a;
 
   for (int e = 0; e < nim->num_ext; ++e) {
@@ -382,7 +382,7 @@ void writeNifti(const LabelVolume& v, const std::string& path) {
   const std::string l = lower(path);
   const bool nii = l.size() > 4 && l.compare(l.size() - 4, 4, ".nii") == 0;
   const bool niigz = l.size() > 7 && l.compare(l.size() - 7, 7, ".nii.gz") == 0;
-  if (!nii && !niigz) throw InputError("NIfTI output '" + path + "' must end in .nii or .nii.gz");
+  if (!nii && !niigz) throw IOError("NIfTI output '" + path + "' must end in .nii or .nii.gz");
   const std::size_t n = std::size_t(v.dims[0]) * std::size_t(v.dims[1]) * std::size_t(v.dims[2]);
   if (v.dims[0] < 1 || v.dims[1] < 1 || v.dims[2] < 1 || v.labels.size() != n)
     throw InputError("label volume for '" + path + "' is inconsistent: dims " + std::to_string(v.dims[0]) + "x" + std::to_string(v.dims[1]) +
@@ -392,7 +392,7 @@ void writeNifti(const LabelVolume& v, const std::string& path) {
   const fs::path parent = fs::path(path).parent_path();
   std::error_code ec;
   if (!parent.empty() && !fs::is_directory(parent, ec))
-    throw InputError("cannot write '" + path + "': folder '" + parent.string() + "' does not exist");
+    throw IOError("cannot write '" + path + "': folder '" + parent.string() + "' does not exist");
 
   std::int32_t lo = 0, hi = 0;
   for (std::int32_t x : v.labels) { lo = std::min(lo, x); hi = std::max(hi, x); }
@@ -400,7 +400,7 @@ void writeNifti(const LabelVolume& v, const std::string& path) {
   const int64_t dims[8] = {3, v.dims[0], v.dims[1], v.dims[2], 1, 1, 1, 1};
   quietNifti();
   NimPtr nim(nifti_make_new_nim(dims, small ? DT_INT16 : DT_INT32, 1));
-  if (!nim || !nim->data) throw InputError("cannot write '" + path + "': out of memory");
+  if (!nim || !nim->data) throw IOError("cannot write '" + path + "': out of memory");
   if (small) {
     auto* d = static_cast<std::int16_t*>(nim->data);
     for (std::size_t i = 0; i < n; ++i) d[i] = std::int16_t(v.labels[i]);
@@ -434,7 +434,7 @@ void writeNifti(const LabelVolume& v, const std::string& path) {
   nim->qto_ijk = nifti_dmat44_inverse(nim->qto_xyz);
   std::snprintf(nim->descrip, sizeof(nim->descrip), "label map");
   nim->nifti_type = NIFTI_FTYPE_NIFTI1_1;
-  if (nifti_set_filenames(nim.get(), path.c_str(), 0, 1) != 0) throw InputError("cannot write '" + path + "': not a valid NIfTI file name");
+  if (nifti_set_filenames(nim.get(), path.c_str(), 0, 1) != 0) throw IOError("cannot write '" + path + "': not a valid NIfTI file name");
   nifti_set_iname_offset(nim.get(), 1);
 
   if (!v.names.empty()) {
@@ -457,12 +457,12 @@ void writeNifti(const LabelVolume& v, const std::string& path) {
          "</VolumeInformation></CaretExtension>\n";
     const std::string xml = x.str();
     if (nifti_add_extension(nim.get(), xml.data(), int(xml.size()), NIFTI_ECODE_IGNORE) != 0)
-      throw InputError("cannot write '" + path + "': the label table does not fit in a NIfTI extension");
+      throw IOError("cannot write '" + path + "': the label table does not fit in a NIfTI extension");
   }
   fs::remove(path, ec);
   nifti_image_write(nim.get());
   if (!fs::is_regular_file(path, ec) || fs::file_size(path, ec) == 0)
-    throw InputError("cannot write '" + path + "': check that the folder is writable and the disk not full");
+    throw IOError("cannot write '" + path + "': check that the folder is writable and the disk not full");
   (void)niigz;
 }
 

@@ -35,14 +35,14 @@ struct LabelVolume {
 /// Units: the header's spatial unit (mm, um or m) converted to mm; unknown units are taken as mm.
 /// Label names: the file's label table when it carries one (a NIfTI header extension holding an XML label
 /// table, `<Label Key="1" ...>name</Label>`, with or without CDATA, as TotalSegmentator writes it), else
-/// from a sidecar beside it (labelTableSidecar). Throws InputError naming the file and what is wrong
+/// from a sidecar beside it (labelTableSidecar). Throws IOError naming the file and what is wrong
 /// (missing, unreadable, not 3-D, non-integer data, singular affine).
 LabelVolume readNifti(const std::string& path);
 
 /// Reads a label table file (value -> name): one label a line ("1 rib_left_1", "1,rib_left_1", tab- or
 /// semicolon-separated; ITK-SNAP's label description with the name in quotes; '#' comments and header lines
 /// without a number are skipped), a JSON object {"1": "rib_left_1"}, or XML `<Label Key="1">name</Label>`.
-/// Throws InputError if the file cannot be opened or has no entry.
+/// Throws IOError if the file cannot be opened or has no entry.
 std::map<int, std::string> readLabelTable(const std::string& path);
 
 /// The label table file beside a NIfTI file, if one exists: for <stem>.nii[.gz] the first of <stem>.txt,
@@ -52,7 +52,7 @@ std::string labelTableSidecar(const std::string& niftiPath);
 /// Writes `v` as a NIfTI-1 file (.nii or .nii.gz by the name), int16 if the labels fit, else int32, with
 /// the affine as sform and qform (code 1, scanner; the qform keeps rotation, flip and voxel sizes, not
 /// shear) and units mm. When `v.names` is not empty it is written as TotalSegmentator's label table (an
-/// XML CaretExtension, extension code 0), which readNifti reads back. Throws InputError if it cannot write.
+/// XML CaretExtension, extension code 0), which readNifti reads back. Throws IOError if it cannot write.
 void writeNifti(const LabelVolume& v, const std::string& path);
 
 /// The closed surface of one label (all voxels == label), by marching cubes on the binary mask padded

@@ -87,18 +87,18 @@ Soup wrapOf(const std::string& name, const Soup& s, const PrepareOptions& opt) {
   Soup w = alphaWrap(sealed, opt.alpha, opt.offset);
   const std::string still = w.empty() ? std::string("empty") : defects(w);
   if (!still.empty())
-    throw InputError("Alpha wrapping cannot close '" + name + "' at detail " + mm(opt.alpha, 2) + " mm (the result is " + still +
+    throw TopologyError("Alpha wrapping cannot close '" + name + "' at detail " + mm(opt.alpha, 2) + " mm (the result is " + still +
                      "): raise 'Wrap detail (alpha)' or check the structure.");
   const double v0 = volume(sealed), a0 = area(sealed), v1 = volume(w);
   if (v1 < kWrapHollow * v0)
-    throw InputError("Alpha wrapping went inside '" + name + "' through a hole wider than its detail (" + mm(opt.alpha, 2) +
+    throw TopologyError("Alpha wrapping went inside '" + name + "' through a hole wider than its detail (" + mm(opt.alpha, 2) +
                      " mm): the wrap is a hollow shell of " + mm(v1 / 1000, 2) + " cm3 around a structure of " + mm(v0 / 1000, 2) +
                      " cm3. Close the structure's holes (e.g. Filters > Remeshing > Close Holes) or raise 'Wrap detail (alpha)' "
                      "above the holes' width.");
   const double t = 2 * v0 / std::max(a0, 1e-300), o = opt.offset;
   const double grown = v0 + o * a0 + o * o * a0 / std::max(2 * t, 1e-300);
   if (v1 > kWrapGrowth * grown)
-    throw InputError("Alpha wrapping cannot follow '" + name + "' at detail " + mm(opt.alpha, 2) + " mm: the wrap holds " +
+    throw TopologyError("Alpha wrapping cannot follow '" + name + "' at detail " + mm(opt.alpha, 2) + " mm: the wrap holds " +
                      mm(v1 / 1000, 2) + " cm3, " + mm(v1 / grown, 1) + " times the structure grown by the offset (" +
                      mm(grown / 1000, 2) + " cm3), so it bridges the structure's gaps. Lower 'Wrap detail (alpha)' towards "
                      "the structure's thickness (about " + mm(t, 1) + " mm).");
@@ -910,7 +910,7 @@ void Preparation::repairColumn(const Structure& s) {
   }
   const std::string still = defects(keep);
   if (keep.empty() || !still.empty())
-    throw InputError("Alpha wrapping cannot close the vertebral column from '" + s.name + "' at detail " + mm(alpha, 2) + " mm (" +
+    throw TopologyError("Alpha wrapping cannot close the vertebral column from '" + s.name + "' at detail " + mm(alpha, 2) + " mm (" +
                      (keep.empty() ? std::string("nothing is left") : "the result is " + still) +
                      "): set 'Spine' to cut at the costovertebral joints, or check the layer.");
   log.push_back("vertebral column ('" + s.name + "'), kept as the fixed support: " +
@@ -1060,7 +1060,7 @@ NameClass classifyName(const std::string& name) {
 
 std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped) {
   std::ifstream in(path);
-  if (!in) throw InputError("Cannot read the picked points file '" + path + "': check the path.");
+  if (!in) throw IOError("Cannot read the picked points file '" + path + "': check the path.");
   std::stringstream ss;
   ss << in.rdbuf();
   const std::string text = ss.str();
@@ -1093,7 +1093,7 @@ std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped) {
     out.push_back({std::stoi(name.substr(k, e - k)), Vec3(std::stod(x), std::stod(y), std::stod(z))});
   }
   if (out.empty() && text.find("<PickedPoints") == std::string::npos)
-    throw InputError("'" + path + "' is not a PickPoints file (.pp): no <PickedPoints> element.");
+    throw IOError("'" + path + "' is not a PickPoints file (.pp): no <PickedPoints> element.");
   if (skipped) *skipped = skip;
   return out;
 }

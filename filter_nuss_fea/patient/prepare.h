@@ -110,14 +110,15 @@ struct PrepareResult {
 
 /// Builds the labelled cage into `cage` (cleared first; face labels by writeFaceLabels). Throws InputError
 /// naming what to fix: no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised by
-/// name or shape (rename the layers), a frame that cannot be found, a structure alpha wrapping cannot close
-/// or follow at the requested detail or that is hollow, a landmark that cannot be placed and is not given.
+/// name or shape (rename the layers), a frame that cannot be found, a landmark that cannot be placed and is
+/// not given; TopologyError for a structure alpha wrapping cannot close or follow at the requested detail or
+/// that is hollow.
 PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
                                  const std::function<void(int, const char*)>& progress = {});
 
 /// Points picked with MeshLab's PickPoints tool (a .pp file: <point x=".." y=".." z=".." name=".." active="1"/>)
 /// as landmarks: the name is the code ("500") or starts with it ("500 lower sternum end"); inactive points
-/// and names without a code are skipped (counted in `skipped`). Throws InputError if the file is unreadable.
+/// and names without a code are skipped (counted in `skipped`). Throws IOError if the file is unreadable.
 std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped = nullptr);
 
 }  // namespace pectus::patient

@@ -60,7 +60,7 @@ std::uintmax_t writeStl(const std::string& path, const std::vector<Tri>& tris, b
       o << "    endloop\n  endfacet\n";
     }
     o << "endsolid " << solid << "\n";
-    if (!o) throw InputError("cannot write '" + path + "'");
+    if (!o) throw IOError("cannot write '" + path + "'");
   } else {
     std::ofstream o(path, std::ios::binary);
     char header[80] = {};
@@ -79,7 +79,7 @@ std::uintmax_t writeStl(const std::string& path, const std::vector<Tri>& tris, b
       const std::uint16_t attr = 0;
       o.write(reinterpret_cast<const char*>(&attr), 2);
     }
-    if (!o) throw InputError("cannot write '" + path + "'");
+    if (!o) throw IOError("cannot write '" + path + "'");
   }
   return fs::file_size(path);
 }

@@ -9,10 +9,10 @@
 namespace pectus::quad {
 
 void writePolyMesh(const std::string& path, const PolyMesh& m, PolyFormat format) {
-  if (path.empty()) throw InputError("no output file name was given");
+  if (path.empty()) throw IOError("no output file name was given");
   std::FILE* fh = std::fopen(path.c_str(), "w");
   if (!fh)
-    throw InputError("cannot write '" + path + "': " + std::strerror(errno) +
+    throw IOError("cannot write '" + path + "': " + std::strerror(errno) +
                      " (check that the folder exists and is writable)");
   const auto vertices = [&](const char* prefix) {
     for (const auto& p : m.V) std::fprintf(fh, "%s%.9g %.9g %.9g\n", prefix, p.x(), p.y(), p.z());
@@ -51,7 +51,7 @@ void writePolyMesh(const std::string& path, const PolyMesh& m, PolyFormat format
       break;
   }
   const bool bad = std::ferror(fh) != 0;
-  if (std::fclose(fh) != 0 || bad) throw InputError("writing '" + path + "' failed (disk full?)");
+  if (std::fclose(fh) != 0 || bad) throw IOError("writing '" + path + "' failed (disk full?)");
 }
 
 }  // namespace pectus::quad

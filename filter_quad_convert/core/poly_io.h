@@ -10,7 +10,7 @@ namespace pectus::quad {
 enum class PolyFormat { OBJ, OFF, VTK };
 
 /// Writes `m` (ASCII, full float precision). OBJ: `v`/`f` records, 1-based. OFF: "OFF", counts, vertices,
-/// "n i j k [l]". VTK: legacy "POLYDATA" with POINTS and POLYGONS. Throws InputError if the file cannot be
+/// "n i j k [l]". VTK: legacy "POLYDATA" with POINTS and POLYGONS. Throws IOError if the file cannot be
 /// written (missing folder, no permission, disk full).
 void writePolyMesh(const std::string& path, const PolyMesh& m, PolyFormat format);
 

@@ -35,9 +35,9 @@ void requireElementIndices(const char* kind, std::size_t index, const int* v, in
   const std::string what = std::string(kind) + " " + std::to_string(index);
   for (int k = 0; k < nv; ++k) {
     if (v[k] < 0 || std::size_t(v[k]) >= vertices)
-      throw InputError(what + " uses vertex index " + std::to_string(v[k]) + ", out of range");
+      throw TopologyError(what + " uses vertex index " + std::to_string(v[k]) + ", out of range");
     for (int l = 0; l < k; ++l)
-      if (v[k] == v[l]) throw InputError(what + " uses a vertex twice (a collapsed face); remove it first");
+      if (v[k] == v[l]) throw TopologyError(what + " uses a vertex twice (a collapsed face); remove it first");
   }
 }
 
@@ -45,7 +45,7 @@ void requirePolyMesh(const PolyMesh& m) {
   requireFiniteVertices(m.V);
   for (std::size_t f = 0; f < m.F.size(); ++f) {
     if (m.F[f].nv != 3 && m.F[f].nv != 4)
-      throw InputError("element " + std::to_string(f) + " has " + std::to_string(m.F[f].nv) +
+      throw TopologyError("element " + std::to_string(f) + " has " + std::to_string(m.F[f].nv) +
                        " vertices; only triangles and quads are supported");
     requireElementIndices("element", f, m.F[f].v.data(), m.F[f].nv, m.V.size());
   }

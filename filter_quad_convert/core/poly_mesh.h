@@ -52,10 +52,10 @@ void toCMesh(const PolyMesh& p, CMeshO& m);
 /// Throws InputError naming the first vertex with a NaN or infinite coordinate, used by an element or not (the
 /// conversion keeps every vertex, so an unused one would go through into its output).
 void requireFiniteVertices(const std::vector<Vec3>& V);
-/// Throws InputError unless element `index` (`kind`: "triangle", "element") has `nv` vertex indices in
+/// Throws TopologyError unless element `index` (`kind`: "triangle", "element") has `nv` vertex indices in
 /// [0, vertices) and no vertex twice.
 void requireElementIndices(const char* kind, std::size_t index, const int* v, int nv, std::size_t vertices);
-/// Both checks over a polygon mesh, and every element a triangle or a quad.
+/// Both checks over a polygon mesh, and every element a triangle or a quad (else TopologyError).
 void requirePolyMesh(const PolyMesh& m);
 
 /// Rotates a quad so its faux diagonal v0-v2 is the one whose two triangles have the larger minimum alpha.

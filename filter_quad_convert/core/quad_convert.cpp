@@ -25,7 +25,7 @@ Vec3 triNormal(const c1::TriMesh& m, const std::array<int, 3>& t) {
 
 std::vector<Candidate> quadCandidates(const c1::TriMesh& tri, const ConvertOptions& o) {
   const Topology topo(tri);
-  if (topo.badFace >= 0) throw InputError("face " + std::to_string(topo.badFace) + " uses vertex index " +
+  if (topo.badFace >= 0) throw TopologyError("face " + std::to_string(topo.badFace) + " uses vertex index " +
                                           std::to_string(topo.badIndex) + ", but the mesh has " +
                                           std::to_string(tri.V.size()) + " vertices");
   const double cosMax = std::cos(o.maxDihedralDeg * M_PI / 180.0);
@@ -115,7 +115,7 @@ PolyMesh splitToQuads(const PolyMesh& m, const PlaceFn& place, std::size_t* newN
 
 ConvertResult convertToQuads(const c1::TriMesh& tri, const ConvertOptions& o) {
   const auto t0 = std::chrono::steady_clock::now();
-  if (tri.F.empty()) throw InputError("the mesh has no triangle to convert");
+  if (tri.F.empty()) throw TopologyError("the mesh has no triangle to convert");
   // (unchecked, a NaN vertex, used or not, would go through into the output, a bad index would be read out
   // of range, and a triangle with a repeated vertex would go through as a leftover element with that vertex
   // twice)
@@ -125,7 +125,7 @@ ConvertResult convertToQuads(const c1::TriMesh& tri, const ConvertOptions& o) {
   const auto cand = quadCandidates(tri, o);
   r.candidates = cand.size();
   if (cand.empty())
-    throw InputError("no two adjacent triangles make an acceptable quad (isolated triangles, inconsistent "
+    throw TopologyError("no two adjacent triangles make an acceptable quad (isolated triangles, inconsistent "
                      "orientation, every pair beyond the dihedral limit or below the minimum quality): nothing to convert");
   std::vector<WeightedEdge> edges;
   edges.reserve(cand.size());

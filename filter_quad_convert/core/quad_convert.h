@@ -45,8 +45,8 @@ struct Candidate {
 };
 std::vector<Candidate> quadCandidates(const c1::TriMesh& tri, const ConvertOptions& o);
 
-/// Throws InputError for input that cannot be converted (no triangle, no pair at all) or that
-/// requireFiniteVertices / requireElementIndices refuse.
+/// Throws TopologyError for input that cannot be converted (no triangle, no pair at all), and what
+/// requireFiniteVertices (InputError) / requireElementIndices (TopologyError) throw.
 ConvertResult convertToQuads(const c1::TriMesh& tri, const ConvertOptions& o);
 
 /// One Catmull-Clark style split of a triangle/quad mesh: every element with n sides -> n quads, new nodes at

@@ -31,8 +31,8 @@ struct StructureResult {
 };
 
 /// `surface` places the new nodes of edge dividing (closest point of the edge midpoint); if null, the
-/// midpoint of the straight edge is used. Throws InputError for input requirePolyMesh refuses (NaN/Inf
-/// vertices, elements other than triangles and quads, bad or repeated indices).
+/// midpoint of the straight edge is used. Throws what requirePolyMesh throws: InputError for NaN/Inf
+/// vertices, TopologyError for elements other than triangles and quads, bad or repeated indices.
 StructureResult improveStructure(const PolyMesh& m, const c1::C1Surface* surface, const StructureOptions& o);
 
 }  // namespace pectus::quad

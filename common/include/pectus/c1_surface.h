@@ -27,8 +27,9 @@
 //  - GradientMethod::InverseArea (thesis eqs. 3-1/3-2: inverse-area weighted facet gradients, boundary
 //    extrapolation 3-2), or are given.
 //
-// Bad input (pectus::InputError): faces with invalid indices, non-finite coordinates, edges with 3+ faces,
-// non-manifold vertices (two fans glued at a vertex), a HeightField mesh that folds over the axis.
+// Bad input (pectus::InputError): non-finite coordinates, a HeightField mesh that folds over the axis; its
+// pectus::TopologyError: faces with invalid indices, duplicate faces, edges with 3+ faces, non-manifold
+// vertices (two fans glued at a vertex).
 // Documented fallbacks (never NaN): zero-area triangles are skipped in the gradient estimation and get
 // h_i = 1/2 on a zero-length edge; a vertex whose frame cannot be built (all its faces degenerate) gets
 // the identity derivative map (edges leave it straight) and counts in stats().flatVertices; isolated
@@ -97,7 +98,8 @@ struct PatchJet {
 
 class C1Surface {
  public:
-  /// Estimates vertex normals with opt.gradient and builds the patches. Throws InputError.
+  /// Estimates vertex normals with opt.gradient and builds the patches. Throws InputError (TopologyError
+  /// for the mesh's topology; see above).
   explicit C1Surface(TriMesh mesh, const Options& opt = {});
   /// Given unit vertex normals (HeightField: any normal not orthogonal to the axis).
   C1Surface(TriMesh mesh, std::vector<Vec3> normals, const Options& opt);

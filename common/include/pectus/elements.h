@@ -28,7 +28,7 @@ bool hasFauxEdges(const CMeshO& m);
 
 /// Triangles: one element per live face, faux flags ignored.
 /// Quads: two faces joined across a faux edge make a quad; faces with no faux edge stay triangles.
-/// Throws InputError when the faux edges do not describe quads (a face with two faux edges, i.e. a
+/// Throws TopologyError when the faux edges do not describe quads (a face with two faux edges, i.e. a
 /// polygon of more than four sides; a faux edge on the boundary or shared by more than two faces).
 ElementMesh buildElements(const CMeshO& m, ElementKind kind);
 

@@ -32,7 +32,9 @@ struct MeshRequirements {
   bool noDegenerate = false;  ///< no zero-area face
 };
 
-/// Throws InputError naming the first requirement `m` fails; `layer` names the layer in the message.
+/// Throws naming the first requirement `m` fails; `layer` names the layer in the message: InputError for
+/// NaN/Inf coordinates, TopologyError for the others (empty, no faces, duplicate faces, non-manifold edges
+/// or vertices, zero-area faces, open).
 MeshReport requireMesh(const CMeshO& m, const MeshRequirements& req, const std::string& layer);
 
 }  // namespace pectus

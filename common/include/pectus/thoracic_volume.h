@@ -39,7 +39,8 @@ void requireRange(const Range& r, const std::string& what);
 
 /// Before/after pair check: same vertex count and the same frame (comparable bounding boxes, and
 /// most vertices not moved by more than a tenth of the size: an FE correction moves the anterior
-/// wall, not the whole model). Throws InputError naming both layers.
+/// wall, not the whole model). Throws InputError naming both layers, TopologyError when the before layer has
+/// no faces.
 void requireComparablePair(const Soup& before, const Soup& after, const std::string& beforeName,
                            const std::string& afterName);
 

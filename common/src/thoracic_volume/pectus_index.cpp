@@ -47,7 +47,7 @@ PectusIndex pectusIndexOnSlice(const SliceRegion& r, const std::optional<double>
     for (const auto& sg : r.segments) lo = lo.cwiseMin(sg.a).cwiseMin(sg.b), hi = hi.cwiseMax(sg.a).cwiseMax(sg.b);
     const double ext = (hi - lo).maxCoeff();
     if (!(std::abs(r.polygonArea()) > 1e-3 * ext * ext))
-      throw InputError("the pectus index cannot be measured at z = " + std::to_string(r.z) +
+      throw TopologyError("the pectus index cannot be measured at z = " + std::to_string(r.z) +
                        " mm: the section encloses no area (a sheet, not a chest)");
   }
   PectusIndex out;

@@ -72,7 +72,7 @@ void requireComparablePair(const Soup& before, const Soup& after, const std::str
          "(e.g. the FE result of this cage)";
     throw InputError(o.str());
   }
-  if (nb == 0) throw InputError("the before layer '" + bn + "' has no faces");
+  if (nb == 0) throw TopologyError("the before layer '" + bn + "' has no faces");
   const double db = bb.diag(), da = ba.diag();
   std::vector<double> disp;
   disp.reserve(nb);

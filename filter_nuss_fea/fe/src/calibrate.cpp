@@ -91,7 +91,7 @@ CalibrationResult calibrateForce(const std::function<double(double, const Observ
       std::ostringstream s;
       s << "Calibration did not reach the target " << target << " mm within " << opt.maxEvaluations << " solves (last: "
         << r.force << " N -> " << r.displacement << " mm).";
-      throw InputError(s.str());
+      throw SolverFailure(s.str());
     }
     double d = 0;
     try {
@@ -108,12 +108,12 @@ CalibrationResult calibrateForce(const std::function<double(double, const Observ
         s << "No converged state reaches the target displacement " << target << " mm: the nonlinear solve stops converging at "
           << e.loadFactor * f << " N (" << e.what() << ") and the largest displacement reached is " << best->second << " mm at "
           << best->first << " N. Lower the target, or check the model where it deforms most (an element inverting at the load).";
-        throw InputError(s.str());
+        throw SolverFailure(s.str());
       }
       f = nextForce(seen, target, opt.maxForce, true);
       continue;
     }
-    if (!std::isfinite(d)) throw InputError("Calibration: the displacement is not finite at force " + std::to_string(f) + " N.");
+    if (!std::isfinite(d)) throw SolverFailure("Calibration: the displacement is not finite at force " + std::to_string(f) + " N.");
     r.history.emplace_back(f, d);
     ++r.evaluations;
     r.force = f;
@@ -127,7 +127,7 @@ CalibrationResult calibrateForce(const std::function<double(double, const Observ
       std::ostringstream s;
       s << "No force up to " << opt.maxForce << " N reaches the target displacement " << target << " mm (at " << opt.maxForce
         << " N: " << d << " mm). Lower the target or raise the maximum force.";
-      throw InputError(s.str());
+      throw SolverFailure(s.str());
     }
     f = nextForce(seen, target, opt.maxForce, seen.size() > std::size_t(2 * r.evaluations + 1));
   }

@@ -20,7 +20,7 @@ namespace pectus::fe {
 namespace {
 std::ofstream openOut(const std::string& path) {
   std::ofstream f(path);
-  if (!f) throw InputError("Cannot write " + path + " (check the folder exists and is writable).");
+  if (!f) throw IOError("Cannot write " + path + " (check the folder exists and is writable).");
   f.precision(12);
   return f;
 }
@@ -118,7 +118,7 @@ void writeVtu(const std::string& path, const TetMesh& m, const Result* res) {
   }
   f << "</Piece>\n</UnstructuredGrid>\n</VTKFile>\n";
   f.flush();
-  if (!file) throw InputError("Writing " + path + " failed (disk full?).");
+  if (!file) throw IOError("Writing " + path + " failed (disk full?).");
 }
 
 void writeCalculixInp(const std::string& path, const Problem& p, const InpOptions& opt) {
@@ -181,7 +181,7 @@ void writeCalculixInp(const std::string& path, const Problem& p, const InpOption
   if (!opt.printNodes.empty()) f << "*NODE PRINT, NSET=OUT\nU\n";
   f << "*NODE FILE\nU\n*EL FILE\nS, E\n*END STEP\n";
   f.flush();
-  if (!file) throw InputError("Writing " + path + " failed (disk full?).");
+  if (!file) throw IOError("Writing " + path + " failed (disk full?).");
 }
 
 namespace {
@@ -222,7 +222,7 @@ std::map<std::string, std::string> keywordLine(std::string_view line) {
 
 std::unique_ptr<InpModel> readCalculixInp(const std::string& path) {
   std::ifstream f(path, std::ios::binary);
-  if (!f) throw InputError("Cannot read " + path + ".");
+  if (!f) throw IOError("Cannot read " + path + ".");
   std::ostringstream all;
   all << f.rdbuf();
   return parseCalculixInp(all.str(), path);
@@ -256,7 +256,7 @@ class InpReader {
   struct BoundaryLine { int node, first, last; double value; };  // deck node id, dofs first..last (1-based)
 
   [[noreturn]] void fail(const std::string& why) const {
-    throw InputError(path_ + ", line " + std::to_string(lineNo_) + ": " + why);
+    throw IOError(path_ + ", line " + std::to_string(lineNo_) + ": " + why);
   }
   double number(std::string_view t) const {
     double v = 0;
@@ -278,7 +278,7 @@ class InpReader {
   // the 0-based node of a deck node id
   int node(int id) const {
     const auto it = nodeIndex_.find(id);
-    if (it == nodeIndex_.end()) throw InputError(path_ + ": node " + std::to_string(id) + " is used but not defined.");
+    if (it == nodeIndex_.end()) throw IOError(path_ + ": node " + std::to_string(id) + " is used but not defined.");
     return it->second;
   }
 
@@ -398,13 +398,13 @@ class InpReader {
   void assemble() {
     TetMesh& m = owned_->mesh;
     Problem& p = owned_->problem;
-    if (elems_.empty()) throw InputError(path_ + ": no *ELEMENT of type C3D4 or C3D10.");
+    if (elems_.empty()) throw IOError(path_ + ": no *ELEMENT of type C3D4 or C3D10.");
     std::vector<std::size_t> order(elems_.size());
     for (std::size_t k = 0; k < order.size(); ++k) order[k] = k;
     std::sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return elems_[a].first < elems_[b].first; });
     for (std::size_t k = 1; k < order.size(); ++k)
       if (elems_[order[k]].first == elems_[order[k - 1]].first)
-        throw InputError(path_ + ": element " + std::to_string(elems_[order[k]].first) + " is defined twice.");
+        throw IOError(path_ + ": element " + std::to_string(elems_[order[k]].first) + " is defined twice.");
     m.order = nen_ == 10 ? 2 : 1;
     for (std::size_t k : order) {
       std::array<int, 10> e{};
@@ -413,7 +413,7 @@ class InpReader {
       m.tissue.push_back(elemTissue_[k]);
     }
     for (const auto& b : boundary_) {
-      if (b.first < 1 || b.last > 3 || b.first > b.last) throw InputError(path_ + ": *BOUNDARY dofs must be within 1..3.");
+      if (b.first < 1 || b.last > 3 || b.first > b.last) throw IOError(path_ + ": *BOUNDARY dofs must be within 1..3.");
       for (int d = b.first; d <= b.last; ++d) p.fixed.push_back({node(b.node), d - 1, b.value});
     }
     p.force.assign(m.nodes.size(), Eigen::Vector3d::Zero());

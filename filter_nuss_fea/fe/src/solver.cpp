@@ -554,7 +554,7 @@ struct Solver::Impl {
                                                   : -1,
                    orderByNodes ? " on the nodes" : "", orderSeconds, analyseSeconds, seconds);
     if (chol.info() != Eigen::Success)
-      throw InputError(
+      throw SolverFailure(
           "The stiffness matrix is singular or not positive definite: the model is not held enough (fix more "
           "nodes so that every part of the mesh is connected to a fixed node), or an element is inverted.");
     const double rc = chol.rcond();
@@ -563,14 +563,14 @@ struct Solver::Impl {
       s << "The stiffness matrix is numerically singular (reciprocal condition estimate " << rc
         << "): the fixed nodes do not prevent a rigid-body motion of some part of the model; fix more nodes "
            "(at least three non-collinear nodes per connected part).";
-      throw InputError(s.str());
+      throw SolverFailure(s.str());
     }
   }
 
   Eigen::VectorXd solveFree(const Eigen::VectorXd& rhs) {
     Eigen::VectorXd x = chol.solve(rhs);
     if (!x.allFinite())
-      throw InputError("The linear solve produced non-finite displacements (singular stiffness matrix): fix more nodes.");
+      throw SolverFailure("The linear solve produced non-finite displacements (singular stiffness matrix): fix more nodes.");
     return x;
   }
 
@@ -817,14 +817,14 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
   I.m = &m;
   I.nen = m.nodesPerTet();
   I.setOrder(m.order);
-  if (m.tets.empty()) throw InputError("The FE mesh has no tetrahedra.");
+  if (m.tets.empty()) throw TopologyError("The FE mesh has no tetrahedra.");
   if (m.tissue.size() != m.tets.size()) throw InputError("The FE mesh needs one tissue label per tetrahedron.");
   const int n = m.numNodes();
   for (int t = 0; t < m.numTets(); ++t) {
     for (int a = 0; a < I.nen; ++a)
-      if (m.tets[t][a] < 0 || m.tets[t][a] >= n) throw InputError("Tetrahedron " + std::to_string(t) + " has an invalid node index.");
+      if (m.tets[t][a] < 0 || m.tets[t][a] >= n) throw TopologyError("Tetrahedron " + std::to_string(t) + " has an invalid node index.");
     if (!(m.tetVolume(t) > 0))
-      throw InputError("Tetrahedron " + std::to_string(t) + " is inverted or flat (volume <= 0).");
+      throw TopologyError("Tetrahedron " + std::to_string(t) + " is inverted or flat (volume <= 0).");
     // a TET10 whose mid-edge nodes lie far from its edges' midpoints can fold inside although its corners
     // do not: its Jacobian must be positive at every quadrature point and at the centroid (where the
     // stresses are taken), else its stiffness and stresses are meaningless (NaN stresses)
@@ -833,7 +833,7 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
       bool ok = I.gradientsT<10>(t, I.centroidDN, 1.0, G) > 0;
       for (std::size_t q = 0; q < I.quad.size() && ok; ++q) ok = I.gradientsT<10>(t, I.quadDN[q], 1.0, G) > 0;
       if (!ok)
-        throw InputError("Tetrahedron " + std::to_string(t) +
+        throw TopologyError("Tetrahedron " + std::to_string(t) +
                          " (quadratic) folds inside: its mid-edge nodes are too far from its edges' midpoints (the "
                          "Jacobian is not positive everywhere in it). Use straight-sided quadratic tets or refine there.");
     }
@@ -996,7 +996,7 @@ Result Solver::solveLinear(double scale) {
   const double rn = (r - Kdu).norm();
   const double ref = std::max({r.norm(), Kdu.norm(), 1e-30});
   if (!(rn <= 1e-6 * ref))
-    throw InputError("The linear system could not be solved accurately (relative residual " + std::to_string(rn / ref) +
+    throw SolverFailure("The linear system could not be solved accurately (relative residual " + std::to_string(rn / ref) +
                      "): the model is nearly singular; fix more nodes.");
   const double tResidual = since(t);
   t = Clock::now();

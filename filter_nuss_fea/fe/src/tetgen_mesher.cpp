@@ -180,9 +180,9 @@ class SkippedFacesCleanup {
 constexpr int kTetgenSelfIntersection = 3;
 
 // TetGen refused the surface with one of its error codes
-class TetgenRefusal : public InputError {
+class TetgenRefusal : public TopologyError {
  public:
-  TetgenRefusal(int code, const std::string& msg) : InputError(msg), code_(code) {}
+  TetgenRefusal(int code, const std::string& msg) : TopologyError(msg), code_(code) {}
   int code() const { return code_; }
 
  private:
@@ -193,7 +193,7 @@ TetgenRefusal tetgenRefusal(int code) {
   return {code, "TetGen failed (error code " + std::to_string(code) + ") on the surface: " + kTetgenAdvice};
 }
 
-// TetGen in this process; its errors (thrown ints) become TetgenRefusal, an InputError
+// TetGen in this process; its errors (thrown ints) become TetgenRefusal, a TopologyError
 TetgenOutput tetgenHere(const std::string& switches, tetgenio& in) {
   tetgenio out;
   const SkippedFacesCleanup cleanup;
@@ -204,7 +204,7 @@ TetgenOutput tetgenHere(const std::string& switches, tetgenio& in) {
     throw tetgenRefusal(code);
   } catch (...) {
     cleanup.afterFailure();
-    throw InputError(std::string("TetGen failed on the surface: ") + kTetgenAdvice);
+    throw TopologyError(std::string("TetGen failed on the surface: ") + kTetgenAdvice);
   }
   TetgenOutput r;
   r.points.assign(out.pointlist, out.pointlist + 3 * std::max(0, out.numberofpoints));
@@ -250,7 +250,7 @@ bool readAll(int fd, void* data, std::size_t n, const Deadline* deadline, bool& 
 // its Delaunay refinement stops on one (insertpoint: assert(0)) or crashes: in this
 // process that would abort MeshLab with the user's unsaved work. The child (fork: a copy-on-write image of
 // this one, only the calling thread) runs TetGen and sends the points and tets back through a pipe; a
-// child that dies becomes an InputError, and so does one still running after `timeLimit` seconds (> 0),
+// child that dies becomes a TopologyError, and so does one still running after `timeLimit` seconds (> 0),
 // which is killed. Without fork (no memory for the page tables) TetGen runs here, without a time limit.
 TetgenOutput runTetgen(const std::string& switches, tetgenio& in, double timeLimit) {
   constexpr int kRefusedStatus = 1000;  // the child's status for TetGen's error code c: kRefusedStatus + c
@@ -312,16 +312,16 @@ TetgenOutput runTetgen(const std::string& switches, tetgenio& in, double timeLim
     m << "TetGen did not finish within " << timeLimit << " s and was stopped: its quality refinement can go on "
       << "without end where the surface has tiny features, near-duplicate vertices or very sharp angles. "
       << "Merge close vertices, remove tiny faces, or mesh without quality refinement (tetQuality 0).";
-    throw InputError(m.str());
+    throw TopologyError(m.str());
   }
   if (WIFSIGNALED(ws)) {
     const int sig = WTERMSIG(ws);
-    throw InputError(std::string("TetGen ") +
+    throw TopologyError(std::string("TetGen ") +
                      (sig == SIGABRT ? "stopped on one of its internal assertions" : "crashed (" + std::string(strsignal(sig)) + ")") +
                      " while meshing the surface (nothing else was affected): " + kTetgenAdvice +
                      " A different maximum tet volume or tet quality may also get past it.");
   }
-  if (ok && status == 1) throw InputError(msg);
+  if (ok && status == 1) throw TopologyError(msg);  // tetgenHere failed on the surface in the child
   if (ok && status >= kRefusedStatus) throw TetgenRefusal(status - kRefusedStatus, msg);
   if (!ok || status != 0 || !WIFEXITED(ws) || WEXITSTATUS(ws) != 0)
     throw InputError("TetGen's process ended without a result (exit status " + std::to_string(WIFEXITED(ws) ? WEXITSTATUS(ws) : -1) + ").");
@@ -354,7 +354,7 @@ std::vector<int> inputVerticesFirst(const SurfaceMesh& s, const TetgenOutput& ou
           << (it == at.end() ? "another vertex" : "vertex " + std::to_string(node[it->second]))
           << " or lies outside the volume. Merge close vertices (e.g. MeshLab's 'Merge Close Vertices') and remove "
              "unreferenced ones.";
-      throw InputError(msg.str());
+      throw TopologyError(msg.str());
     }
     node[it->second] = i;
   }
@@ -374,15 +374,15 @@ std::optional<std::pair<int, int>> findSelfIntersection(const SurfaceMesh& s) {
 
 void checkSurfaceForTetgen(const SurfaceMesh& s) {
   const int nv = static_cast<int>(s.V.size());
-  if (s.F.size() < 4) throw InputError("The surface has fewer than 4 triangles: it cannot bound a volume.");
+  if (s.F.size() < 4) throw TopologyError("The surface has fewer than 4 triangles: it cannot bound a volume.");
   if (s.faceTissue.size() != s.F.size())
     throw InputError("The surface needs one tissue label per face (" + std::to_string(s.faceTissue.size()) + " labels for " +
                      std::to_string(s.F.size()) + " faces).");
   for (size_t f = 0; f < s.F.size(); ++f) {
     const auto& F = s.F[f];
     for (int i = 0; i < 3; ++i) {
-      if (F[i] < 0 || F[i] >= nv) throw InputError("Face " + std::to_string(f) + " has an invalid vertex index.");
-      if (F[i] == F[(i + 1) % 3]) throw InputError("Face " + std::to_string(f) + " is degenerate (repeated vertex).");
+      if (F[i] < 0 || F[i] >= nv) throw TopologyError("Face " + std::to_string(f) + " has an invalid vertex index.");
+      if (F[i] == F[(i + 1) % 3]) throw TopologyError("Face " + std::to_string(f) + " is degenerate (repeated vertex).");
       if (s.faceTissue[f] <= 0) throw InputError("Face " + std::to_string(f) + " has no tissue label.");
     }
   }
@@ -393,7 +393,7 @@ void checkSurfaceForTetgen(const SurfaceMesh& s) {
       m << "The surface is not closed: the edge between vertices " << e.a << " and " << e.b << " (at "
         << s.V[e.a].transpose() << ") belongs to " << e.faces
         << " face(s) instead of 2. Close the holes / remove non-manifold edges before meshing.";
-      throw InputError(m.str());
+      throw TopologyError(m.str());
     }
   if (auto p = findSelfIntersection(s)) {
     const auto& a = s.F[p->first];
@@ -405,7 +405,7 @@ void checkSurfaceForTetgen(const SurfaceMesh& s) {
     else
       m << "The surface intersects itself: faces " << p->first << " and " << p->second << " cross (near " << c.transpose()
         << " mm). Remove the self-intersection (e.g. MeshLab's 'Select Self Intersecting Faces') before meshing.";
-    throw InputError(m.str());
+    throw TopologyError(m.str());
   }
 }
 
@@ -494,7 +494,7 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
     if (e.code() != kTetgenSelfIntersection) throw;
     out = runTetgen(sw.str() + "M", in, opt.timeLimitSeconds);
   }
-  if (out.numTets() <= 0) throw InputError("TetGen produced no tetrahedra (is the surface closed?).");
+  if (out.numTets() <= 0) throw TopologyError("TetGen produced no tetrahedra (is the surface closed?).");
   for (int v : out.tets)
     if (v < 0 || v >= out.numPoints()) throw InputError("TetGen returned a tetrahedron with a node out of range.");
   const std::vector<int> node = inputVerticesFirst(s, out);
@@ -519,7 +519,7 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
       msg << "TetGen made a tetrahedron without volume (tet " << t << ", near " << m.centroid(t).transpose()
           << " mm): the surface has features far smaller than its tets (near-duplicate vertices, tiny faces). Merge "
              "close vertices, remove tiny faces, or change the maximum tet volume or the tet quality.";
-      throw InputError(msg.str());
+      throw TopologyError(msg.str());
     }
     centroids[t] = m.centroid(t);
   }
@@ -528,7 +528,7 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
       std::ostringstream msg;
       msg << "Surface vertex " << i << " (at " << s.V[i].transpose() << " mm) is in no tetrahedron: it lies outside "
           << "the meshed volume. Remove it (e.g. MeshLab's 'Remove Unreferenced Vertices').";
-      throw InputError(msg.str());
+      throw TopologyError(msg.str());
     }
   const std::vector<int> nf = nearestFaces(s, centroids);
   m.tissue.resize(m.tets.size());
@@ -554,7 +554,9 @@ TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt, std::vect
   checkSurfaceForTetgen(s);
   try {
     return tetgenMesh(s, opt, tetFace);
-  } catch (const InputError& e) {  // TetGen failed: say where the surface's features are tiny, if they are
+  } catch (const TopologyError& e) {  // TetGen failed: say where the surface's features are tiny, if they are
+    throw TopologyError(e.what() + smallFeatureHint(s));
+  } catch (const InputError& e) {  // any other failure keeps its kind and gets the same hint
     throw InputError(e.what() + smallFeatureHint(s));
   }
 }

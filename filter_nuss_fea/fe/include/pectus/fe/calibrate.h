@@ -25,11 +25,12 @@ struct CalibrationResult {
 /// The next force interpolates F(d) through every state seen so far: inverse quadratic through the three
 /// points around the target, kept inside the bracket once there is one (else linear on the bracket); before
 /// that, extrapolation through the last points (secant as the fallback), at most 4 times the highest force
-/// below the target. Throws pectus::InputError when the target is not
-/// reached up to maxForce, the displacement has the wrong sign, or maxEvaluations is exceeded.
+/// below the target. Throws pectus::SolverFailure when the target is not
+/// reached up to maxForce, a displacement is not finite or maxEvaluations is exceeded, and pectus::InputError
+/// for a target or forces out of range or a displacement of the wrong sign.
 /// A NewtonDidNotConverge from displacement() (solver.h) is a failed evaluation: when a state observed
 /// before it (Observer below) lies beyond the target, the search goes on below the failing force;
-/// otherwise an InputError says that no converged state reaches the target. Other exceptions propagate.
+/// otherwise a SolverFailure says that no converged state reaches the target. Other exceptions propagate.
 CalibrationResult calibrateForce(const std::function<double(double)>& displacement, double target,
                                  const CalibrationOptions& opt = {});
 

@@ -10,7 +10,7 @@ namespace pectus::fe {
 
 /// Writes the tets (VTK_TETRA / VTK_QUADRATIC_TETRA), cell data "tissue" and, with a result,
 /// point data "displacement" (mm) and "von_mises_nodal" (MPa, volume-averaged), cell data "von_mises"
-/// (MPa) and "equivalent_strain". Throws pectus::InputError if the file cannot be written.
+/// (MPa) and "equivalent_strain". Throws pectus::IOError if the file cannot be written.
 void writeVtu(const std::string& path, const TetMesh& m, const Result* result = nullptr);
 
 struct InpOptions {
@@ -42,8 +42,8 @@ struct InpModel {
 /// (node, first dof, last dof[, value]), *STEP[, NLGEOM, INC], *STATIC[, DIRECT], *CLOAD, *NODE PRINT,
 /// *NODE FILE, *EL FILE, *END STEP; comment lines (**) and *HEADING text are skipped. Each ELSET becomes
 /// a tissue label (BONE 1, CARTILAGE 2, STERNUM 3 as written, others 4, 5, ... in order of appearance).
-/// Anything else (another keyword, element type, a bad number or node id) throws pectus::InputError
-/// naming the line.
+/// Anything else (another keyword, element type, a bad number or node id) throws pectus::IOError
+/// naming the line; so does a file that cannot be read.
 std::unique_ptr<InpModel> readCalculixInp(const std::string& path);
 /// The same on the deck's text; `name` stands for the file in the messages.
 std::unique_ptr<InpModel> parseCalculixInp(const std::string& text, const std::string& name);

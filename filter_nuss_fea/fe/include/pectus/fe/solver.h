@@ -2,7 +2,9 @@
 // nonlinear statics (total Lagrangian; St Venant-Kirchhoff or compressible neo-Hookean; Newton with load
 // increments, optionally with a line search, automatic step control or displacement control), TET4/TET10,
 // sparse Cholesky by CHOLMOD (supernodal, symbolic analysis done once per solver), OpenMP assembly.
-// Units: mm, N, MPa. Errors (singular system, non-converged Newton, bad input) throw pectus::InputError.
+// Units: mm, N, MPa. Errors throw pectus::InputError for bad input, pectus::TopologyError for a mesh without
+// tets or with invalid, inverted or folded ones, and pectus::SolverFailure for a singular system or a Newton
+// solve that does not converge (NewtonDidNotConverge) or a factor over the memory budget (ModelTooLarge).
 #pragma once
 #include <map>
 #include <memory>
@@ -102,18 +104,18 @@ struct NewtonOptions {
   double maxStepGrowth = 4.0;
 };
 
-/// Thrown by Solver::solveNonlinear when Newton does not converge after the step cut-backs (an
-/// InputError: the message says what to do); `loadFactor` is the load factor it could not reach.
-struct NewtonDidNotConverge : InputError {
-  NewtonDidNotConverge(const std::string& what, double factor) : InputError(what), loadFactor(factor) {}
+/// Thrown by Solver::solveNonlinear when Newton does not converge after the step cut-backs (a
+/// SolverFailure: the message says what to do); `loadFactor` is the load factor it could not reach.
+struct NewtonDidNotConverge : SolverFailure {
+  NewtonDidNotConverge(const std::string& what, double factor) : SolverFailure(what), loadFactor(factor) {}
   double loadFactor;
 };
 
 /// Thrown when the stiffness matrix's factor would not fit in the memory this process may still take
 /// (found by the symbolic analysis, before the factor is allocated): the message says how to make the
-/// model smaller. Never caught as a hard load step.
-struct ModelTooLarge : InputError {
-  using InputError::InputError;
+/// model smaller (a SolverFailure). Never caught as a hard load step.
+struct ModelTooLarge : SolverFailure {
+  using SolverFailure::SolverFailure;
 };
 
 struct Result {

@@ -22,11 +22,11 @@ struct TetgenOptions {
   int order = 1;                 ///< 1: TET4, 2: TET10 (straight mid-edge nodes added by toQuadratic)
   bool preserveSurface = false;  ///< TetGen -Y: no Steiner points on the surface
   /// TetGen -S: at most this many points added to the input's (quality and volume refinement stop there,
-  /// leaving tets above the bounds; a surface whose recovery needs more is an InputError); < 0: no limit.
+  /// leaving tets above the bounds; a surface whose recovery needs more is a pectus::TopologyError); < 0: no limit.
   /// Bounds the mesh's size, and so time and memory, whatever the surface's features.
   int maxAddedPoints = -1;
   /// TetGen runs in a child process; one still running after this many seconds is stopped (its quality
-  /// refinement can go on without end on tiny features) and the call throws InputError; <= 0: no limit
+  /// refinement can go on without end on tiny features) and the call throws TopologyError; <= 0: no limit
   double timeLimitSeconds = 900;
 };
 
@@ -37,7 +37,9 @@ struct TetgenOptions {
 std::optional<std::pair<int, int>> findSelfIntersection(const SurfaceMesh& s);
 
 /// Checks the surface is closed (every edge in exactly two faces), has valid indices, one label per
-/// face and no self-intersection; throws pectus::InputError naming the faulty edge or face pair.
+/// face and no self-intersection; throws pectus::TopologyError naming the faulty edge or face pair (fewer
+/// than 4 faces, an invalid index, a repeated vertex, an open or non-manifold edge, a self-intersection), and
+/// pectus::InputError for a missing tissue label.
 void checkSurfaceForTetgen(const SurfaceMesh& s);
 
 /// Tetrahedralises the volume bounded by the surface (checkSurfaceForTetgen first; TetGen would crash on
@@ -47,9 +49,9 @@ void checkSurfaceForTetgen(const SurfaceMesh& s);
 /// surface). Input vertices keep their indices: surface vertex i is mesh node i, at its input position and
 /// in at least one tet (TetGen numbers the points it keeps consecutively and drops a point in no face
 /// outside the volume or a duplicate: the nodes are renumbered back, and a vertex TetGen left out or no tet
-/// uses throws InputError). `tetFace`, if given, receives that nearest surface face per tet (e.g. to carry
-/// further face labels onto the tets). When TetGen fails (InputError: it stopped on an assertion, ran past
-/// the time limit, made a flat tet...), the message also names the surface's smallest feature if it is
+/// uses throws TopologyError). `tetFace`, if given, receives that nearest surface face per tet (e.g. to carry
+/// further face labels onto the tets). When TetGen fails (TopologyError: it refused the surface, stopped on an
+/// assertion, ran past the time limit, made a flat tet...; InputError for options validate refuses), the message also names the surface's smallest feature if it is
 /// under 1e-3 of the median edge (smallestFeature), which is where such failures come from.
 TetMesh tetrahedralize(const SurfaceMesh& s, const TetgenOptions& opt = {}, std::vector<int>* tetFace = nullptr);
 
@@ -62,7 +64,7 @@ void validate(const TetgenOptions& opt);
 /// The surface's smallest feature: its shortest edge, or the smallest distance from a vertex to a face it
 /// is not a corner of (two sheets that nearly touch, a vertex nearly on another face, a sliver), whichever
 /// is smaller, beside the median edge length. A feature far below the edges (near-duplicate vertices, a
-/// pinch) is what TetGen's refinement fails on: when it fails, tetrahedralize's InputError names this
+/// pinch) is what TetGen's refinement fails on: when it fails, tetrahedralize's TopologyError names this
 /// feature if it is under 1e-3 of the median edge. Grid search; vertex and face are -1 for an empty surface.
 struct SurfaceFeature {
   int vertex = -1;  ///< the vertex near a face, or the short edge's first vertex
