@@ -651,6 +651,193 @@ struct Solver::Impl {
     return {};
   }
 
+  // --- the problem's setup (Solver's constructor), step by step ---
+
+  // every tet references existing nodes and has a positive volume; a TET10 whose mid-edge nodes lie far
+  // from its edges' midpoints can fold inside although its corners do not: its Jacobian must be positive at
+  // every quadrature point and at the centroid (where the stresses are taken), else its stiffness and
+  // stresses are meaningless (NaN stresses)
+  void checkTets() const {
+    const int n = m->numNodes();
+    for (int t = 0; t < m->numTets(); ++t) {
+      for (int a = 0; a < nen; ++a)
+        if (m->tets[t][a] < 0 || m->tets[t][a] >= n) throw InputError("Tetrahedron " + std::to_string(t) + " has an invalid node index.");
+      if (!(m->tetVolume(t) > 0))
+        throw InputError("Tetrahedron " + std::to_string(t) + " is inverted or flat (volume <= 0).");
+      if (nen == 10) {
+        Eigen::Matrix<double, 10, 3> G;
+        bool ok = gradientsT<10>(t, centroidDN, 1.0, G) > 0;
+        for (std::size_t q = 0; q < quad.size() && ok; ++q) ok = gradientsT<10>(t, quadDN[q], 1.0, G) > 0;
+        if (!ok)
+          throw InputError("Tetrahedron " + std::to_string(t) +
+                           " (quadratic) folds inside: its mid-edge nodes are too far from its edges' midpoints (the "
+                           "Jacobian is not positive everywhere in it). Use straight-sided quadratic tets or refine there.");
+      }
+    }
+  }
+
+  // the elasticity matrix of each tissue's material, and per tet its material (in our copy p) and matrix
+  void bindMaterials(const Problem& prob) {
+    for (const auto& kv : prob.materials) {
+      if (!(kv.second.E > 0) || !(kv.second.nu > -1 && kv.second.nu < 0.5))
+        throw InputError("Material of tissue " + std::to_string(kv.first) + ": need E > 0 and -1 < Poisson ratio < 0.5.");
+      Dby[kv.first] = elasticity(kv.second);
+    }
+    D.resize(m->numTets());
+    mat.resize(m->numTets());
+    for (int t = 0; t < m->numTets(); ++t) {
+      auto it = prob.materials.find(m->tissue[t]);
+      if (it == prob.materials.end())
+        throw InputError("No material for tissue label " + std::to_string(m->tissue[t]) + " (tetrahedron " + std::to_string(t) + ").");
+      mat[t] = &it->second;
+      D[t] = &Dby[m->tissue[t]];
+    }
+    // rebind material pointers to our copy
+    for (int t = 0; t < m->numTets(); ++t) mat[t] = &p.materials.at(m->tissue[t]);
+  }
+
+  // the fixed dofs with their prescribed displacements, and the nodal forces
+  void setLoads(const Problem& prob) {
+    const int n = m->numNodes();
+    if (prob.fixed.empty())
+      throw InputError("No fixed nodes: the stiffness matrix is singular (the model can move as a rigid body). "
+                       "Fix at least the nodes where the model is held (e.g. the costovertebral joints).");
+    isConstrained.assign(3 * n, 0);
+    prescribed.setZero(3 * n);
+    for (const auto& d : prob.fixed) {
+      if (d.node < 0 || d.node >= n || d.dof < 0 || d.dof > 2) throw InputError("Fixed node/dof out of range.");
+      isConstrained[3 * d.node + d.dof] = 1;
+      prescribed(3 * d.node + d.dof) = d.value;
+    }
+    fext.setZero(3 * n);
+    if (!prob.force.empty()) {
+      if (static_cast<int>(prob.force.size()) != n) throw InputError("Force vector size differs from the node count.");
+      for (int i = 0; i < n; ++i) fext.segment<3>(3 * i) = prob.force[i];
+    }
+  }
+
+  // node adjacency (compressed rows, sorted, with the node itself); nodes without tets have no row entries
+  void nodeAdjacency(std::vector<int>& adjOuter, std::vector<int>& adj) const {
+    const int n = m->numNodes();
+    adjOuter.assign(std::size_t(n) + 1, 0);
+    for (const auto& e : m->tets)
+      for (int a = 0; a < nen; ++a) adjOuter[std::size_t(e[a]) + 1] += nen;
+    for (int i = 0; i < n; ++i) adjOuter[std::size_t(i) + 1] += adjOuter[std::size_t(i)];
+    adj.resize(std::size_t(adjOuter[std::size_t(n)]));
+    std::vector<int> fill(adjOuter.begin(), adjOuter.end() - 1);
+    for (const auto& e : m->tets)
+      for (int a = 0; a < nen; ++a)
+        for (int b = 0; b < nen; ++b) adj[std::size_t(fill[std::size_t(e[a])]++)] = e[b];
+    int k = 0;  // sort and deduplicate each row in place
+    for (int i = 0; i < n; ++i) {
+      const auto first = adj.begin() + adjOuter[std::size_t(i)], last = adj.begin() + adjOuter[std::size_t(i) + 1];
+      std::sort(first, last);
+      const int start = k;
+      for (auto it = first; it != last; ++it)
+        if (it == first || *it != *(it - 1)) adj[std::size_t(k++)] = *it;
+      adjOuter[std::size_t(i)] = start;
+    }
+    adjOuter[std::size_t(n)] = k;
+    adj.resize(std::size_t(k));
+  }
+
+  // the nodes with a free dof, compactly numbered (the ordering's graph): compact per node (-1: none),
+  // nodeOf per compact number
+  void freeNodes(const std::vector<int>& adjOuter, std::vector<int>& compact, std::vector<int>& nodeOf) const {
+    const int n = m->numNodes();
+    compact.assign(std::size_t(n), -1);
+    for (int i = 0; i < n; ++i) {
+      if (adjOuter[std::size_t(i)] == adjOuter[std::size_t(i) + 1]) continue;  // used by no tet: no dofs
+      for (int d = 0; d < 3 && compact[std::size_t(i)] < 0; ++d)
+        if (!isConstrained[3 * std::size_t(i) + std::size_t(d)]) {
+          compact[std::size_t(i)] = static_cast<int>(nodeOf.size());
+          nodeOf.push_back(i);
+        }
+    }
+    if (nodeOf.empty()) throw InputError("Every degree of freedom is fixed: nothing to solve.");
+  }
+
+  // fill-reducing order of those nodes (see Cholmod::orderNodes), as compact numbers; their free dofs are
+  // numbered in it, node by node, so CHOLMOD factorises K as it is (PECTUS_FE_ORDERING: node order, CHOLMOD
+  // orders the dofs)
+  std::vector<int> orderFreeNodes(const std::vector<int>& adjOuter, const std::vector<int>& adj,
+                                  const std::vector<int>& compact, const std::vector<int>& nodeOf) {
+    std::vector<int> order;
+    if (orderByNodes) {
+      std::vector<int> gOuter(1, 0), gInner;
+      gInner.reserve(adj.size() / 2 + nodeOf.size());
+      for (int i : nodeOf) {
+        for (int k = adjOuter[std::size_t(i)]; k < adjOuter[std::size_t(i) + 1]; ++k) {
+          const int j = compact[std::size_t(adj[std::size_t(k)])];
+          if (j >= compact[std::size_t(i)]) gInner.push_back(j);
+        }
+        std::sort(gInner.begin() + gOuter.back(), gInner.end());
+        gOuter.push_back(static_cast<int>(gInner.size()));
+      }
+      const auto t0 = std::chrono::steady_clock::now();
+      order = chol.orderNodes(gOuter, gInner);
+      orderSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (order.empty()) orderByNodes = false;  // CHOLMOD failed: it orders the dofs itself
+    }
+    if (order.empty())
+      for (std::size_t k = 0; k < nodeOf.size(); ++k) order.push_back(static_cast<int>(k));
+    return order;
+  }
+
+  // numbers the free dofs (freeIndex, nFree) node by node in that order; returns each node's position in it
+  std::vector<int> numberFreeDofs(const std::vector<int>& order, const std::vector<int>& nodeOf) {
+    const int n = m->numNodes();
+    std::vector<int> rank(std::size_t(n), std::numeric_limits<int>::max());
+    freeIndex.assign(3 * std::size_t(n), -1);
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const int i = nodeOf[std::size_t(order[k])];
+      rank[std::size_t(i)] = static_cast<int>(k);
+      for (int d = 0; d < 3; ++d)
+        if (!isConstrained[3 * std::size_t(i) + std::size_t(d)]) freeIndex[3 * std::size_t(i) + std::size_t(d)] = nFree++;
+    }
+    return rank;
+  }
+
+  // lower-triangular pattern of K (zero values): the column of a free dof holds the free dofs at or after it
+  // of the node's neighbours; with the neighbours sorted by rank the rows come out sorted
+  void stiffnessPattern(const std::vector<int>& order, const std::vector<int>& nodeOf, const std::vector<int>& adjOuter,
+                        const std::vector<int>& adj, const std::vector<int>& rank) {
+    std::vector<int> outer(std::size_t(nFree) + 1, 0), inner, nbrs;
+    inner.reserve(static_cast<size_t>(nFree) * 20);
+    int col = 0;
+    for (int i : order) {
+      const int node = nodeOf[std::size_t(i)];
+      nbrs.assign(adj.begin() + adjOuter[std::size_t(node)], adj.begin() + adjOuter[std::size_t(node) + 1]);
+      std::sort(nbrs.begin(), nbrs.end(), [&](int x, int y) { return rank[std::size_t(x)] < rank[std::size_t(y)]; });
+      for (int d = 0; d < 3; ++d) {
+        const int fc = freeIndex[3 * std::size_t(node) + std::size_t(d)];
+        if (fc < 0) continue;
+        for (int j : nbrs)
+          for (int e = 0; e < 3; ++e) {
+            const int fr = freeIndex[3 * std::size_t(j) + std::size_t(e)];
+            if (fr >= fc) inner.push_back(fr);
+          }
+        outer[std::size_t(++col)] = static_cast<int>(inner.size());
+      }
+    }
+    std::vector<double> zeros(inner.size(), 0.0);
+    K = Eigen::Map<Eigen::SparseMatrix<double>>(nFree, nFree, static_cast<Eigen::Index>(inner.size()), outer.data(),
+                                                inner.data(), zeros.data());
+  }
+
+  // the assembly visits the tets by their first node in the dof order (colorChunks)
+  void orderTets(const std::vector<int>& rank) {
+    std::vector<int> first(std::size_t(m->numTets()));
+    for (int t = 0; t < m->numTets(); ++t) {
+      int r = std::numeric_limits<int>::max();
+      for (int a = 0; a < 4; ++a) r = std::min(r, rank[std::size_t(m->tets[std::size_t(t)][a])]);
+      first[std::size_t(t)] = r;
+    }
+    tetOrder.resize(first.size());
+    for (std::size_t t = 0; t < first.size(); ++t) tetOrder[t] = static_cast<int>(t);
+    std::stable_sort(tetOrder.begin(), tetOrder.end(), [&](int x, int y) { return first[std::size_t(x)] < first[std::size_t(y)]; });
+  }
+
   // Newton with load increments (ctrl null: load factor target * scale on the forces and prescribed
   // displacements) or displacement control (ctrl: free-dof weights w, w . u stepped to target; the load
   // factor is the extra unknown of a bordered system)
@@ -819,153 +1006,17 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
   I.setOrder(m.order);
   if (m.tets.empty()) throw InputError("The FE mesh has no tetrahedra.");
   if (m.tissue.size() != m.tets.size()) throw InputError("The FE mesh needs one tissue label per tetrahedron.");
-  const int n = m.numNodes();
-  for (int t = 0; t < m.numTets(); ++t) {
-    for (int a = 0; a < I.nen; ++a)
-      if (m.tets[t][a] < 0 || m.tets[t][a] >= n) throw InputError("Tetrahedron " + std::to_string(t) + " has an invalid node index.");
-    if (!(m.tetVolume(t) > 0))
-      throw InputError("Tetrahedron " + std::to_string(t) + " is inverted or flat (volume <= 0).");
-    // a TET10 whose mid-edge nodes lie far from its edges' midpoints can fold inside although its corners
-    // do not: its Jacobian must be positive at every quadrature point and at the centroid (where the
-    // stresses are taken), else its stiffness and stresses are meaningless (NaN stresses)
-    if (I.nen == 10) {
-      Eigen::Matrix<double, 10, 3> G;
-      bool ok = I.gradientsT<10>(t, I.centroidDN, 1.0, G) > 0;
-      for (std::size_t q = 0; q < I.quad.size() && ok; ++q) ok = I.gradientsT<10>(t, I.quadDN[q], 1.0, G) > 0;
-      if (!ok)
-        throw InputError("Tetrahedron " + std::to_string(t) +
-                         " (quadratic) folds inside: its mid-edge nodes are too far from its edges' midpoints (the "
-                         "Jacobian is not positive everywhere in it). Use straight-sided quadratic tets or refine there.");
-    }
-  }
-  for (const auto& kv : prob.materials) {
-    if (!(kv.second.E > 0) || !(kv.second.nu > -1 && kv.second.nu < 0.5))
-      throw InputError("Material of tissue " + std::to_string(kv.first) + ": need E > 0 and -1 < Poisson ratio < 0.5.");
-    I.Dby[kv.first] = elasticity(kv.second);
-  }
-  I.D.resize(m.numTets());
-  I.mat.resize(m.numTets());
-  for (int t = 0; t < m.numTets(); ++t) {
-    auto it = prob.materials.find(m.tissue[t]);
-    if (it == prob.materials.end())
-      throw InputError("No material for tissue label " + std::to_string(m.tissue[t]) + " (tetrahedron " + std::to_string(t) + ").");
-    I.mat[t] = &it->second;
-    I.D[t] = &I.Dby[m.tissue[t]];
-  }
-  // rebind material pointers to our copy
-  for (int t = 0; t < m.numTets(); ++t) I.mat[t] = &I.p.materials.at(m.tissue[t]);
-
-  if (prob.fixed.empty())
-    throw InputError("No fixed nodes: the stiffness matrix is singular (the model can move as a rigid body). "
-                     "Fix at least the nodes where the model is held (e.g. the costovertebral joints).");
-  I.isConstrained.assign(3 * n, 0);
-  I.prescribed.setZero(3 * n);
-  for (const auto& d : prob.fixed) {
-    if (d.node < 0 || d.node >= n || d.dof < 0 || d.dof > 2) throw InputError("Fixed node/dof out of range.");
-    I.isConstrained[3 * d.node + d.dof] = 1;
-    I.prescribed(3 * d.node + d.dof) = d.value;
-  }
-  I.fext.setZero(3 * n);
-  if (!prob.force.empty()) {
-    if (static_cast<int>(prob.force.size()) != n) throw InputError("Force vector size differs from the node count.");
-    for (int i = 0; i < n; ++i) I.fext.segment<3>(3 * i) = prob.force[i];
-  }
-  // node adjacency (compressed rows, sorted, with the node itself); nodes without tets have no row entries
-  std::vector<int> adjOuter(std::size_t(n) + 1, 0), adj;
-  {
-    for (const auto& e : m.tets)
-      for (int a = 0; a < I.nen; ++a) adjOuter[std::size_t(e[a]) + 1] += I.nen;
-    for (int i = 0; i < n; ++i) adjOuter[std::size_t(i) + 1] += adjOuter[std::size_t(i)];
-    adj.resize(std::size_t(adjOuter[std::size_t(n)]));
-    std::vector<int> fill(adjOuter.begin(), adjOuter.end() - 1);
-    for (const auto& e : m.tets)
-      for (int a = 0; a < I.nen; ++a)
-        for (int b = 0; b < I.nen; ++b) adj[std::size_t(fill[std::size_t(e[a])]++)] = e[b];
-    int k = 0;  // sort and deduplicate each row in place
-    for (int i = 0; i < n; ++i) {
-      const auto first = adj.begin() + adjOuter[std::size_t(i)], last = adj.begin() + adjOuter[std::size_t(i) + 1];
-      std::sort(first, last);
-      const int start = k;
-      for (auto it = first; it != last; ++it)
-        if (it == first || *it != *(it - 1)) adj[std::size_t(k++)] = *it;
-      adjOuter[std::size_t(i)] = start;
-    }
-    adjOuter[std::size_t(n)] = k;
-    adj.resize(std::size_t(k));
-  }
-  // the nodes with a free dof, compactly numbered (the ordering's graph)
-  std::vector<int> compact(std::size_t(n), -1), nodeOf;
-  for (int i = 0; i < n; ++i) {
-    if (adjOuter[std::size_t(i)] == adjOuter[std::size_t(i) + 1]) continue;  // used by no tet: no dofs
-    for (int d = 0; d < 3 && compact[std::size_t(i)] < 0; ++d)
-      if (!I.isConstrained[3 * std::size_t(i) + std::size_t(d)]) {
-        compact[std::size_t(i)] = static_cast<int>(nodeOf.size());
-        nodeOf.push_back(i);
-      }
-  }
-  if (nodeOf.empty()) throw InputError("Every degree of freedom is fixed: nothing to solve.");
-  // fill-reducing order of those nodes (see Cholmod::orderNodes); their free dofs are numbered in it,
-  // node by node, so CHOLMOD factorises K as it is (PECTUS_FE_ORDERING: node order, CHOLMOD orders the dofs)
-  std::vector<int> order;
-  if (I.orderByNodes) {
-    std::vector<int> gOuter(1, 0), gInner;
-    gInner.reserve(adj.size() / 2 + nodeOf.size());
-    for (int i : nodeOf) {
-      for (int k = adjOuter[std::size_t(i)]; k < adjOuter[std::size_t(i) + 1]; ++k) {
-        const int j = compact[std::size_t(adj[std::size_t(k)])];
-        if (j >= compact[std::size_t(i)]) gInner.push_back(j);
-      }
-      std::sort(gInner.begin() + gOuter.back(), gInner.end());
-      gOuter.push_back(static_cast<int>(gInner.size()));
-    }
-    const auto t0 = std::chrono::steady_clock::now();
-    order = I.chol.orderNodes(gOuter, gInner);
-    I.orderSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (order.empty()) I.orderByNodes = false;  // CHOLMOD failed: it orders the dofs itself
-  }
-  if (order.empty())
-    for (std::size_t k = 0; k < nodeOf.size(); ++k) order.push_back(static_cast<int>(k));
-  std::vector<int> rank(std::size_t(n), std::numeric_limits<int>::max());  // position of a node in the order
-  I.freeIndex.assign(3 * std::size_t(n), -1);
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const int i = nodeOf[std::size_t(order[k])];
-    rank[std::size_t(i)] = static_cast<int>(k);
-    for (int d = 0; d < 3; ++d)
-      if (!I.isConstrained[3 * std::size_t(i) + std::size_t(d)]) I.freeIndex[3 * std::size_t(i) + std::size_t(d)] = I.nFree++;
-  }
-  // lower-triangular pattern of K: the column of a free dof holds the free dofs at or after it of the node's
-  // neighbours; with the neighbours sorted by rank the rows come out sorted
-  std::vector<int> outer(std::size_t(I.nFree) + 1, 0), inner, nbrs;
-  inner.reserve(static_cast<size_t>(I.nFree) * 20);
-  int col = 0;
-  for (int i : order) {
-    const int node = nodeOf[std::size_t(i)];
-    nbrs.assign(adj.begin() + adjOuter[std::size_t(node)], adj.begin() + adjOuter[std::size_t(node) + 1]);
-    std::sort(nbrs.begin(), nbrs.end(), [&](int x, int y) { return rank[std::size_t(x)] < rank[std::size_t(y)]; });
-    for (int d = 0; d < 3; ++d) {
-      const int fc = I.freeIndex[3 * std::size_t(node) + std::size_t(d)];
-      if (fc < 0) continue;
-      for (int j : nbrs)
-        for (int e = 0; e < 3; ++e) {
-          const int fr = I.freeIndex[3 * std::size_t(j) + std::size_t(e)];
-          if (fr >= fc) inner.push_back(fr);
-        }
-      outer[std::size_t(++col)] = static_cast<int>(inner.size());
-    }
-  }
-  std::vector<double> zeros(inner.size(), 0.0);
-  I.K = Eigen::Map<Eigen::SparseMatrix<double>>(I.nFree, I.nFree, static_cast<Eigen::Index>(inner.size()),
-                                                 outer.data(), inner.data(), zeros.data());
-  // the assembly visits the tets by their first node in that order (colorChunks)
-  std::vector<int> first(std::size_t(m.numTets()));
-  for (int t = 0; t < m.numTets(); ++t) {
-    int r = std::numeric_limits<int>::max();
-    for (int a = 0; a < 4; ++a) r = std::min(r, rank[std::size_t(m.tets[std::size_t(t)][a])]);
-    first[std::size_t(t)] = r;
-  }
-  I.tetOrder.resize(first.size());
-  for (std::size_t t = 0; t < first.size(); ++t) I.tetOrder[t] = static_cast<int>(t);
-  std::stable_sort(I.tetOrder.begin(), I.tetOrder.end(), [&](int x, int y) { return first[std::size_t(x)] < first[std::size_t(y)]; });
+  I.checkTets();
+  I.bindMaterials(prob);
+  I.setLoads(prob);
+  std::vector<int> adjOuter, adj;
+  I.nodeAdjacency(adjOuter, adj);
+  std::vector<int> compact, nodeOf;
+  I.freeNodes(adjOuter, compact, nodeOf);
+  const std::vector<int> order = I.orderFreeNodes(adjOuter, adj, compact, nodeOf);
+  const std::vector<int> rank = I.numberFreeDofs(order, nodeOf);
+  I.stiffnessPattern(order, nodeOf, adjOuter, adj, rank);
+  I.orderTets(rank);
 }
 
 Solver::~Solver() = default;
