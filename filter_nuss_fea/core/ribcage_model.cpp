@@ -99,7 +99,13 @@ double CageModel::funnel(double x, double y, double z) const {
 
 double autoBlend(const Dimensions& d) { return std::clamp(0.45 * d.ribThickness, 1.2, 3.0); }
 
-CageModel buildModel(const Dimensions& d, const RibCageParams& p, double funnelDepth, double spacing) {
+namespace {
+// rib k's centre-line half width as a fraction of the widest rib's (index: rib 1-12)
+constexpr double kRibWidth[13] = {0, 0.56, 0.70, 0.80, 0.88, 0.94, 0.98, 1.0, 0.99, 0.96, 0.92, 0.86, 0.76};
+
+// the model's parameters and its heights: vertebral level spacing, sternal notch, manubriosternal and
+// xiphisternal joints, xiphoid tip
+CageModel modelLevels(const Dimensions& d, const RibCageParams& p, double funnelDepth, double spacing) {
   CageModel m;
   m.d = d;
   m.ribPairs = p.ribPairs;
@@ -110,147 +116,199 @@ CageModel buildModel(const Dimensions& d, const RibCageParams& p, double funnelD
   m.fh = p.funnelHeight;
   m.spacing = spacing;
   m.blend = p.blend < 0 ? autoBlend(d) : p.blend;
-  const double L = d.spineHeight, T = d.chestWidth, D0 = d.chestDepth;
+  const double L = d.spineHeight;
   const double dl = L / 12.0;
   m.delta = dl;
   m.zNotch = L - 2.3 * dl;
   m.zXJ = L - 8.8 * dl;
   m.zMS = m.zNotch - 0.27 * (m.zNotch - m.zXJ);
   m.zTip = m.zXJ - 0.9 * dl;
-  const double ws = d.sternumWidth, ts = d.sternumThickness;
+  return m;
+}
 
-  // sternum cross-section along z (descending tables) and rest centre line
-  const std::vector<std::pair<double, double>> width = {
-      {m.zNotch, 1.35 * ws}, {m.zMS, 1.0 * ws}, {m.zXJ + 4, 1.05 * ws}, {m.zXJ - 3, 0.55 * ws}, {m.zTip, 0.3 * ws}};
-  const std::vector<std::pair<double, double>> thick = {
-      {m.zNotch, 1.15 * ts}, {m.zMS, 1.0 * ts}, {m.zXJ + 4, 1.0 * ts}, {m.zXJ - 3, 0.6 * ts}, {m.zTip, 0.45 * ts}};
-  auto sternumPosterior = [&](double z) {
-    const double phi = std::clamp((m.zNotch - z) / (m.zNotch - m.zXJ), 0.0, 1.3);
-    return D0 * (1 + 0.12 * phi);
-  };
-  auto sternumCentreY = [&](double z) { return sternumPosterior(z) + 0.5 * lerpTable(thick, z); };
-  const double fzAbs = m.zNotch - m.fz * (m.zNotch - m.zXJ);
-  auto sternumDy = [&](double z) {
-    return -funnelDepth * bump((0 - m.fx) / (0.5 * m.fw)) * bump((z - fzAbs) / (0.5 * m.fh));
-  };
+// sternum cross-section along z (descending tables), rest centre line and funnel displacement
+struct SternumProfile {
+  const CageModel& m;
+  std::vector<std::pair<double, double>> width, thick;
+  double fzAbs;  // the funnel centre's height
 
-  const double A = 0.5 * T + 0.5 * d.ribThickness;  // centre line of the widest rib: inner surface at T/2
-  const double wk[13] = {0, 0.56, 0.70, 0.80, 0.88, 0.94, 0.98, 1.0, 0.99, 0.96, 0.92, 0.86, 0.76};
-  const double hr = d.ribHeight, tr = d.ribThickness;
-
-  // rib k attachment heights on the sternum (ribs 1-7)
-  auto zAttach = [&](int k) {
-    if (k == 1) return m.zNotch - 0.45 * (m.zNotch - m.zMS);
-    if (k == 2) return m.zMS;
-    return m.zMS + (k - 2) / 5.0 * (m.zXJ - m.zMS);
-  };
-
-  struct RibRest {
-    std::vector<Vec3> c;
-    std::vector<double> u, dy;
-    double ucc = 2;
-  };
-  std::vector<std::array<RibRest, 2>> rest(std::size_t(p.ribPairs + 1));
-  double refLen[2] = {0, 0};  // rib 10's arc length to its costochondral junction (floating ribs follow its slope)
-  for (int k = 1; k <= p.ribPairs; ++k) {
-    for (int si = 0; si < 2; ++si) {
-      const int side = si + 1;
-      const double sg = side == 1 ? -1.0 : 1.0;  // side 1 = right = -x
-      const double a = A * wk[k];
-      const double zk = L - (k - 0.5) * dl;
-      std::vector<Vec2> P = {{0.075 * T, -0.20 * D0}, {0.30 * a, -0.45 * D0}, {0.75 * a, -0.28 * D0}, {a, 0.22 * D0}};
-      double zEnd = 0;
-      int parentSample = -1;
-      const double xs = 0.30 * ws;
-      if (k <= 7) {
-        const double ye = sternumCentreY(zAttach(k));
-        P.push_back({0.86 * a, 0.66 * D0});
-        P.push_back({xs + 0.40 * (a - xs), ye - 0.10 * D0});
-        P.push_back({xs, ye});
-        zEnd = zAttach(k);
-      } else if (k <= 10) {
-        const RibRest& par = rest[std::size_t(k - 1)][std::size_t(si)];
-        const double uj = par.ucc + 0.5 * (1 - par.ucc);
-        parentSample = int(std::lower_bound(par.u.begin(), par.u.end(), uj) - par.u.begin());
-        const Vec3 J = par.c[std::size_t(parentSample)];
-        P.push_back({0.86 * a, 0.66 * D0});
-        P.push_back({std::abs(J.x()), J.y()});
-        zEnd = J.z();
-      } else if (k == 11) {
-        P.push_back({0.92 * a, 0.45 * D0});
-      } else {
-        P.back() = {0.97 * a, 0.05 * D0};
-      }
-      std::vector<Vec2> pts;
-      std::vector<double> u;
-      resample(catmullRom(P), spacing, pts, u);
-      // lateral point and cartilage start
-      std::size_t iLat = 0;
-      for (std::size_t i = 0; i < pts.size(); ++i)
-        if (pts[i].x() > pts[iLat].x()) iLat = i;
-      const double uLat = u[iLat];
-      RibRest& r = rest[std::size_t(k)][std::size_t(si)];
-      const double ck = 0.46 + 0.015 * (k - 1);
-      r.ucc = k <= 10 ? uLat + (1 - ck) * (1 - uLat) : 0.88;
-      const double drop = k <= 10 ? dl * (2.0 + 0.25 * (k - 1)) : (k == 11 ? 2.0 * dl : 1.5 * dl);
-      r.u = u;
-      const double len = double(pts.size() - 1) * spacing;
-      if (k == 10) refLen[si] = len * r.ucc;
-      for (std::size_t i = 0; i < pts.size(); ++i) {
-        double z;
-        if (k > 10) z = zk - dl * 4.25 * smoothstep(u[i] * len / (refLen[si] * wk[k] / wk[10]));
-        else if (u[i] <= r.ucc) z = zk - drop * smoothstep(u[i] / r.ucc);
-        else z = (zk - drop) + (zEnd - (zk - drop)) * smoothstep((u[i] - r.ucc) / (1 - r.ucc));
-        r.c.push_back(Vec3(sg * pts[i].x(), pts[i].y(), z));
-      }
-      // funnel displacement, blended at the sternal / parental end over the last 12 mm
-      const double ub = std::min(0.5, 12.0 / std::max(len, 1.0));
-      r.dy.resize(r.c.size());
-      for (std::size_t i = 0; i < r.c.size(); ++i) {
-        const Vec3& c = r.c[i];
-        double dy = -funnelDepth * m.funnel(c.x(), c.y(), c.z());
-        if (k <= 10) {
-          const double target = k <= 7 ? sternumDy(c.z())
-                                        : rest[std::size_t(k - 1)][std::size_t(si)].dy[std::size_t(parentSample)];
-          const double w = smoothstep((u[i] - (1 - ub)) / ub);
-          dy = (1 - w) * dy + w * target;
-        }
-        r.dy[i] = dy;
-      }
-      Curve cv;
-      cv.side = side;
-      cv.rib = k;
-      cv.uCartilage = r.ucc;
-      cv.u = u;
-      for (std::size_t i = 0; i < r.c.size(); ++i) {
-        cv.c.push_back(r.c[i] + Vec3(0, r.dy[i], 0));
-        const double ui = u[i];
-        const double bone = std::clamp(ui / std::max(uLat, 1e-3), 0.0, 1.0);
-        const double raB = 0.5 * hr * (0.78 + 0.22 * smoothstep(bone)), rbB = 0.5 * tr;
-        const double raC = 0.5 * 0.85 * hr, rbC = 0.5 * 1.05 * tr;
-        const double w = smoothstep((ui - (r.ucc - 0.03)) / 0.06);
-        cv.ra.push_back((1 - w) * raB + w * raC);
-        cv.rb.push_back((1 - w) * rbB + w * rbC);
-      }
-      frames(cv, Vec3::UnitZ());
-      m.curves.push_back(std::move(cv));
-    }
+  explicit SternumProfile(const CageModel& model) : m(model) {
+    const double ws = m.d.sternumWidth, ts = m.d.sternumThickness;
+    width = {{m.zNotch, 1.35 * ws}, {m.zMS, 1.0 * ws}, {m.zXJ + 4, 1.05 * ws}, {m.zXJ - 3, 0.55 * ws}, {m.zTip, 0.3 * ws}};
+    thick = {{m.zNotch, 1.15 * ts}, {m.zMS, 1.0 * ts}, {m.zXJ + 4, 1.0 * ts}, {m.zXJ - 3, 0.6 * ts}, {m.zTip, 0.45 * ts}};
+    fzAbs = m.zNotch - m.fz * (m.zNotch - m.zXJ);
   }
+  double posterior(double z) const {
+    const double phi = std::clamp((m.zNotch - z) / (m.zNotch - m.zXJ), 0.0, 1.3);
+    return m.d.chestDepth * (1 + 0.12 * phi);
+  }
+  double centreY(double z) const { return posterior(z) + 0.5 * lerpTable(thick, z); }
+  double dy(double z) const {
+    return -m.funnelDepth * bump((0 - m.fx) / (0.5 * m.fw)) * bump((z - fzAbs) / (0.5 * m.fh));
+  }
+};
 
-  // sternum (last curve)
+// rib k attachment heights on the sternum (ribs 1-7)
+double zAttach(const CageModel& m, int k) {
+  if (k == 1) return m.zNotch - 0.45 * (m.zNotch - m.zMS);
+  if (k == 2) return m.zMS;
+  return m.zMS + (k - 2) / 5.0 * (m.zXJ - m.zMS);
+}
+
+// a rib's rest state: centre line, its u, the funnel's displacement along y, and where the cartilage starts
+struct RibRest {
+  std::vector<Vec3> c;
+  std::vector<double> u, dy;
+  double ucc = 2;
+};
+
+// control points (|x|, y) of rib k, half width a, from the spine round to the front: ribs 1-7 end on the
+// sternum, 8-10 on the cartilage of the rib above (parent; parentSample: its sample they join), 11 and 12
+// end free. zEnd: the front end's height (ribs 1-10)
+std::vector<Vec2> ribOutline(const CageModel& m, const SternumProfile& st, int k, double a, const RibRest& parent,
+                             double& zEnd, int& parentSample) {
+  const double T = m.d.chestWidth, D0 = m.d.chestDepth;
+  std::vector<Vec2> P = {{0.075 * T, -0.20 * D0}, {0.30 * a, -0.45 * D0}, {0.75 * a, -0.28 * D0}, {a, 0.22 * D0}};
+  zEnd = 0;
+  parentSample = -1;
+  const double xs = 0.30 * m.d.sternumWidth;
+  if (k <= 7) {
+    const double ye = st.centreY(zAttach(m, k));
+    P.push_back({0.86 * a, 0.66 * D0});
+    P.push_back({xs + 0.40 * (a - xs), ye - 0.10 * D0});
+    P.push_back({xs, ye});
+    zEnd = zAttach(m, k);
+  } else if (k <= 10) {
+    const double uj = parent.ucc + 0.5 * (1 - parent.ucc);
+    parentSample = int(std::lower_bound(parent.u.begin(), parent.u.end(), uj) - parent.u.begin());
+    const Vec3 J = parent.c[std::size_t(parentSample)];
+    P.push_back({0.86 * a, 0.66 * D0});
+    P.push_back({std::abs(J.x()), J.y()});
+    zEnd = J.z();
+  } else if (k == 11) {
+    P.push_back({0.92 * a, 0.45 * D0});
+  } else {
+    P.back() = {0.97 * a, 0.05 * D0};
+  }
+  return P;
+}
+
+// the rest centre line's height: from zk at the spine down by `drop` at the cartilage start, then on to
+// zEnd at the front; the floating ribs (11, 12) follow rib 10's slope by arc length (refLen: rib 10's
+// arc length to its costochondral junction)
+void restHeights(RibRest& r, const std::vector<Vec2>& pts, int k, double sg, double zk, double drop, double zEnd,
+                 double len, double refLen, double dl) {
+  const std::vector<double>& u = r.u;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    double z;
+    if (k > 10) z = zk - dl * 4.25 * smoothstep(u[i] * len / (refLen * kRibWidth[k] / kRibWidth[10]));
+    else if (u[i] <= r.ucc) z = zk - drop * smoothstep(u[i] / r.ucc);
+    else z = (zk - drop) + (zEnd - (zk - drop)) * smoothstep((u[i] - r.ucc) / (1 - r.ucc));
+    r.c.push_back(Vec3(sg * pts[i].x(), pts[i].y(), z));
+  }
+}
+
+// funnel displacement, blended at the sternal / parental end over the last 12 mm so that ribs 1-10 follow
+// what they join
+void funnelDisplacement(RibRest& r, const CageModel& m, const SternumProfile& st, int k, double len,
+                        const RibRest& parent, int parentSample) {
+  const double ub = std::min(0.5, 12.0 / std::max(len, 1.0));
+  r.dy.resize(r.c.size());
+  for (std::size_t i = 0; i < r.c.size(); ++i) {
+    const Vec3& c = r.c[i];
+    double dy = -m.funnelDepth * m.funnel(c.x(), c.y(), c.z());
+    if (k <= 10) {
+      const double target = k <= 7 ? st.dy(c.z()) : parent.dy[std::size_t(parentSample)];
+      const double w = smoothstep((r.u[i] - (1 - ub)) / ub);
+      dy = (1 - w) * dy + w * target;
+    }
+    r.dy[i] = dy;
+  }
+}
+
+// the rib's curve: displaced centre line, cross-section radii (bone, growing to the lateral point uLat,
+// then cartilage), frames
+Curve ribCurve(const CageModel& m, const RibRest& r, int k, int side, double uLat) {
+  const double hr = m.d.ribHeight, tr = m.d.ribThickness;
+  Curve cv;
+  cv.side = side;
+  cv.rib = k;
+  cv.uCartilage = r.ucc;
+  cv.u = r.u;
+  for (std::size_t i = 0; i < r.c.size(); ++i) {
+    cv.c.push_back(r.c[i] + Vec3(0, r.dy[i], 0));
+    const double ui = r.u[i];
+    const double bone = std::clamp(ui / std::max(uLat, 1e-3), 0.0, 1.0);
+    const double raB = 0.5 * hr * (0.78 + 0.22 * smoothstep(bone)), rbB = 0.5 * tr;
+    const double raC = 0.5 * 0.85 * hr, rbC = 0.5 * 1.05 * tr;
+    const double w = smoothstep((ui - (r.ucc - 0.03)) / 0.06);
+    cv.ra.push_back((1 - w) * raB + w * raC);
+    cv.rb.push_back((1 - w) * rbB + w * rbC);
+  }
+  frames(cv, Vec3::UnitZ());
+  return cv;
+}
+
+// rib k of side si (0: right, 1: left): its rest state rest[k][si] (ribs 8-10 join rest[k - 1][si]) and
+// its curve; refLen[si]: rib 10's arc length to its costochondral junction (set at rib 10)
+Curve buildRib(const CageModel& m, const SternumProfile& st, int k, int si, std::vector<std::array<RibRest, 2>>& rest,
+               double refLen[2]) {
+  const int side = si + 1;
+  const double sg = side == 1 ? -1.0 : 1.0;  // side 1 = right = -x
+  const double A = 0.5 * m.d.chestWidth + 0.5 * m.d.ribThickness;  // centre line of the widest rib: inner surface at T/2
+  const double a = A * kRibWidth[k];
+  const double dl = m.delta;
+  const double zk = m.d.spineHeight - (k - 0.5) * dl;
+  const RibRest& parent = rest[std::size_t(k - 1)][std::size_t(si)];
+  double zEnd = 0;
+  int parentSample = -1;
+  const std::vector<Vec2> P = ribOutline(m, st, k, a, parent, zEnd, parentSample);
+  std::vector<Vec2> pts;
+  std::vector<double> u;
+  resample(catmullRom(P), m.spacing, pts, u);
+  // lateral point and cartilage start
+  std::size_t iLat = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i)
+    if (pts[i].x() > pts[iLat].x()) iLat = i;
+  const double uLat = u[iLat];
+  RibRest& r = rest[std::size_t(k)][std::size_t(si)];
+  const double ck = 0.46 + 0.015 * (k - 1);
+  r.ucc = k <= 10 ? uLat + (1 - ck) * (1 - uLat) : 0.88;
+  const double drop = k <= 10 ? dl * (2.0 + 0.25 * (k - 1)) : (k == 11 ? 2.0 * dl : 1.5 * dl);
+  r.u = u;
+  const double len = double(pts.size() - 1) * m.spacing;
+  if (k == 10) refLen[si] = len * r.ucc;
+  restHeights(r, pts, k, sg, zk, drop, zEnd, len, refLen[si], dl);
+  funnelDisplacement(r, m, st, k, len, parent, parentSample);
+  return ribCurve(m, r, k, side, uLat);
+}
+
+// the sternum's curve (the model's last), from the notch to the xiphoid tip
+Curve sternumCurve(const CageModel& m, const SternumProfile& sp) {
   Curve st;
   const double len = m.zNotch - m.zTip;
-  const int n = std::max(8, int(std::ceil(len / spacing)));
+  const int n = std::max(8, int(std::ceil(len / m.spacing)));
   for (int i = 0; i <= n; ++i) {
     const double z = m.zNotch - len * i / n;
-    st.c.push_back(Vec3(0, sternumCentreY(z) + sternumDy(z), z));
+    st.c.push_back(Vec3(0, sp.centreY(z) + sp.dy(z), z));
     st.u.push_back(double(i) / n);
-    st.ra.push_back(0.5 * lerpTable(width, z));
-    st.rb.push_back(0.5 * lerpTable(thick, z));
+    st.ra.push_back(0.5 * lerpTable(sp.width, z));
+    st.rb.push_back(0.5 * lerpTable(sp.thick, z));
   }
   st.sternumSplit = {(m.zNotch - m.zMS) / len, (m.zNotch - m.zXJ) / len, 1.0};
   frames(st, Vec3::UnitX());
-  m.curves.push_back(std::move(st));
+  return st;
+}
+}  // namespace
+
+CageModel buildModel(const Dimensions& d, const RibCageParams& p, double funnelDepth, double spacing) {
+  CageModel m = modelLevels(d, p, funnelDepth, spacing);
+  const SternumProfile sternum(m);
+  std::vector<std::array<RibRest, 2>> rest(std::size_t(p.ribPairs + 1));
+  double refLen[2] = {0, 0};
+  for (int k = 1; k <= p.ribPairs; ++k)
+    for (int si = 0; si < 2; ++si) m.curves.push_back(buildRib(m, sternum, k, si, rest, refLen));
+  m.curves.push_back(sternumCurve(m, sternum));
   return m;
 }
 

@@ -651,161 +651,418 @@ struct Solver::Impl {
     return {};
   }
 
-  // Newton with load increments (ctrl null: load factor target * scale on the forces and prescribed
-  // displacements) or displacement control (ctrl: free-dof weights w, w . u stepped to target; the load
-  // factor is the extra unknown of a bordered system)
-  Result path(const NewtonOptions& opt, double scale, const Eigen::VectorXd* ctrl, double dTarget, double& factorSeconds) {
+  // --- the problem's setup (Solver's constructor), step by step ---
+
+  // every tet references existing nodes and has a positive volume; a TET10 whose mid-edge nodes lie far
+  // from its edges' midpoints can fold inside although its corners do not: its Jacobian must be positive at
+  // every quadrature point and at the centroid (where the stresses are taken), else its stiffness and
+  // stresses are meaningless (NaN stresses)
+  void checkTets() const {
+    const int n = m->numNodes();
+    for (int t = 0; t < m->numTets(); ++t) {
+      for (int a = 0; a < nen; ++a)
+        if (m->tets[t][a] < 0 || m->tets[t][a] >= n) throw TopologyError("Tetrahedron " + std::to_string(t) + " has an invalid node index.");
+      if (!(m->tetVolume(t) > 0))
+        throw TopologyError("Tetrahedron " + std::to_string(t) + " is inverted or flat (volume <= 0).");
+      if (nen == 10) {
+        Eigen::Matrix<double, 10, 3> G;
+        bool ok = gradientsT<10>(t, centroidDN, 1.0, G) > 0;
+        for (std::size_t q = 0; q < quad.size() && ok; ++q) ok = gradientsT<10>(t, quadDN[q], 1.0, G) > 0;
+        if (!ok)
+          throw TopologyError("Tetrahedron " + std::to_string(t) +
+                           " (quadratic) folds inside: its mid-edge nodes are too far from its edges' midpoints (the "
+                           "Jacobian is not positive everywhere in it). Use straight-sided quadratic tets or refine there.");
+      }
+    }
+  }
+
+  // the elasticity matrix of each tissue's material, and per tet its material (in our copy p) and matrix
+  void bindMaterials(const Problem& prob) {
+    for (const auto& kv : prob.materials) {
+      if (!(kv.second.E > 0) || !(kv.second.nu > -1 && kv.second.nu < 0.5))
+        throw InputError("Material of tissue " + std::to_string(kv.first) + ": need E > 0 and -1 < Poisson ratio < 0.5.");
+      Dby[kv.first] = elasticity(kv.second);
+    }
+    D.resize(m->numTets());
+    mat.resize(m->numTets());
+    for (int t = 0; t < m->numTets(); ++t) {
+      auto it = prob.materials.find(m->tissue[t]);
+      if (it == prob.materials.end())
+        throw InputError("No material for tissue label " + std::to_string(m->tissue[t]) + " (tetrahedron " + std::to_string(t) + ").");
+      mat[t] = &it->second;
+      D[t] = &Dby[m->tissue[t]];
+    }
+    // rebind material pointers to our copy
+    for (int t = 0; t < m->numTets(); ++t) mat[t] = &p.materials.at(m->tissue[t]);
+  }
+
+  // the fixed dofs with their prescribed displacements, and the nodal forces
+  void setLoads(const Problem& prob) {
+    const int n = m->numNodes();
+    if (prob.fixed.empty())
+      throw InputError("No fixed nodes: the stiffness matrix is singular (the model can move as a rigid body). "
+                       "Fix at least the nodes where the model is held (e.g. the costovertebral joints).");
+    isConstrained.assign(3 * n, 0);
+    prescribed.setZero(3 * n);
+    for (const auto& d : prob.fixed) {
+      if (d.node < 0 || d.node >= n || d.dof < 0 || d.dof > 2) throw InputError("Fixed node/dof out of range.");
+      isConstrained[3 * d.node + d.dof] = 1;
+      prescribed(3 * d.node + d.dof) = d.value;
+    }
+    fext.setZero(3 * n);
+    if (!prob.force.empty()) {
+      if (static_cast<int>(prob.force.size()) != n) throw InputError("Force vector size differs from the node count.");
+      for (int i = 0; i < n; ++i) fext.segment<3>(3 * i) = prob.force[i];
+    }
+  }
+
+  // node adjacency (compressed rows, sorted, with the node itself); nodes without tets have no row entries
+  void nodeAdjacency(std::vector<int>& adjOuter, std::vector<int>& adj) const {
+    const int n = m->numNodes();
+    adjOuter.assign(std::size_t(n) + 1, 0);
+    for (const auto& e : m->tets)
+      for (int a = 0; a < nen; ++a) adjOuter[std::size_t(e[a]) + 1] += nen;
+    for (int i = 0; i < n; ++i) adjOuter[std::size_t(i) + 1] += adjOuter[std::size_t(i)];
+    adj.resize(std::size_t(adjOuter[std::size_t(n)]));
+    std::vector<int> fill(adjOuter.begin(), adjOuter.end() - 1);
+    for (const auto& e : m->tets)
+      for (int a = 0; a < nen; ++a)
+        for (int b = 0; b < nen; ++b) adj[std::size_t(fill[std::size_t(e[a])]++)] = e[b];
+    int k = 0;  // sort and deduplicate each row in place
+    for (int i = 0; i < n; ++i) {
+      const auto first = adj.begin() + adjOuter[std::size_t(i)], last = adj.begin() + adjOuter[std::size_t(i) + 1];
+      std::sort(first, last);
+      const int start = k;
+      for (auto it = first; it != last; ++it)
+        if (it == first || *it != *(it - 1)) adj[std::size_t(k++)] = *it;
+      adjOuter[std::size_t(i)] = start;
+    }
+    adjOuter[std::size_t(n)] = k;
+    adj.resize(std::size_t(k));
+  }
+
+  // the nodes with a free dof, compactly numbered (the ordering's graph): compact per node (-1: none),
+  // nodeOf per compact number
+  void freeNodes(const std::vector<int>& adjOuter, std::vector<int>& compact, std::vector<int>& nodeOf) const {
+    const int n = m->numNodes();
+    compact.assign(std::size_t(n), -1);
+    for (int i = 0; i < n; ++i) {
+      if (adjOuter[std::size_t(i)] == adjOuter[std::size_t(i) + 1]) continue;  // used by no tet: no dofs
+      for (int d = 0; d < 3 && compact[std::size_t(i)] < 0; ++d)
+        if (!isConstrained[3 * std::size_t(i) + std::size_t(d)]) {
+          compact[std::size_t(i)] = static_cast<int>(nodeOf.size());
+          nodeOf.push_back(i);
+        }
+    }
+    if (nodeOf.empty()) throw InputError("Every degree of freedom is fixed: nothing to solve.");
+  }
+
+  // fill-reducing order of those nodes (see Cholmod::orderNodes), as compact numbers; their free dofs are
+  // numbered in it, node by node, so CHOLMOD factorises K as it is (PECTUS_FE_ORDERING: node order, CHOLMOD
+  // orders the dofs)
+  std::vector<int> orderFreeNodes(const std::vector<int>& adjOuter, const std::vector<int>& adj,
+                                  const std::vector<int>& compact, const std::vector<int>& nodeOf) {
+    std::vector<int> order;
+    if (orderByNodes) {
+      std::vector<int> gOuter(1, 0), gInner;
+      gInner.reserve(adj.size() / 2 + nodeOf.size());
+      for (int i : nodeOf) {
+        for (int k = adjOuter[std::size_t(i)]; k < adjOuter[std::size_t(i) + 1]; ++k) {
+          const int j = compact[std::size_t(adj[std::size_t(k)])];
+          if (j >= compact[std::size_t(i)]) gInner.push_back(j);
+        }
+        std::sort(gInner.begin() + gOuter.back(), gInner.end());
+        gOuter.push_back(static_cast<int>(gInner.size()));
+      }
+      const auto t0 = std::chrono::steady_clock::now();
+      order = chol.orderNodes(gOuter, gInner);
+      orderSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+      if (order.empty()) orderByNodes = false;  // CHOLMOD failed: it orders the dofs itself
+    }
+    if (order.empty())
+      for (std::size_t k = 0; k < nodeOf.size(); ++k) order.push_back(static_cast<int>(k));
+    return order;
+  }
+
+  // numbers the free dofs (freeIndex, nFree) node by node in that order; returns each node's position in it
+  std::vector<int> numberFreeDofs(const std::vector<int>& order, const std::vector<int>& nodeOf) {
+    const int n = m->numNodes();
+    std::vector<int> rank(std::size_t(n), std::numeric_limits<int>::max());
+    freeIndex.assign(3 * std::size_t(n), -1);
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      const int i = nodeOf[std::size_t(order[k])];
+      rank[std::size_t(i)] = static_cast<int>(k);
+      for (int d = 0; d < 3; ++d)
+        if (!isConstrained[3 * std::size_t(i) + std::size_t(d)]) freeIndex[3 * std::size_t(i) + std::size_t(d)] = nFree++;
+    }
+    return rank;
+  }
+
+  // lower-triangular pattern of K (zero values): the column of a free dof holds the free dofs at or after it
+  // of the node's neighbours; with the neighbours sorted by rank the rows come out sorted
+  void stiffnessPattern(const std::vector<int>& order, const std::vector<int>& nodeOf, const std::vector<int>& adjOuter,
+                        const std::vector<int>& adj, const std::vector<int>& rank) {
+    std::vector<int> outer(std::size_t(nFree) + 1, 0), inner, nbrs;
+    inner.reserve(static_cast<size_t>(nFree) * 20);
+    int col = 0;
+    for (int i : order) {
+      const int node = nodeOf[std::size_t(i)];
+      nbrs.assign(adj.begin() + adjOuter[std::size_t(node)], adj.begin() + adjOuter[std::size_t(node) + 1]);
+      std::sort(nbrs.begin(), nbrs.end(), [&](int x, int y) { return rank[std::size_t(x)] < rank[std::size_t(y)]; });
+      for (int d = 0; d < 3; ++d) {
+        const int fc = freeIndex[3 * std::size_t(node) + std::size_t(d)];
+        if (fc < 0) continue;
+        for (int j : nbrs)
+          for (int e = 0; e < 3; ++e) {
+            const int fr = freeIndex[3 * std::size_t(j) + std::size_t(e)];
+            if (fr >= fc) inner.push_back(fr);
+          }
+        outer[std::size_t(++col)] = static_cast<int>(inner.size());
+      }
+    }
+    std::vector<double> zeros(inner.size(), 0.0);
+    K = Eigen::Map<Eigen::SparseMatrix<double>>(nFree, nFree, static_cast<Eigen::Index>(inner.size()), outer.data(),
+                                                inner.data(), zeros.data());
+  }
+
+  // the assembly visits the tets by their first node in the dof order (colorChunks)
+  void orderTets(const std::vector<int>& rank) {
+    std::vector<int> first(std::size_t(m->numTets()));
+    for (int t = 0; t < m->numTets(); ++t) {
+      int r = std::numeric_limits<int>::max();
+      for (int a = 0; a < 4; ++a) r = std::min(r, rank[std::size_t(m->tets[std::size_t(t)][a])]);
+      first[std::size_t(t)] = r;
+    }
+    tetOrder.resize(first.size());
+    for (std::size_t t = 0; t < first.size(); ++t) tetOrder[t] = static_cast<int>(t);
+    std::stable_sort(tetOrder.begin(), tetOrder.end(), [&](int x, int y) { return first[std::size_t(x)] < first[std::size_t(y)]; });
+  }
+
+  // the Newton options must allow a path: at least one step and iteration, a usable line search and step control
+  static void checkNewtonOptions(const NewtonOptions& opt) {
     if (opt.loadSteps < 1 || opt.maxIterations < 1) throw InputError("Newton: need at least one load step and one iteration.");
     if (opt.lineSearch && !(opt.lineSearchTol > 0 && opt.lineSearchSteps >= 1))
       throw InputError("Newton: the line search needs a tolerance > 0 and at least one step.");
     if (opt.adaptiveSteps && !(opt.targetIterations >= 1 && opt.maxStepGrowth >= 1))
       throw InputError("Newton: automatic steps need target iterations >= 1 and a maximum growth >= 1.");
+  }
+
+  // a Newton path's state and its steps (path): increments of the load factor (or displacement fraction), each
+  // solved by Newton iterations from a trial state
+  struct NewtonPath {
+    Impl& I;
+    const NewtonOptions& opt;
+    const double scale;
+    const Eigen::VectorXd* const ctrl;
+    const double dTarget;
+    double& factorSeconds;
     Result res;
-    res.nonlinear = true;
-    Eigen::VectorXd u = Eigen::VectorXd::Zero(fext.size()), fint, fintConverged = Eigen::VectorXd::Zero(fext.size());
-    const Eigen::VectorXd fFree = freePart(fext);
-    const double fextNorm = fFree.norm() * std::abs(scale);
-    double lam = 0, dlam = 1.0 / opt.loadSteps;
-    const double maxStep = opt.adaptiveSteps ? opt.maxStepGrowth / opt.loadSteps : 1.0;
+    Eigen::VectorXd u, fint, fintConverged;
+    const Eigen::VectorXd fFree;
+    const double fextNorm;
+    double lam = 0, dlam;  // the converged load factor (or displacement fraction) and the next step
+    const double maxStep;
     double L = 0;  // displacement control: load factor of the converged state
     int cut = 0;
     Eigen::VectorXd uLast;  // the last state evaluated (the failure report looks for an inverted tet there)
     std::string inversion;  // the first inverted tet met at a non-finite residual since the last converged increment
-    while (lam < 1.0 - 1e-12) {
+
+    NewtonPath(Impl& impl, const NewtonOptions& o, double s, const Eigen::VectorXd* c, double dT, double& fs)
+        : I(impl), opt(o), scale(s), ctrl(c), dTarget(dT), factorSeconds(fs),
+          u(Eigen::VectorXd::Zero(I.fext.size())), fintConverged(Eigen::VectorXd::Zero(I.fext.size())),
+          fFree(I.freePart(I.fext)), fextNorm(fFree.norm() * std::abs(scale)), dlam(1.0 / opt.loadSteps),
+          maxStep(opt.adaptiveSteps ? opt.maxStepGrowth / opt.loadSteps : 1.0) {
+      res.nonlinear = true;
+    }
+
+    bool done() const { return !(lam < 1.0 - 1e-12); }  // the whole load (or displacement) is on
+
+    // one increment: Newton iterations towards the next load factor; taken if they converge, else the step is cut
+    void increment() {
+      const double target = nextTarget();
+      Eigen::VectorXd uTrial = trialStart(target);
+      double Lt = L;  // load factor of the trial state (displacement control)
+      int it = 0;
+      if (iterate(target, uTrial, Lt, it)) accept(target, uTrial, Lt, it);
+      else cutBack(target);
+    }
+
+    // the increment's load factor: one step on, but not past the next stop
+    double nextTarget() const {
       double target = std::min(1.0, lam + dlam);
       for (double st : opt.stops)
         if (st > lam + 1e-12 && st < target - 1e-12) { target = st; break; }
+      return target;
+    }
+
+    // the converged state with the prescribed displacements at the target (none under displacement control)
+    Eigen::VectorXd trialStart(double target) const {
       Eigen::VectorXd uTrial = u;
-      double Lt = L;  // load factor of the trial state (displacement control)
-      for (size_t d = 0; d < freeIndex.size(); ++d)
-        if (isConstrained[d]) uTrial(d) = ctrl ? 0.0 : target * scale * prescribed(d);
-      // the residual (free dofs) at a state: forces at load factor f minus the internal forces
-      const auto residual = [&](const Eigen::VectorXd& uu, double f, bool tangent) {
-        uLast = uu;
-        assemble(uu, true, fint, tangent);
-        return Eigen::VectorXd(f * fFree - freePart(fint));
-      };
-      const auto factorAt = [&](double Lc) { return ctrl ? Lc : target * scale; };
-      bool converged = false;
+      for (size_t d = 0; d < I.freeIndex.size(); ++d)
+        if (I.isConstrained[d]) uTrial(d) = ctrl ? 0.0 : target * scale * I.prescribed(d);
+      return uTrial;
+    }
+
+    // the residual (free dofs) at a state: forces at load factor f minus the internal forces
+    Eigen::VectorXd residual(const Eigen::VectorXd& uu, double f, bool tangent) {
+      uLast = uu;
+      I.assemble(uu, true, fint, tangent);
+      return Eigen::VectorXd(f * fFree - I.freePart(fint));
+    }
+    double factorAt(double Lc, double target) const { return ctrl ? Lc : target * scale; }
+
+    // Newton iterations from uTrial (load factor Lt) at the target; true if they converged (it: their count)
+    bool iterate(double target, Eigen::VectorXd& uTrial, double& Lt, int& it) {
       double duNorm = 0, lastRn = 1e300;
-      int it = 0;
       for (; it <= opt.maxIterations; ++it) {
-        const Eigen::VectorXd r = residual(uTrial, factorAt(Lt), true);
+        const Eigen::VectorXd r = residual(uTrial, factorAt(Lt, target), true);
         double reactions = 0;
-        for (size_t d = 0; d < freeIndex.size(); ++d)
-          if (isConstrained[d]) reactions += fint(d) * fint(d);
+        for (size_t d = 0; d < I.freeIndex.size(); ++d)
+          if (I.isConstrained[d]) reactions += fint(d) * fint(d);
         const double ref = std::max({ctrl ? std::abs(Lt) * fFree.norm() : target * fextNorm, std::sqrt(reactions), 1e-30});
         const double rn = r.norm();
         if (opt.onIteration) opt.onIteration(res.increments, it, rn);
         if (!std::isfinite(rn)) {
-          if (inversion.empty()) inversion = invertedAt(uTrial);
-          break;
+          if (inversion.empty()) inversion = I.invertedAt(uTrial);
+          return false;
         }
-        const double g = ctrl ? ctrl->dot(freePart(uTrial)) - target * dTarget : 0.0;  // constraint violation
+        const double g = ctrl ? ctrl->dot(I.freePart(uTrial)) - target * dTarget : 0.0;  // constraint violation
         if (rn <= opt.tolResidual * ref && std::abs(g) <= opt.tolDisplacement * std::abs(dTarget) &&
             (it == 0 || duNorm <= opt.tolDisplacement * std::max(uTrial.norm(), 1e-30))) {
-          converged = true;
           fintConverged = fint;
-          break;
+          return true;
         }
-        if (it == opt.maxIterations) break;
+        if (it == opt.maxIterations) return false;
         const bool refactor = !opt.modified || it == 0 || !(rn < lastRn / 3);
         lastRn = rn;
-        if (refactor) try {
-          factorize(factorSeconds);
-          ++res.factorizations;
-        } catch (const ModelTooLarge&) {
-          throw;
-        } catch (const InputError&) {
-          // singular at the undeformed state: a real input problem; at a state distorted by prescribed
-          // displacements (their whole increment on the boundary nodes, none yet inside) or deformed by the
-          // load, the tangent lost positive definiteness (distortion, buckling, inversion): cut back
-          if (it == 0 && lam == 0 && uTrial.isZero(0.0)) throw;
-          break;
-        }
-        Eigen::VectorXd du = chol.solve(r);
+        Eigen::VectorXd du;
         double dL = 0;
-        if (ctrl) {  // bordered system: du = a + dL b, w . (u + du) = target
-          const Eigen::VectorXd b = chol.solve(fFree);
-          const double wb = ctrl->dot(b);
-          if (!(std::abs(wb) > 0) || !std::isfinite(wb)) break;
-          dL = (-g - ctrl->dot(du)) / wb;
-          du += dL * b;
-        }
-        if (!du.allFinite()) break;
+        if (!newtonStep(refactor, it, uTrial, r, g, du, dL)) return false;
         duNorm = du.norm();
-        double a = 1;
-        if (opt.lineSearch) {
-          const double s0 = du.dot(r), sRef = std::abs(s0);
-          Eigen::VectorXd uNew(uTrial.size());
-          bool finite = false;
-          for (int k = 0; k < opt.lineSearchSteps; ++k) {
-            uNew = uTrial;
-            for (size_t d = 0; d < freeIndex.size(); ++d)
-              if (freeIndex[d] >= 0) uNew(d) += a * du(freeIndex[d]);
-            const Eigen::VectorXd r1 = residual(uNew, factorAt(Lt + a * dL), false);
-            if (!r1.allFinite()) {
-              if (inversion.empty()) inversion = invertedAt(uNew);
-              finite = false;
-              a *= 0.25;
-              continue;
-            }
-            finite = true;
-            const double s1 = du.dot(r1);
-            // a step that lowers the residual's norm, or leaves little of s, is taken as it is. Under
-            // displacement control s is no merit function's slope (the step is driven by the constraint: the
-            // secant's root is ~0 at the predictor), so only the back-off from non-finite residuals applies.
-            if (ctrl || std::abs(s1) <= opt.lineSearchTol * sRef || r1.norm() < r.norm()) break;
-            const double an = a * s0 / (s0 - s1);  // the root of s(a) linear through (0, s0) and (a, s1)
-            if (!std::isfinite(an) || an >= a) break;  // s still as large ahead: the full step is the best guess
-            a = std::max(an, 0.1 * a);
-          }
-          if (!finite) {  // every trial inverted an element: back off once more and let the next iteration see it
-            a *= 0.25;
-          }
-        }
-        for (size_t d = 0; d < freeIndex.size(); ++d)
-          if (freeIndex[d] >= 0) uTrial(d) += a * du(freeIndex[d]);
+        const double a = opt.lineSearch ? lineSearch(uTrial, Lt, target, r, du, dL) : 1;
+        for (size_t d = 0; d < I.freeIndex.size(); ++d)
+          if (I.freeIndex[d] >= 0) uTrial(d) += a * du(I.freeIndex[d]);
         Lt += a * dL;
         ++res.newtonIterations;
       }
-      if (converged) {
-        u = uTrial;
-        L = Lt;
-        lam = target;
-        ++res.increments;
-        cut = opt.adaptiveSteps ? 0 : cut;
-        inversion.clear();
-        if (opt.adaptiveSteps) {
-          if (it <= opt.targetIterations) dlam = std::min(1.5 * dlam, maxStep);
-          else if (it > 3 * opt.targetIterations) dlam *= 0.5;
-        }
-        if (opt.onIncrement) opt.onIncrement(ctrl ? L : lam, u);
-      } else {
-        if (++cut > opt.maxCutbacks) {
-          std::string inv = invertedAt(uLast);
-          if (inv.empty()) inv = inversion;  // an earlier trial of this increment inverted an element
-          std::ostringstream s;
-          s << "The nonlinear (Newton) solve did not converge at " << (ctrl ? "displacement fraction " : "load factor ") << target
-            << " after " << opt.maxCutbacks << (opt.adaptiveSteps ? " step cut-backs in a row" : " step cut-backs") << ": ";
-          if (!inv.empty())
-            s << "an element inverts: " << inv
-              << ". The load is too large for the model there; reduce the force or refine the mesh there.";
-          else
-            s << "the load is too large for the model (instability or inverted elements); "
-                 "reduce the force, use more load steps or check the boundary conditions.";
-          throw NewtonDidNotConverge(s.str(), target);
-        }
-        dlam *= 0.5;
-      }
+      return false;
     }
-    res.u = u;
-    res.loadFactor = ctrl ? L : scale;
-    res.reactions = Eigen::VectorXd::Zero(fext.size());
-    for (size_t d = 0; d < freeIndex.size(); ++d)
-      if (isConstrained[d]) res.reactions(d) = fintConverged(d);
-    stresses(res.u, true, res);
-    return res;
+
+    // the Newton correction du (and dL of the load factor) at residual r, constraint violation g; false
+    // where there is none (the tangent is singular or not positive definite, or du is not finite)
+    bool newtonStep(bool refactor, int it, const Eigen::VectorXd& uTrial, const Eigen::VectorXd& r, double g,
+                    Eigen::VectorXd& du, double& dL) {
+      if (refactor) try {
+        I.factorize(factorSeconds);
+        ++res.factorizations;
+      } catch (const ModelTooLarge&) {
+        throw;
+      } catch (const InputError&) {
+        // singular at the undeformed state: a real input problem; at a state distorted by prescribed
+        // displacements (their whole increment on the boundary nodes, none yet inside) or deformed by the
+        // load, the tangent lost positive definiteness (distortion, buckling, inversion): cut back
+        if (it == 0 && lam == 0 && uTrial.isZero(0.0)) throw;
+        return false;
+      }
+      du = I.chol.solve(r);
+      if (ctrl) {  // bordered system: du = a + dL b, w . (u + du) = target
+        const Eigen::VectorXd b = I.chol.solve(fFree);
+        const double wb = ctrl->dot(b);
+        if (!(std::abs(wb) > 0) || !std::isfinite(wb)) return false;
+        dL = (-g - ctrl->dot(du)) / wb;
+        du += dL * b;
+      }
+      return du.allFinite();
+    }
+
+    // the step length along du from uTrial (residual r there)
+    double lineSearch(const Eigen::VectorXd& uTrial, double Lt, double target, const Eigen::VectorXd& r,
+                      const Eigen::VectorXd& du, double dL) {
+      double a = 1;
+      const double s0 = du.dot(r), sRef = std::abs(s0);
+      Eigen::VectorXd uNew(uTrial.size());
+      bool finite = false;
+      for (int k = 0; k < opt.lineSearchSteps; ++k) {
+        uNew = uTrial;
+        for (size_t d = 0; d < I.freeIndex.size(); ++d)
+          if (I.freeIndex[d] >= 0) uNew(d) += a * du(I.freeIndex[d]);
+        const Eigen::VectorXd r1 = residual(uNew, factorAt(Lt + a * dL, target), false);
+        if (!r1.allFinite()) {
+          if (inversion.empty()) inversion = I.invertedAt(uNew);
+          finite = false;
+          a *= 0.25;
+          continue;
+        }
+        finite = true;
+        const double s1 = du.dot(r1);
+        // a step that lowers the residual's norm, or leaves little of s, is taken as it is. Under
+        // displacement control s is no merit function's slope (the step is driven by the constraint: the
+        // secant's root is ~0 at the predictor), so only the back-off from non-finite residuals applies.
+        if (ctrl || std::abs(s1) <= opt.lineSearchTol * sRef || r1.norm() < r.norm()) break;
+        const double an = a * s0 / (s0 - s1);  // the root of s(a) linear through (0, s0) and (a, s1)
+        if (!std::isfinite(an) || an >= a) break;  // s still as large ahead: the full step is the best guess
+        a = std::max(an, 0.1 * a);
+      }
+      if (!finite) {  // every trial inverted an element: back off once more and let the next iteration see it
+        a *= 0.25;
+      }
+      return a;
+    }
+
+    // the converged trial becomes the state; automatic steps grow or shrink with the iterations it took
+    void accept(double target, const Eigen::VectorXd& uTrial, double Lt, int it) {
+      u = uTrial;
+      L = Lt;
+      lam = target;
+      ++res.increments;
+      cut = opt.adaptiveSteps ? 0 : cut;
+      inversion.clear();
+      if (opt.adaptiveSteps) {
+        if (it <= opt.targetIterations) dlam = std::min(1.5 * dlam, maxStep);
+        else if (it > 3 * opt.targetIterations) dlam *= 0.5;
+      }
+      if (opt.onIncrement) opt.onIncrement(ctrl ? L : lam, u);
+    }
+
+    // halves the step; after too many cut-backs, reports why (an element that inverts, if any)
+    void cutBack(double target) {
+      if (++cut > opt.maxCutbacks) {
+        std::string inv = I.invertedAt(uLast);
+        if (inv.empty()) inv = inversion;  // an earlier trial of this increment inverted an element
+        std::ostringstream s;
+        s << "The nonlinear (Newton) solve did not converge at " << (ctrl ? "displacement fraction " : "load factor ") << target
+          << " after " << opt.maxCutbacks << (opt.adaptiveSteps ? " step cut-backs in a row" : " step cut-backs") << ": ";
+        if (!inv.empty())
+          s << "an element inverts: " << inv
+            << ". The load is too large for the model there; reduce the force or refine the mesh there.";
+        else
+          s << "the load is too large for the model (instability or inverted elements); "
+               "reduce the force, use more load steps or check the boundary conditions.";
+        throw NewtonDidNotConverge(s.str(), target);
+      }
+      dlam *= 0.5;
+    }
+
+    // the converged state, its reactions (the internal forces at the fixed dofs) and stresses
+    Result result() {
+      res.u = u;
+      res.loadFactor = ctrl ? L : scale;
+      res.reactions = Eigen::VectorXd::Zero(I.fext.size());
+      for (size_t d = 0; d < I.freeIndex.size(); ++d)
+        if (I.isConstrained[d]) res.reactions(d) = fintConverged(d);
+      I.stresses(res.u, true, res);
+      return res;
+    }
+  };
+
+  // Newton with load increments (ctrl null: load factor target * scale on the forces and prescribed
+  // displacements) or displacement control (ctrl: free-dof weights w, w . u stepped to target; the load
+  // factor is the extra unknown of a bordered system)
+  Result path(const NewtonOptions& opt, double scale, const Eigen::VectorXd* ctrl, double dTarget, double& factorSeconds) {
+    checkNewtonOptions(opt);
+    NewtonPath np(*this, opt, scale, ctrl, dTarget, factorSeconds);
+    while (!np.done()) np.increment();
+    return np.result();
   }
 };
 
@@ -819,153 +1076,17 @@ Solver::Solver(const Problem& prob) : impl_(std::make_unique<Impl>()) {
   I.setOrder(m.order);
   if (m.tets.empty()) throw TopologyError("The FE mesh has no tetrahedra.");
   if (m.tissue.size() != m.tets.size()) throw InputError("The FE mesh needs one tissue label per tetrahedron.");
-  const int n = m.numNodes();
-  for (int t = 0; t < m.numTets(); ++t) {
-    for (int a = 0; a < I.nen; ++a)
-      if (m.tets[t][a] < 0 || m.tets[t][a] >= n) throw TopologyError("Tetrahedron " + std::to_string(t) + " has an invalid node index.");
-    if (!(m.tetVolume(t) > 0))
-      throw TopologyError("Tetrahedron " + std::to_string(t) + " is inverted or flat (volume <= 0).");
-    // a TET10 whose mid-edge nodes lie far from its edges' midpoints can fold inside although its corners
-    // do not: its Jacobian must be positive at every quadrature point and at the centroid (where the
-    // stresses are taken), else its stiffness and stresses are meaningless (NaN stresses)
-    if (I.nen == 10) {
-      Eigen::Matrix<double, 10, 3> G;
-      bool ok = I.gradientsT<10>(t, I.centroidDN, 1.0, G) > 0;
-      for (std::size_t q = 0; q < I.quad.size() && ok; ++q) ok = I.gradientsT<10>(t, I.quadDN[q], 1.0, G) > 0;
-      if (!ok)
-        throw TopologyError("Tetrahedron " + std::to_string(t) +
-                         " (quadratic) folds inside: its mid-edge nodes are too far from its edges' midpoints (the "
-                         "Jacobian is not positive everywhere in it). Use straight-sided quadratic tets or refine there.");
-    }
-  }
-  for (const auto& kv : prob.materials) {
-    if (!(kv.second.E > 0) || !(kv.second.nu > -1 && kv.second.nu < 0.5))
-      throw InputError("Material of tissue " + std::to_string(kv.first) + ": need E > 0 and -1 < Poisson ratio < 0.5.");
-    I.Dby[kv.first] = elasticity(kv.second);
-  }
-  I.D.resize(m.numTets());
-  I.mat.resize(m.numTets());
-  for (int t = 0; t < m.numTets(); ++t) {
-    auto it = prob.materials.find(m.tissue[t]);
-    if (it == prob.materials.end())
-      throw InputError("No material for tissue label " + std::to_string(m.tissue[t]) + " (tetrahedron " + std::to_string(t) + ").");
-    I.mat[t] = &it->second;
-    I.D[t] = &I.Dby[m.tissue[t]];
-  }
-  // rebind material pointers to our copy
-  for (int t = 0; t < m.numTets(); ++t) I.mat[t] = &I.p.materials.at(m.tissue[t]);
-
-  if (prob.fixed.empty())
-    throw InputError("No fixed nodes: the stiffness matrix is singular (the model can move as a rigid body). "
-                     "Fix at least the nodes where the model is held (e.g. the costovertebral joints).");
-  I.isConstrained.assign(3 * n, 0);
-  I.prescribed.setZero(3 * n);
-  for (const auto& d : prob.fixed) {
-    if (d.node < 0 || d.node >= n || d.dof < 0 || d.dof > 2) throw InputError("Fixed node/dof out of range.");
-    I.isConstrained[3 * d.node + d.dof] = 1;
-    I.prescribed(3 * d.node + d.dof) = d.value;
-  }
-  I.fext.setZero(3 * n);
-  if (!prob.force.empty()) {
-    if (static_cast<int>(prob.force.size()) != n) throw InputError("Force vector size differs from the node count.");
-    for (int i = 0; i < n; ++i) I.fext.segment<3>(3 * i) = prob.force[i];
-  }
-  // node adjacency (compressed rows, sorted, with the node itself); nodes without tets have no row entries
-  std::vector<int> adjOuter(std::size_t(n) + 1, 0), adj;
-  {
-    for (const auto& e : m.tets)
-      for (int a = 0; a < I.nen; ++a) adjOuter[std::size_t(e[a]) + 1] += I.nen;
-    for (int i = 0; i < n; ++i) adjOuter[std::size_t(i) + 1] += adjOuter[std::size_t(i)];
-    adj.resize(std::size_t(adjOuter[std::size_t(n)]));
-    std::vector<int> fill(adjOuter.begin(), adjOuter.end() - 1);
-    for (const auto& e : m.tets)
-      for (int a = 0; a < I.nen; ++a)
-        for (int b = 0; b < I.nen; ++b) adj[std::size_t(fill[std::size_t(e[a])]++)] = e[b];
-    int k = 0;  // sort and deduplicate each row in place
-    for (int i = 0; i < n; ++i) {
-      const auto first = adj.begin() + adjOuter[std::size_t(i)], last = adj.begin() + adjOuter[std::size_t(i) + 1];
-      std::sort(first, last);
-      const int start = k;
-      for (auto it = first; it != last; ++it)
-        if (it == first || *it != *(it - 1)) adj[std::size_t(k++)] = *it;
-      adjOuter[std::size_t(i)] = start;
-    }
-    adjOuter[std::size_t(n)] = k;
-    adj.resize(std::size_t(k));
-  }
-  // the nodes with a free dof, compactly numbered (the ordering's graph)
-  std::vector<int> compact(std::size_t(n), -1), nodeOf;
-  for (int i = 0; i < n; ++i) {
-    if (adjOuter[std::size_t(i)] == adjOuter[std::size_t(i) + 1]) continue;  // used by no tet: no dofs
-    for (int d = 0; d < 3 && compact[std::size_t(i)] < 0; ++d)
-      if (!I.isConstrained[3 * std::size_t(i) + std::size_t(d)]) {
-        compact[std::size_t(i)] = static_cast<int>(nodeOf.size());
-        nodeOf.push_back(i);
-      }
-  }
-  if (nodeOf.empty()) throw InputError("Every degree of freedom is fixed: nothing to solve.");
-  // fill-reducing order of those nodes (see Cholmod::orderNodes); their free dofs are numbered in it,
-  // node by node, so CHOLMOD factorises K as it is (PECTUS_FE_ORDERING: node order, CHOLMOD orders the dofs)
-  std::vector<int> order;
-  if (I.orderByNodes) {
-    std::vector<int> gOuter(1, 0), gInner;
-    gInner.reserve(adj.size() / 2 + nodeOf.size());
-    for (int i : nodeOf) {
-      for (int k = adjOuter[std::size_t(i)]; k < adjOuter[std::size_t(i) + 1]; ++k) {
-        const int j = compact[std::size_t(adj[std::size_t(k)])];
-        if (j >= compact[std::size_t(i)]) gInner.push_back(j);
-      }
-      std::sort(gInner.begin() + gOuter.back(), gInner.end());
-      gOuter.push_back(static_cast<int>(gInner.size()));
-    }
-    const auto t0 = std::chrono::steady_clock::now();
-    order = I.chol.orderNodes(gOuter, gInner);
-    I.orderSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-    if (order.empty()) I.orderByNodes = false;  // CHOLMOD failed: it orders the dofs itself
-  }
-  if (order.empty())
-    for (std::size_t k = 0; k < nodeOf.size(); ++k) order.push_back(static_cast<int>(k));
-  std::vector<int> rank(std::size_t(n), std::numeric_limits<int>::max());  // position of a node in the order
-  I.freeIndex.assign(3 * std::size_t(n), -1);
-  for (std::size_t k = 0; k < order.size(); ++k) {
-    const int i = nodeOf[std::size_t(order[k])];
-    rank[std::size_t(i)] = static_cast<int>(k);
-    for (int d = 0; d < 3; ++d)
-      if (!I.isConstrained[3 * std::size_t(i) + std::size_t(d)]) I.freeIndex[3 * std::size_t(i) + std::size_t(d)] = I.nFree++;
-  }
-  // lower-triangular pattern of K: the column of a free dof holds the free dofs at or after it of the node's
-  // neighbours; with the neighbours sorted by rank the rows come out sorted
-  std::vector<int> outer(std::size_t(I.nFree) + 1, 0), inner, nbrs;
-  inner.reserve(static_cast<size_t>(I.nFree) * 20);
-  int col = 0;
-  for (int i : order) {
-    const int node = nodeOf[std::size_t(i)];
-    nbrs.assign(adj.begin() + adjOuter[std::size_t(node)], adj.begin() + adjOuter[std::size_t(node) + 1]);
-    std::sort(nbrs.begin(), nbrs.end(), [&](int x, int y) { return rank[std::size_t(x)] < rank[std::size_t(y)]; });
-    for (int d = 0; d < 3; ++d) {
-      const int fc = I.freeIndex[3 * std::size_t(node) + std::size_t(d)];
-      if (fc < 0) continue;
-      for (int j : nbrs)
-        for (int e = 0; e < 3; ++e) {
-          const int fr = I.freeIndex[3 * std::size_t(j) + std::size_t(e)];
-          if (fr >= fc) inner.push_back(fr);
-        }
-      outer[std::size_t(++col)] = static_cast<int>(inner.size());
-    }
-  }
-  std::vector<double> zeros(inner.size(), 0.0);
-  I.K = Eigen::Map<Eigen::SparseMatrix<double>>(I.nFree, I.nFree, static_cast<Eigen::Index>(inner.size()),
-                                                 outer.data(), inner.data(), zeros.data());
-  // the assembly visits the tets by their first node in that order (colorChunks)
-  std::vector<int> first(std::size_t(m.numTets()));
-  for (int t = 0; t < m.numTets(); ++t) {
-    int r = std::numeric_limits<int>::max();
-    for (int a = 0; a < 4; ++a) r = std::min(r, rank[std::size_t(m.tets[std::size_t(t)][a])]);
-    first[std::size_t(t)] = r;
-  }
-  I.tetOrder.resize(first.size());
-  for (std::size_t t = 0; t < first.size(); ++t) I.tetOrder[t] = static_cast<int>(t);
-  std::stable_sort(I.tetOrder.begin(), I.tetOrder.end(), [&](int x, int y) { return first[std::size_t(x)] < first[std::size_t(y)]; });
+  I.checkTets();
+  I.bindMaterials(prob);
+  I.setLoads(prob);
+  std::vector<int> adjOuter, adj;
+  I.nodeAdjacency(adjOuter, adj);
+  std::vector<int> compact, nodeOf;
+  I.freeNodes(adjOuter, compact, nodeOf);
+  const std::vector<int> order = I.orderFreeNodes(adjOuter, adj, compact, nodeOf);
+  const std::vector<int> rank = I.numberFreeDofs(order, nodeOf);
+  I.stiffnessPattern(order, nodeOf, adjOuter, adj, rank);
+  I.orderTets(rank);
 }
 
 Solver::~Solver() = default;
