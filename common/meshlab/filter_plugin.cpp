@@ -171,6 +171,16 @@ const DeclaredRange& FilterContext::declared(const QString& name, bool integer) 
 float FilterContext::floatIn(const QString& name) const { return checkedFloat(name, declared(name, false).range); }
 int FilterContext::intIn(const QString& name) const { return checkedInt(name, declared(name, true).range); }
 
+float FilterContext::floatCheckedByCore(const QString& name) const {
+  declared(name, false);
+  return par_.getFloat(name);
+}
+
+int FilterContext::intCheckedByCore(const QString& name) const {
+  declared(name, true);
+  return par_.getInt(name);
+}
+
 float FilterContext::checkedFloat(const QString& name, const ParamRange& r) const {
   const double v = par_.getFloat(name);
   if (!r.contains(v)) {

@@ -88,10 +88,11 @@ class FilterContext {
   // programming error (std::logic_error).
   float floatIn(const QString& name) const;
   int intIn(const QString& name) const;
-  float floatIn(const QString& name, double lo, double hi, bool loOpen = false, bool hiOpen = false) const {
-    return checkedFloat(name, ParamRange{lo, hi, loOpen, hiOpen});
-  }
-  int intIn(const QString& name, int lo, int hi) const { return checkedInt(name, ParamRange{double(lo), double(hi)}); }
+  /// A parameter declared with addFloat/addInt whose range the core checks itself, with the same range
+  /// constant and messages of its own (e.g. with ranges that depend on other parameters): its value,
+  /// unchecked here.
+  float floatCheckedByCore(const QString& name) const;
+  int intCheckedByCore(const QString& name) const;
   bool boolean(const QString& name) const { return par_.getBool(name); }
   int enumIn(const QString& name, int count) const;
   MeshModel& mesh(const QString& name) const;

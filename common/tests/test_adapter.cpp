@@ -151,6 +151,9 @@ TEST(Adapter, CheckedParametersNameTheParameter) {
   }
   EXPECT_THROW(ctx.intIn("accuracy"), std::logic_error);  // declared as a Float
   EXPECT_THROW(ctx.floatIn("undeclared"), std::logic_error);
+  EXPECT_FLOAT_EQ(ctx.floatCheckedByCore("accuracy"), -1.0f);  // the core checks it
+  EXPECT_EQ(ctx.intCheckedByCore("count"), 7);
+  EXPECT_THROW(ctx.floatCheckedByCore("undeclared"), std::logic_error);
   ctx.commit();
 }
 
