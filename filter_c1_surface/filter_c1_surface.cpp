@@ -10,6 +10,7 @@
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
+using pectus::ml::addInt;
 namespace c1 = pectus::c1;
 
 namespace {
@@ -92,9 +93,9 @@ FilterC1SurfacePlugin::FilterC1SurfacePlugin() {
 
 void FilterC1SurfacePlugin::initParameters(int id, const MeshDocument& md, RichParameterList& par) {
   if (id == FP_C1_REFINE) {
-    par.addParam(RichInt("subdivisions", 3, "Subdivisions k",
-                         "Every triangle is split into k&times;k triangles (k from 1 to 32); k = 1 keeps the mesh. "
-                         "The new vertices lie on the C1 patches."));
+    addInt(par, "subdivisions", 3, "Subdivisions k",
+           "Every triangle is split into k&times;k triangles; k = 1 keeps the mesh. "
+           "The new vertices lie on the C1 patches.", {1, 32});
     par.addParam(RichEnum("gradientMethod", 0, kGradient, "Gradient estimation", kGradientHelp));
     par.addParam(RichEnum("frame", 0, kFrame, "Surface type", kFrameHelp));
     par.addParam(RichBool("newLayer", true, "Result in a new layer",
@@ -121,7 +122,7 @@ void FilterC1SurfacePlugin::run(int id, FilterContext& ctx) {
 
 void FilterC1SurfacePlugin::runRefine(FilterContext& ctx) {
   MeshModel& mm = ctx.current();
-  const int k = ctx.intIn("subdivisions", 1, 32);
+  const int k = ctx.intIn("subdivisions");
   const c1::Options opt = options(ctx);
   const bool newLayer = ctx.boolean("newLayer");
   checkFaces(mm, "the current");

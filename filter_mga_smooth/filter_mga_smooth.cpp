@@ -12,8 +12,13 @@
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
+using pectus::ml::addFloat;
+using pectus::ml::addInt;
+namespace smooth = pectus::smooth;
 
 namespace {
+/// the micro-GA seed: any value of a non-negative Int
+constexpr pectus::ParamRange kSeedRange{0, 2147483647};
 /// Per-face quality (one value per face index) into `mm`, with MeshLab's red-to-blue ramp on [0, 1]
 /// so that colours compare across layers and before/after smoothing. Call after ctx.modify(mm).
 void writeFaceQuality(MeshModel& mm, const std::vector<double>& perFace, bool colorize) {
@@ -120,21 +125,22 @@ void FilterMgaSmoothPlugin::initParameters(int id, const MeshDocument&, RichPara
                           "mesh), else triangles (alpha). Triangles: every face is an element, faux edges "
                           "ignored. Quads: faux-edge pairs are quads (beta), lone triangles use alpha; refused if "
                           "the layer has no faux edge."));
-    par.addParam(RichInt("maxSweeps", mga ? 10 : 15, "Maximum sweeps",
-                         "Upper bound on the number of passes over all free nodes (thesis step 9)."));
-    par.addParam(RichFloat("tolerance", 1e-4f, "Convergence tolerance",
-                           "Stop when one sweep raises the mean element quality by less than this (>= 0)."));
+    addInt(par, "maxSweeps", mga ? 10 : 15, "Maximum sweeps",
+           "Upper bound on the number of passes over all free nodes (thesis step 9).", smooth::kMaxSweepsRange);
+    addFloat(par, "tolerance", 1e-4f, "Convergence tolerance",
+             "Stop when one sweep raises the mean element quality by less than this.", smooth::kToleranceRange);
     if (mga) {
-      par.addParam(RichFloat("accuracy", 1e-3f, "Accuracy of r1, r2",
-                             "Wanted accuracy of the design parameters r1, r2; sets the bits per parameter "
-                             "(eq. 1-1: 2^(nl-1) < interval/accuracy <= 2^nl). In (0, 0.5)."));
-      par.addParam(RichInt("generations", 20, "Generations per element",
-                           "Micro-GA generations per adjacent element (restarts included). More: slower, better."));
-      par.addParam(RichInt("restarts", 4, "Restarts per element",
-                           "Maximum micro-GA restarts (a new population around the kept best after nominal "
-                           "convergence) per adjacent element."));
-      par.addParam(RichInt("population", 5, "Population size",
-                           "Micro-GA population (the thesis uses 5, after Krishnakumar). At least 3."));
+      addFloat(par, "accuracy", 1e-3f, "Accuracy of r1, r2",
+               "Wanted accuracy of the design parameters r1, r2; sets the bits per parameter "
+               "(eq. 1-1: 2^(nl-1) < interval/accuracy <= 2^nl).", smooth::kAccuracyRange);
+      addInt(par, "generations", 20, "Generations per element",
+             "Micro-GA generations per adjacent element (restarts included). More: slower, better.",
+             smooth::kGenerationsRange);
+      addInt(par, "restarts", 4, "Restarts per element",
+             "Maximum micro-GA restarts (a new population around the kept best after nominal "
+             "convergence) per adjacent element.", smooth::kRestartsRange);
+      addInt(par, "population", 5, "Population size",
+             "Micro-GA population (the thesis uses 5, after Krishnakumar).", smooth::kPopulationRange);
       par.addParam(RichEnum("selection", 0, QStringList() << "Roulette wheel" << "Tournament", "Selection",
                             "Parent selection: roulette wheel (as in the thesis) or binary tournament."));
       par.addParam(RichEnum("elementSearch", 0,
@@ -150,18 +156,18 @@ void FilterMgaSmoothPlugin::initParameters(int id, const MeshDocument&, RichPara
                             "faster again, the same mean on smooth scans (bunny), lower on rough ones (femur). With "
                             "it, more sweeps of fewer generations (e.g. 6 x 8) beat fewer long ones."));
     } else {
-      par.addParam(RichInt("cgIterations", 10, "CG iterations per node",
-                           "Conjugate gradient iterations (each: a numerical gradient and a line search) per node "
-                           "and sweep. In [1, 10000]."));
+      addInt(par, "cgIterations", 10, "CG iterations per node",
+             "Conjugate gradient iterations (each: a numerical gradient and a line search) per node "
+             "and sweep.", smooth::kCgIterationsRange);
     }
-    par.addParam(RichFloat("worstGuard", float(pectus::smooth::kMinQualityGuard), "Worst-element guard",
-                           "A move is refused if the worst of the node's elements would drop below min(its current "
-                           "value, this), so the sum cannot buy a better mean with one very poor element. In [0, 1]; "
-                           "0 = the thesis' plain sum of qualities."));
-    par.addParam(RichFloat("minPassBelow", 0.0f, "Final worst-element pass below",
-                           "After the sweeps, up to three more sweeps over the nodes whose worst element is below "
-                           "this, maximising that worst element (up to this value, then the sum). In [0, 1]; 0 = off "
-                           "(the thesis' algorithm)."));
+    addFloat(par, "worstGuard", pectus::smooth::kMinQualityGuard, "Worst-element guard",
+             "A move is refused if the worst of the node's elements would drop below min(its current "
+             "value, this), so the sum cannot buy a better mean with one very poor element. "
+             "0 = the thesis' plain sum of qualities.", smooth::kQualityRange);
+    addFloat(par, "minPassBelow", 0.0f, "Final worst-element pass below",
+             "After the sweeps, up to three more sweeps over the nodes whose worst element is below "
+             "this, maximising that worst element (up to this value, then the sum); 0 = off "
+             "(the thesis' algorithm).", smooth::kQualityRange);
     par.addParam(RichEnum("featureDetection", 0, QStringList() << "Crease chains" << "Feature and singular angles",
                           "Feature detection",
                           "Which nodes stay fixed as features. Crease chains (for CAD parts and scans alike): the "
@@ -172,14 +178,14 @@ void FilterMgaSmoothPlugin::initParameters(int id, const MeshDocument&, RichPara
                           "stay free; where chains meet or end are the singular nodes. The two angles below are "
                           "not used. Feature and singular angles: every node on an edge bent more than the feature "
                           "angle, and every node whose normal cone is wider than the singular angle."));
-    par.addParam(RichFloat("featureAngle", 60.0f, "Feature angle (degrees)",
-                           "With 'Feature and singular angles': an edge whose dihedral angle (angle between the "
-                           "normals of its two faces) exceeds this is sharp, and every node on a sharp edge stays "
-                           "fixed. In (0, 180]; 180 disables it."));
-    par.addParam(RichFloat("singularAngle", 90.0f, "Singular angle (degrees)",
-                           "With 'Feature and singular angles': a node whose faces' normals spread by more than this "
-                           "(the largest angle between two face normals around the node) is a singular node of large "
-                           "curvature variation (a cone tip, a spike) and stays fixed. In (0, 180]; 180 disables it."));
+    addFloat(par, "featureAngle", 60.0f, "Feature angle (degrees)",
+             "With 'Feature and singular angles': an edge whose dihedral angle (angle between the "
+             "normals of its two faces) exceeds this is sharp, and every node on a sharp edge stays "
+             "fixed; 180 disables it.", smooth::kAngleRange);
+    addFloat(par, "singularAngle", 90.0f, "Singular angle (degrees)",
+             "With 'Feature and singular angles': a node whose faces' normals spread by more than this "
+             "(the largest angle between two face normals around the node) is a singular node of large "
+             "curvature variation (a cone tip, a spike) and stays fixed; 180 disables it.", smooth::kAngleRange);
     par.addParam(RichEnum("selectionMode", 0,
                           QStringList() << "None" << "Smooth only selected vertices" << "Keep selected vertices fixed",
                           "Vertex selection",
@@ -187,9 +193,9 @@ void FilterMgaSmoothPlugin::initParameters(int id, const MeshDocument&, RichPara
                           "fixed. Keep selected fixed: selected vertices stay fixed. Boundary, feature and singular "
                           "nodes are fixed in every mode."));
     if (mga)
-      par.addParam(RichInt("seed", 1, "Random seed",
-                           "Seed of the micro-GA; per-node seeds are derived from it, the vertex index and the "
-                           "sweep, so the same seed gives the same result with any number of threads."));
+      addInt(par, "seed", 1, "Random seed",
+             "Seed of the micro-GA; per-node seeds are derived from it, the vertex index and the "
+             "sweep, so the same seed gives the same result with any number of threads.", kSeedRange);
   }
 }
 
@@ -237,29 +243,29 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
   pectus::smooth::Options o;
   o.method = mga ? pectus::smooth::Method::MicroGA : pectus::smooth::Method::ConjugateGradient;
   const int type = ctx.enumIn("elementType", 3);
-  o.maxSweeps = ctx.intIn("maxSweeps", 1, 100000);
-  o.tolerance = ctx.floatIn("tolerance", 0, 1);
+  o.maxSweeps = ctx.intIn("maxSweeps");
+  o.tolerance = ctx.floatIn("tolerance");
   if (mga) {
-    o.accuracy = ctx.floatIn("accuracy", 0, 0.5, true, true);
-    o.generations = ctx.intIn("generations", 1, 100000);
-    o.restarts = ctx.intIn("restarts", 0, 100000);
-    o.population = ctx.intIn("population", 3, 1000);
+    o.accuracy = ctx.floatIn("accuracy");
+    o.generations = ctx.intIn("generations");
+    o.restarts = ctx.intIn("restarts");
+    o.population = ctx.intIn("population");
     o.selection = ctx.enumIn("selection", 2) == 1 ? pectus::mga::Selection::Tournament : pectus::mga::Selection::Roulette;
     const int search = ctx.enumIn("elementSearch", 3);
     o.elementSearch = search == 2 ? pectus::smooth::ElementSearch::GuidedLocal
                     : search == 1 ? pectus::smooth::ElementSearch::Guided : pectus::smooth::ElementSearch::Every;
     if (search == 1) what += ", guided element search";
     if (search == 2) what += ", guided local element search";
-    o.seed = std::uint64_t(std::uint32_t(ctx.intIn("seed", 0, 2147483647)));
+    o.seed = std::uint64_t(std::uint32_t(ctx.intIn("seed")));
   } else {
-    o.cgIterations = ctx.intIn("cgIterations", 1, 10000);
+    o.cgIterations = ctx.intIn("cgIterations");
   }
-  o.worstGuard = ctx.floatIn("worstGuard", 0, 1);
-  o.minPassBelow = ctx.floatIn("minPassBelow", 0, 1);
+  o.worstGuard = ctx.floatIn("worstGuard");
+  o.minPassBelow = ctx.floatIn("minPassBelow");
   o.features = ctx.enumIn("featureDetection", 2) == 1 ? pectus::smooth::FeatureDetection::Angles
                                                       : pectus::smooth::FeatureDetection::Creases;
-  o.featureAngleDeg = ctx.floatIn("featureAngle", 0, 180, true, false);
-  o.singularAngleDeg = ctx.floatIn("singularAngle", 0, 180, true, false);
+  o.featureAngleDeg = ctx.floatIn("featureAngle");
+  o.singularAngleDeg = ctx.floatIn("singularAngle");
   const int selMode = ctx.enumIn("selectionMode", 3);
 
   pectus::MeshRequirements req;

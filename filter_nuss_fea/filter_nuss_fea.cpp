@@ -17,6 +17,24 @@
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
+using pectus::ml::addFloat;
+using pectus::ml::addInt;
+using pectus::ParamRange;
+namespace rc = pectus::ribcage;
+
+namespace {
+// The rib cage's ranges that depend on other parameters (validate() checks them exactly): the declared
+// range is what the bounds allow for any chest, from the same constants.
+constexpr ParamRange kChestDepthEnvelope{rc::kChestDepthShare.lo * rc::kChestWidthRange.lo,
+                                         rc::kChestDepthShare.hi * rc::kChestWidthRange.hi};
+constexpr ParamRange kFunnelWidthEnvelope{rc::kFunnelMinSize, rc::kChestWidthRange.hi};
+constexpr ParamRange kFunnelHeightEnvelope{rc::kFunnelMinSize, rc::kFunnelHeightShare * rc::kSpineHeightRange.hi};
+constexpr ParamRange kFunnelCenterXEnvelope{-rc::kFunnelCenterXShare * rc::kChestWidthRange.hi,
+                                            rc::kFunnelCenterXShare * rc::kChestWidthRange.hi};
+/// the radii of the joints' fixed nodes and of the load patches (mm)
+constexpr ParamRange kPatchRadiusRange{0, 100, true, false};
+QString num(double v) { return QString::number(v); }
+}  // namespace
 
 FilterNussFeaPlugin::FilterNussFeaPlugin() {
   pectus::ml::FilterSpec s;
@@ -121,29 +139,35 @@ void FilterNussFeaPlugin::initCreateRibCage(RichParameterList& par) {
   par.addParam(RichEnum("sizeMode", 0, QStringList() << "From age" << "Explicit dimensions", "Size",
                         "From age: every dimension from the child's age. Explicit: chest width, depth and "
                         "spine height below (rib and sternum sections still follow the equivalent age)."));
-  par.addParam(RichFloat("age", float(d.age), "Age (years)", "5 to 17 years (thesis patients: 5-8)."));
-  par.addParam(RichFloat("chestWidth", 181.0f, "Chest inner width (mm)",
-                         "Explicit size: widest inner transverse diameter of the cage, 120-320 mm."));
-  par.addParam(RichFloat("chestDepth", 74.0f, "Chest depth (mm)",
-                         "Explicit size: sternum-to-vertebra distance without funnel at the jugular notch, "
-                         "0.25-0.7 x chest width."));
-  par.addParam(RichFloat("spineHeight", 172.0f, "Thoracic spine height (mm)", "Explicit size: T1-T12, 120-320 mm."));
-  par.addParam(RichInt("ribPairs", d.ribPairs, "Rib pairs", "10, 11 or 12 (ribs 11-12 are floating)."));
-  par.addParam(RichFloat("hallerIndex", float(d.hallerIndex), "Pectus (Haller) index",
-                         "Requested index: inner transverse diameter / smallest sternum-to-vertebra distance. "
-                         "Normal ~2.5, pectus excavatum > 3.25 (thesis patients 3.6-5.3). The valid range "
-                         "starts at the index of the same chest without funnel."));
-  par.addParam(RichFloat("funnelCenterX", float(d.funnelCenterX), "Funnel centre, lateral (mm)",
-                         "Lateral offset of the funnel centre (+ = patient's left), |x| <= 0.4 x funnel width."));
-  par.addParam(RichFloat("funnelCenterZ", float(d.funnelCenterZ), "Funnel centre, along sternum",
-                         "0 = jugular notch, 1 = xiphisternal junction (up to 1.2)."));
-  par.addParam(RichFloat("funnelWidth", float(d.funnelWidth), "Funnel width (mm)",
-                         "Transverse extent of the depression, 20 mm up to the chest's inner width."));
-  par.addParam(RichFloat("funnelHeight", float(d.funnelHeight), "Funnel height (mm)",
-                         "Vertical extent of the depression, 20 mm up to 0.8 x spine height."));
-  par.addParam(RichFloat("edgeLength", float(d.edgeLength), "Target edge length (mm)",
-                         "Resolution, 0.4-8 mm: 5-6 mm gives a few thousand faces (tests), 2 mm ~80k, "
-                         "1 mm ~300k."));
+  addFloat(par, "age", d.age, "Age (years)",
+           "The child's age (thesis patients: 5-8).", rc::kAgeRange);
+  addFloat(par, "chestWidth", 181.0f, "Chest inner width (mm)",
+           "Explicit size: widest inner transverse diameter of the cage.", rc::kChestWidthRange);
+  addFloat(par, "chestDepth", 74.0f, "Chest depth (mm)",
+           "Explicit size: sternum-to-vertebra distance without funnel at the jugular notch, "
+           + num(rc::kChestDepthShare.lo) + "-" + num(rc::kChestDepthShare.hi) + " x chest width.",
+           kChestDepthEnvelope);
+  addFloat(par, "spineHeight", 172.0f, "Thoracic spine height (mm)",
+           "Explicit size: T1-T12.", rc::kSpineHeightRange);
+  addInt(par, "ribPairs", d.ribPairs, "Rib pairs",
+         "Ribs 11 and 12 are floating.", rc::kRibPairsRange);
+  addFloat(par, "hallerIndex", d.hallerIndex, "Pectus (Haller) index",
+           "Requested index: inner transverse diameter / smallest sternum-to-vertebra distance. "
+           "Normal ~2.5, pectus excavatum > 3.25 (thesis patients 3.6-5.3). The lower end is "
+           "at least the index of the same chest without funnel.", rc::kHallerIndexRange);
+  addFloat(par, "funnelCenterX", d.funnelCenterX, "Funnel centre, lateral (mm)",
+           "Lateral offset of the funnel centre (+ = patient's left), |x| <= " + num(rc::kFunnelCenterXShare) + " x funnel width.",
+           kFunnelCenterXEnvelope);
+  addFloat(par, "funnelCenterZ", d.funnelCenterZ, "Funnel centre, along sternum",
+           "0 = jugular notch, 1 = xiphisternal junction.", rc::kFunnelCenterZRange);
+  addFloat(par, "funnelWidth", d.funnelWidth, "Funnel width (mm)",
+           "Transverse extent of the depression, up to the chest's inner width.", kFunnelWidthEnvelope);
+  addFloat(par, "funnelHeight", d.funnelHeight, "Funnel height (mm)",
+           "Vertical extent of the depression, up to " + num(rc::kFunnelHeightShare) + " x spine height.",
+           kFunnelHeightEnvelope);
+  addFloat(par, "edgeLength", d.edgeLength, "Target edge length (mm)",
+           "Resolution: 5-6 mm gives a few thousand faces (tests), 2 mm ~80k, "
+           "1 mm ~300k.", rc::kEdgeLengthRange);
   par.addParam(RichEnum("output", 0, QStringList() << "One labelled surface" << "One layer per tissue (as CT segmentation)",
                         "Output",
                         "One labelled surface: the smooth union of all tissues, tissue per face. One layer per tissue: "
@@ -155,19 +179,20 @@ void FilterNussFeaPlugin::initCreateRibCage(RichParameterList& par) {
 void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
   pectus::ribcage::RibCageParams p;
   p.fromAge = ctx.enumIn("sizeMode", 2) == 0;
-  const RichParameterList& par = ctx.params();
-  // ranges are checked (with the messages naming each parameter) by the core
-  p.age = par.getFloat("age");
-  p.chestWidth = par.getFloat("chestWidth");
-  p.chestDepth = par.getFloat("chestDepth");
-  p.spineHeight = par.getFloat("spineHeight");
-  p.ribPairs = par.getInt("ribPairs");
-  p.hallerIndex = par.getFloat("hallerIndex");
-  p.funnelCenterX = par.getFloat("funnelCenterX");
-  p.funnelCenterZ = par.getFloat("funnelCenterZ");
-  p.funnelWidth = par.getFloat("funnelWidth");
-  p.funnelHeight = par.getFloat("funnelHeight");
-  p.edgeLength = par.getFloat("edgeLength");
+  // validate() checks every one against the constants the declaration uses (and the ranges that depend on
+  // other parameters exactly), with messages that give the unit and the dependence; the size parameters
+  // of the other size mode are not used
+  p.age = ctx.floatCheckedByCore("age");
+  p.chestWidth = ctx.floatCheckedByCore("chestWidth");
+  p.chestDepth = ctx.floatCheckedByCore("chestDepth");
+  p.spineHeight = ctx.floatCheckedByCore("spineHeight");
+  p.ribPairs = ctx.intCheckedByCore("ribPairs");
+  p.hallerIndex = ctx.floatCheckedByCore("hallerIndex");
+  p.funnelCenterX = ctx.floatCheckedByCore("funnelCenterX");
+  p.funnelCenterZ = ctx.floatCheckedByCore("funnelCenterZ");
+  p.funnelWidth = ctx.floatCheckedByCore("funnelWidth");
+  p.funnelHeight = ctx.floatCheckedByCore("funnelHeight");
+  p.edgeLength = ctx.floatCheckedByCore("edgeLength");
   pectus::ribcage::validate(p);  // before any layer is added
 
   const bool perTissue = ctx.enumIn("output", 2) == 1;
@@ -253,14 +278,15 @@ void addLandmarkParam(const MeshDocument& md, RichParameterList& par) {
                         "By default the layer whose label ends in 'landmarks'."));
 }
 void addCalibrationParams(RichParameterList& par) {
-  par.addParam(RichFloat("targetElevation", 44.7f, "Target elevation (mm)",
-                         "Measured rise of the lower sternum end (CT before, X-ray after; thesis Table 6-1: 34.0-44.7 mm, "
-                         "patient 1: 44.7 mm). 0: from the model, the rise that brings the lower sternum end onto the chest "
-                         "line (the line between the most anterior rib or cartilage points right and left of it, at its "
-                         "level). A target beyond twice that depth is refused before any solve, with the reachable range."));
-  par.addParam(RichFloat("maxForce", 1000.0f, "Maximum force (N)",
-                         "Calibration gives up (with a message) if this force does not reach the target."));
-  par.addParam(RichFloat("tolerance", 0.1f, "Calibration tolerance (mm)", "|simulated - target elevation| allowed."));
+  addFloat(par, "targetElevation", 44.7f, "Target elevation (mm)",
+           "Measured rise of the lower sternum end (CT before, X-ray after; thesis Table 6-1: 34.0-44.7 mm, "
+           "patient 1: 44.7 mm). 0: from the model, the rise that brings the lower sternum end onto the chest "
+           "line (the line between the most anterior rib or cartilage points right and left of it, at its "
+           "level). A target beyond twice that depth is refused before any solve, with the reachable range.", {0, 300});
+  addFloat(par, "maxForce", 1000.0f, "Maximum force (N)",
+           "Calibration gives up (with a message) if this force does not reach the target.", {0, 1e6, true, false});
+  addFloat(par, "tolerance", 0.1f, "Calibration tolerance (mm)",
+           "|simulated - target elevation| allowed.", {0, 50, true, false});
   par.addParam(RichEnum("calibration", entryOf(kCalibrations, pectus::nuss::Options{}.calibration), calibrations(), "Calibration method",
                         "Force search: solves for trial forces until the elevation is within the tolerance (each a whole "
                         "load path in large displacement). Displacement control: one large-displacement solve that "
@@ -285,28 +311,34 @@ void addModelParams(RichParameterList& par) {
   par.addParam(RichEnum("order", 0, orders(), "Element",
                         "TET10: quadratic tetrahedra (accurate on thin ribs). TET4: linear, as the thesis' SOLID185; "
                         "stiffer (locking) on a coarse mesh, so the calibrated force is higher."));
-  par.addParam(RichFloat("tetQuality", 2.0f, "Tet quality (radius-edge ratio)",
-                         "TetGen -q bound, >= 1.2 (smaller: better tets, more of them); 0 = no refinement."));
-  par.addParam(RichFloat("maxTetVolume", 0.0f, "Max tet volume (mm^3)", "TetGen -a bound; 0 = no limit."));
-  par.addParam(RichFloat("boneModulus", float(d.eBone), "Young's modulus, bone (MPa)",
-                         "Ribs and sternum (thesis 11500 MPa)."));
-  par.addParam(RichFloat("cartilageModulus", float(d.eCartilage), "Young's modulus, cartilage (MPa)",
-                         "Costal cartilage. The thesis' 12.25 MPa is half of normal cartilage; published values: "
-                         "indentation 11.1-14.6 MPa, compression 32.9 +- 17.9 MPa. The calibrated force grows about in "
-                         "proportion to it."));
-  par.addParam(RichFloat("nuBone", 0.3f, "Poisson ratio, bone", "Ribs and sternum (cortical bone literature value 0.3)."));
-  par.addParam(RichFloat("nuCartilage", 0.4f, "Poisson ratio, cartilage",
-                         "Costal cartilage (hydrated, nearly incompressible tissue; literature 0.4-0.45)."));
+  addFloat(par, "tetQuality", 2.0f, "Tet quality (radius-edge ratio)",
+           "TetGen -q bound: 0 (no refinement) or at least " + num(pectus::fe::kMinRadiusEdgeRatio) + " (smaller: better tets, more of them).",
+           {0, 100});
+  addFloat(par, "maxTetVolume", 0.0f, "Max tet volume (mm^3)",
+           "TetGen -a bound; 0 = no limit.", {0, 1e9});
+  addFloat(par, "boneModulus", d.eBone, "Young's modulus, bone (MPa)",
+           "Ribs and sternum (thesis 11500 MPa).", pectus::nuss::kModulusRange);
+  addFloat(par, "cartilageModulus", d.eCartilage, "Young's modulus, cartilage (MPa)",
+           "Costal cartilage. The thesis' 12.25 MPa is half of normal cartilage; published values: "
+           "indentation 11.1-14.6 MPa, compression 32.9 +- 17.9 MPa. The calibrated force grows about in "
+           "proportion to it.", pectus::nuss::kModulusRange);
+  addFloat(par, "nuBone", 0.3f, "Poisson ratio, bone",
+           "Ribs and sternum (cortical bone literature value 0.3).", pectus::nuss::kPoissonRange);
+  addFloat(par, "nuCartilage", 0.4f, "Poisson ratio, cartilage",
+           "Costal cartilage (hydrated, nearly incompressible tissue; literature 0.4-0.45).",
+           pectus::nuss::kPoissonRange);
 }
 void addPatchParams(RichParameterList& par) {
-  par.addParam(RichFloat("jointRadius", 6.0f, "Joint radius (mm)",
-                         "Nodes within this distance of a costovertebral joint landmark are fixed (head and tubercle); a joint with "
-                         "fewer than 4 nodes of its rib that near (a coarse or smoothed mesh) is fixed at the 4 nodes of its rib nearest to it, and the Log says so."));
-  par.addParam(RichFloat("sternumLoadRadius", 8.0f, "Fe patch radius (mm)",
-                         "Fe is spread evenly over the sternum surface nodes within this distance of the lower sternum end."));
-  par.addParam(RichFloat("ribSupportRadius", 6.0f, "Fsr patch radius (mm)",
-                         "Each Fsr is spread over the rib's surface nodes within this distance of the rib point nearest "
-                         "to the bar exit."));
+  addFloat(par, "jointRadius", 6.0f, "Joint radius (mm)",
+           "Nodes within this distance of a costovertebral joint landmark are fixed (head and tubercle); a joint with "
+           "fewer than 4 nodes of its rib that near (a coarse or smoothed mesh) is fixed at the 4 nodes of its rib nearest to it, and the Log says so.",
+           kPatchRadiusRange);
+  addFloat(par, "sternumLoadRadius", 8.0f, "Fe patch radius (mm)",
+           "Fe is spread evenly over the sternum surface nodes within this distance of the lower sternum end.",
+           kPatchRadiusRange);
+  addFloat(par, "ribSupportRadius", 6.0f, "Fsr patch radius (mm)",
+           "Each Fsr is spread over the rib's surface nodes within this distance of the rib point nearest "
+           "to the bar exit.", kPatchRadiusRange);
 }
 
 std::vector<pectus::Landmark> readLandmarkParam(FilterContext& ctx) {
@@ -320,10 +352,10 @@ std::vector<pectus::Landmark> readLandmarkParam(FilterContext& ctx) {
   return lms;
 }
 void readCalibrationParams(FilterContext& ctx, pectus::nuss::Options& o, bool calibrate) {
-  o.targetElevation = calibrate ? ctx.floatIn("targetElevation", 0, 300) : 0.0;
+  o.targetElevation = calibrate ? ctx.floatIn("targetElevation") : 0.0;
   o.targetFromChestLine = calibrate && o.targetElevation == 0;
-  o.maxForce = ctx.floatIn("maxForce", 0, 1e6, true);
-  o.tolerance = ctx.floatIn("tolerance", 0, 50, true);
+  o.maxForce = ctx.floatIn("maxForce");
+  o.tolerance = ctx.floatIn("tolerance");
   o.calibration = kCalibrations[ctx.enumIn("calibration", 2)];
 }
 void readModelParams(FilterContext& ctx, pectus::nuss::Options& o) {
@@ -332,17 +364,17 @@ void readModelParams(FilterContext& ctx, pectus::nuss::Options& o) {
   o.newton.lineSearch = ctx.boolean("lineSearch");
   o.newton.adaptiveSteps = ctx.boolean("adaptiveSteps");
   o.mesh.order = ctx.enumIn("order", 2) == 0 ? 2 : 1;
-  o.mesh.radiusEdgeRatio = ctx.floatIn("tetQuality", 0, 100);  // (0, 1.2) is refused by the core (fe::validate)
-  o.mesh.maxVolume = ctx.floatIn("maxTetVolume", 0, 1e9);
-  o.eBone = ctx.floatIn("boneModulus", 0, 1e6, true);
-  o.eCartilage = ctx.floatIn("cartilageModulus", 0, 1e6, true);
-  o.nuBone = ctx.floatIn("nuBone", -1, 0.5, true, true);
-  o.nuCartilage = ctx.floatIn("nuCartilage", -1, 0.5, true, true);
+  o.mesh.radiusEdgeRatio = ctx.floatIn("tetQuality");  // (0, 1.2) is refused by the core (fe::validate)
+  o.mesh.maxVolume = ctx.floatIn("maxTetVolume");
+  o.eBone = ctx.floatIn("boneModulus");
+  o.eCartilage = ctx.floatIn("cartilageModulus");
+  o.nuBone = ctx.floatIn("nuBone");
+  o.nuCartilage = ctx.floatIn("nuCartilage");
 }
 void readPatchParams(FilterContext& ctx, pectus::nuss::Placement& pl) {
-  pl.jointRadius = ctx.floatIn("jointRadius", 0, 100, true);
-  pl.sternumLoadRadius = ctx.floatIn("sternumLoadRadius", 0, 100, true);
-  pl.ribSupportRadius = ctx.floatIn("ribSupportRadius", 0, 100, true);
+  pl.jointRadius = ctx.floatIn("jointRadius");
+  pl.sternumLoadRadius = ctx.floatIn("sternumLoadRadius");
+  pl.ribSupportRadius = ctx.floatIn("ribSupportRadius");
 }
 
 // the deformed surface of an analysis (nuss_output.h) as a new layer, coloured by the nodal field
@@ -372,13 +404,13 @@ void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList&
   par.addParam(RichEnum("mode", 0, modes(), "Force",
                         "Calibrate: find Fe so the sternum end rises by the target elevation (by the calibration method "
                         "below). Given: apply the elevating force below."));
-  par.addParam(RichFloat("force", 140.0f, "Elevating force Fe (N)",
-                         "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N."));
+  addFloat(par, "force", 140.0f, "Elevating force Fe (N)",
+           "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N.", {0, 1e5, true, false});
   addCalibrationParams(par);
   addModelParams(par);
-  par.addParam(RichInt("intercostalSpace", 4, "Bar intercostal space",
-                       "The bar exits between ribs s and s+1 (landmarks 600+10*side+s, the generator writes s = 4, 5; "
-                       "other spaces: between the ribs' lateral-most points)."));
+  addInt(par, "intercostalSpace", 4, "Bar intercostal space",
+         "The bar exits between ribs s and s+1 (landmarks 600+10*side+s, the generator writes s = 4, 5; "
+         "other spaces: between the ribs' lateral-most points).", {1, 11});
   addPatchParams(par);
   par.addParam(RichBool("usePoints", false, "Place Fe and the exits at the points below",
                         "Instead of the landmarks 500 and 600+10*side+s (the joints still come from the landmarks)."));
@@ -389,7 +421,8 @@ void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList&
                         "Per-vertex quality and colour of the result layer: nodal von Mises stress (MPa) or equivalent "
                         "strain (ANSYS EPEL,EQV form; Green-Lagrange for large displacement)."));
   par.addParam(RichEnum("pathSide", 0, sides(), "Strain path: side", "Side of the rib for the strain-path CSV (Fig. 6-18)."));
-  par.addParam(RichInt("pathRib", 5, "Strain path: rib", "Rib (and its costal cartilage) for the strain-path CSV, 1-10."));
+  addInt(par, "pathRib", 5, "Strain path: rib",
+         "Rib (and its costal cartilage) for the strain-path CSV.", {1, 10});
   par.addParam(RichSaveFile("resultBase", "", ".vtu", "Result files (base name)",
                             "If set: BASE.vtu, BASE.inp, BASE_force_displacement.csv/.png, BASE_rib_strain.csv. "
                             "Empty: no files."));
@@ -402,10 +435,10 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
 
   nuss::Options o;
   const bool calibrate = ctx.enumIn("mode", 2) == 0;
-  o.force = ctx.floatIn("force", 0, 1e5, true);
+  o.force = ctx.floatIn("force");
   readCalibrationParams(ctx, o, calibrate);
   readModelParams(ctx, o);
-  o.place.intercostalSpace = ctx.intIn("intercostalSpace", 1, 11);
+  o.place.intercostalSpace = ctx.intIn("intercostalSpace");
   readPatchParams(ctx, o.place);
   if (ctx.boolean("usePoints")) {
     const RichParameterList& par = ctx.params();
@@ -415,7 +448,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   }
   const bool stressField = ctx.enumIn("field", 2) == 0;
   const int pathSide = ctx.enumIn("pathSide", 2) + 1;
-  const int pathRib = ctx.intIn("pathRib", 1, 10);
+  const int pathRib = ctx.intIn("pathRib");
   const std::string base = nuss::resultBase(ctx.params().getSaveFileName("resultBase").trimmed().toStdString());
   o.progress = [&](int pc, const std::string& w) { ctx.progress(pc, w.c_str()); };
 
@@ -507,11 +540,12 @@ void FilterNussFeaPlugin::initBarPlanner(const MeshDocument& md, RichParameterLi
                           "between ribs s and s+1."));
   par.addParam(RichEnum("bars", 0, barSets(), "Bars",
                         "One bar per level, two bars per level, or both (one row each)."));
-  par.addParam(RichInt("secondOffset", -1, "Second bar: offset (spaces)",
-                       "The second bar goes into space s + offset: -1 = the space above the first bar, -2 = two above. "
-                       "Not 0. The first bar's load stays at the lower sternum end, so the second bar goes above it."));
-  par.addParam(RichFloat("secondShare", 0.5f, "Second bar: share of the force",
-                         "Part of the total elevating force carried by the second bar, in (0, 1); the first bar carries the rest."));
+  addInt(par, "secondOffset", -1, "Second bar: offset (spaces)",
+         "The second bar goes into space s + offset: -1 = the space above the first bar, -2 = two above. "
+         "Not 0. The first bar's load stays at the lower sternum end, so the second bar goes above it.", {-10, 10});
+  addFloat(par, "secondShare", 0.5f, "Second bar: share of the force",
+           "Part of the total elevating force carried by the second bar; the first bar carries the rest.",
+           pectus::nuss::kSecondShareRange);
   addCalibrationParams(par);
   addModelParams(par);
   addPatchParams(par);
@@ -531,8 +565,8 @@ void FilterNussFeaPlugin::runBarPlanner(FilterContext& ctx) {
   const int bars = ctx.enumIn("bars", 3);
   o.oneBar = bars != 2;
   o.twoBars = bars != 1;
-  o.secondOffset = ctx.intIn("secondOffset", -10, 10);
-  o.secondShare = ctx.floatIn("secondShare", 0, 1, true, true);
+  o.secondOffset = ctx.intIn("secondOffset");
+  o.secondShare = ctx.floatIn("secondShare");
   readCalibrationParams(ctx, o.analysis, true);
   readModelParams(ctx, o.analysis);
   readPatchParams(ctx, o.analysis.place);

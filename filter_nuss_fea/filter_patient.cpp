@@ -14,6 +14,15 @@
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
+using pectus::ml::addFloat;
+using pectus::ml::addInt;
+
+namespace {
+/// the target edge length of the prepared cage (mm): 0 keeps every face, else at least kMinEdgeLength
+constexpr pectus::ParamRange kEdgeLengthRange{0, 10};
+constexpr double kMinEdgeLength = 0.5;
+std::string num(double v) { return QString::number(v).toStdString(); }
+}  // namespace
 
 void FilterNussFeaPlugin::addPatientFilters() {
   pectus::ml::FilterSpec c;
@@ -98,19 +107,20 @@ void FilterNussFeaPlugin::initPreparePatient(RichParameterList& par) {
                         "Axes of the input layers. Automatic: anterior from the bone's centre to the sternum, the long axis "
                         "along the sternum (snapped to the file's axes within 30 degrees), superior from the rib numbers or "
                         "the ribs' slope, the patient's left from the right-handed scanner frame (or from the names)."));
-  par.addParam(RichFloat("minVolume", float(d.minVolume), "Fragment volume (mm^3)",
-                         "Connected pieces smaller than this are fragments and are dropped, 0-100000 mm^3 (a child's rib "
-                         "holds 2000-10000 mm^3)."));
-  par.addParam(RichFloat("alpha", float(d.alpha), "Wrap detail, alpha (mm)",
-                         "Alpha wrapping (of the costal cartilages, and of structures that stay open, non-manifold or "
-                         "self-intersecting after removing duplicate faces and closing holes): the smallest gap kept "
-                         "open, 0.2-20 mm (smaller: closer to the input, slower)."));
-  par.addParam(RichFloat("offset", float(d.offset), "Wrap offset (mm)",
-                         "Distance of the wrap from the input, 0.01-5 mm (it adds about offset x area to the volume; the "
-                         "wrapped cartilages overlap the ribs and sternum they join by this much)."));
-  par.addParam(RichFloat("edgeLength", float(d.edgeLength), "Target edge length (mm)",
-                         "The joined surface is decimated to this edge length, 0.5-10 mm; 0 keeps every face. The FE analysis's "
-                         "time and memory grow with the cube of 1/edge: 4 mm suits it, 2 mm shows the anatomy finer."));
+  addFloat(par, "minVolume", d.minVolume, "Fragment volume (mm^3)",
+           "Connected pieces smaller than this are fragments and are dropped (a child's rib "
+           "holds 2000-10000 mm^3).", {0, 100000});
+  addFloat(par, "alpha", d.alpha, "Wrap detail, alpha (mm)",
+           "Alpha wrapping (of the costal cartilages, and of structures that stay open, non-manifold or "
+           "self-intersecting after removing duplicate faces and closing holes): the smallest gap kept "
+           "open (smaller: closer to the input, slower).", {0.2, 20});
+  addFloat(par, "offset", d.offset, "Wrap offset (mm)",
+           "Distance of the wrap from the input (it adds about offset x area to the volume; the "
+           "wrapped cartilages overlap the ribs and sternum they join by this much).", {0.01, 5});
+  addFloat(par, "edgeLength", d.edgeLength, "Target edge length (mm)",
+           "The joined surface is decimated to this edge length; 0 keeps every face, else " + QString::number(kMinEdgeLength) + " mm at least. The FE analysis's "
+           "time and memory grow with the cube of 1/edge: 4 mm suits it, 2 mm shows the anatomy finer.",
+           kEdgeLengthRange);
   par.addParam(RichBool("wrapAll", d.wrapAll, "Wrap every structure",
                         "Wrap the clean structures too (by default only the ones that need it are wrapped)."));
   par.addParam(RichEnum("spine", int(d.spine),
@@ -129,12 +139,13 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
   pectus::patient::PrepareOptions o;
   o.units = pectus::patient::Units(ctx.enumIn("units", 4));
   o.frame = pectus::patient::FrameMode(ctx.enumIn("frame", 4));
-  o.minVolume = ctx.floatIn("minVolume", 0, 100000);
-  o.alpha = ctx.floatIn("alpha", 0.2, 20);
-  o.offset = ctx.floatIn("offset", 0.01, 5);
-  o.edgeLength = ctx.floatIn("edgeLength", 0, 10);
-  if (o.edgeLength > 0 && o.edgeLength < 0.5)
-    throw pectus::InputError("parameter 'edgeLength' (Target edge length) must be 0 or 0.5-10 mm, got " + fmt(o.edgeLength));
+  o.minVolume = ctx.floatIn("minVolume");
+  o.alpha = ctx.floatIn("alpha");
+  o.offset = ctx.floatIn("offset");
+  o.edgeLength = ctx.floatIn("edgeLength");
+  if (o.edgeLength > 0 && o.edgeLength < kMinEdgeLength)
+    throw pectus::InputError("parameter 'edgeLength' (Target edge length) must be 0 or " + num(kMinEdgeLength) + "-" +
+                             num(kEdgeLengthRange.hi) + " mm, got " + fmt(o.edgeLength));
   o.wrapAll = ctx.boolean("wrapAll");
   o.spine = pectus::patient::SpineMode(ctx.enumIn("spine", 2));
   const std::string pp = ctx.string("pickedPoints").trimmed().toStdString();
@@ -206,15 +217,15 @@ void FilterNussFeaPlugin::initImportCt(RichParameterList& par) {
                           "'value,name'), a JSON object {\"1\": \"rib_left_1\"}, or the path of a file with such "
                           "lines (3D Slicer colour tables work). Empty: a table beside the file (NAME.txt/.csv/.json "
                           "or NAME_labels.*, for NAME.nii.gz). Not used for mesh files and one-structure masks."));
-  par.addParam(RichInt("minVoxels", 1, "Minimum voxels",
-                       "NIfTI only: a label or mask with fewer voxels is skipped (listed in the Log), 0 to 1,000,000,000. "
-                       "1 keeps every label present."));
+  addInt(par, "minVoxels", 1, "Minimum voxels",
+         "NIfTI only: a label or mask with fewer voxels is skipped (listed in the Log). "
+         "1 keeps every label present.", pectus::patient::kMinVoxelsRange);
 }
 
 void FilterNussFeaPlugin::runImportCt(FilterContext& ctx) {
   pectus::patient::ImportOptions opt;
   opt.labelTable = ctx.string("labelTable").toStdString();
-  opt.minVoxels = ctx.intIn("minVoxels", 0, 1000000000);
+  opt.minVoxels = ctx.intIn("minVoxels");
   const std::string path = ctx.string("path").trimmed().toStdString();
   const auto t0 = std::chrono::steady_clock::now();
   pectus::patient::ImportReport report;

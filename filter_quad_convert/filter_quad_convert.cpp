@@ -17,6 +17,13 @@
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
+using pectus::ml::addFloat;
+using pectus::ml::addInt;
+
+namespace {
+/// the dihedral limit of pairing and of the structure operators (degrees)
+constexpr pectus::ParamRange kDihedralRange{0, 180, true, false};
+}  // namespace
 namespace pq = pectus::quad;
 
 namespace {
@@ -129,24 +136,25 @@ void FilterQuadConvertPlugin::initParameters(int id, const MeshDocument&, RichPa
     par.addParam(RichEnum("leftovers", 0, QStringList() << "All quads" << "Quad-dominant", "Leftover triangles",
                           "All quads: if triangles remain unpaired, split every element once into quads (new nodes on "
                           "the C1 surface). Quad-dominant: keep the unpaired triangles."));
-    par.addParam(RichFloat("minQuality", 0.0f, "Minimum quad quality (beta)",
-                           "Pairs whose quad has beta at or below this are never merged. In [0, 1); 0 only "
-                           "excludes non-convex and inverted quads."));
-    par.addParam(RichFloat("maxDihedral", 60.0f, "Dihedral limit (degrees)",
-                           "Pairs whose two triangles' normals differ by more than this angle are never merged "
-                           "(keeps creases). In (0, 180]."));
+    addFloat(par, "minQuality", 0.0f, "Minimum quad quality (beta)",
+             "Pairs whose quad has beta at or below this are never merged; 0 only "
+             "excludes non-convex and inverted quads.", {0, 1, false, true});
+    addFloat(par, "maxDihedral", 60.0f, "Dihedral limit (degrees)",
+             "Pairs whose two triangles' normals differ by more than this angle are never merged "
+             "(keeps creases).", kDihedralRange);
   }
   if (id == FP_STRUCTURE) {
     par.addParam(RichBool("edgeSwap", true, "Edge swapping", "Swap edges toward the ideal valence (6 / 4)."));
     par.addParam(RichBool("nodeElimination", true, "Node elimination",
                           "Remove interior nodes with too few elements (triangles: 3; quads: 2, 3)."));
     par.addParam(RichBool("edgeDividing", true, "Edge dividing", "Divide long interior edges at their middle."));
-    par.addParam(RichFloat("longEdgeFactor", 1.6f, "Long edge factor",
-                           "An interior edge longer than this times the mean edge length is divided. > 1."));
-    par.addParam(RichFloat("maxDihedral", 30.0f, "Dihedral limit (degrees)",
-                           "Operators act only where the normals of the elements involved differ by at most this "
-                           "angle, so the surface is kept. In (0, 180]."));
-    par.addParam(RichInt("maxPasses", 10, "Maximum passes", "Upper bound on the passes over the mesh."));
+    addFloat(par, "longEdgeFactor", 1.6f, "Long edge factor",
+             "An interior edge longer than this times the mean edge length is divided.", {1, 100, true, false});
+    addFloat(par, "maxDihedral", 30.0f, "Dihedral limit (degrees)",
+             "Operators act only where the normals of the elements involved differ by at most this "
+             "angle, so the surface is kept.", kDihedralRange);
+    addInt(par, "maxPasses", 10, "Maximum passes",
+           "Upper bound on the passes over the mesh.", {1, 1000});
   }
   if (id == FP_SAVE_POLY) {
     par.addParam(RichSaveFile("fileName", "quads.obj", ".obj", "File", "The file to write (its folder must exist)."));
@@ -170,8 +178,8 @@ void FilterQuadConvertPlugin::runConvert(FilterContext& ctx) {
   pq::ConvertOptions o;
   o.pairing = ctx.enumIn("pairing", 2) == 1 ? pq::Pairing::Greedy : pq::Pairing::Optimal;
   o.leftovers = ctx.enumIn("leftovers", 2) == 1 ? pq::Leftovers::QuadDominant : pq::Leftovers::AllQuads;
-  o.minQuality = ctx.floatIn("minQuality", 0, 1, false, true);
-  o.maxDihedralDeg = ctx.floatIn("maxDihedral", 0, 180, true, false);
+  o.minQuality = ctx.floatIn("minQuality");
+  o.maxDihedralDeg = ctx.floatIn("maxDihedral");
   requireManifold(mm);
   if (pectus::hasFauxEdges(mm.cm))
     throw pectus::InputError("layer '" + layer + "' already holds quads or polygons (faux edges); "
@@ -200,9 +208,9 @@ void FilterQuadConvertPlugin::runStructure(FilterContext& ctx) {
   o.swap = ctx.boolean("edgeSwap");
   o.eliminate = ctx.boolean("nodeElimination");
   o.divide = ctx.boolean("edgeDividing");
-  o.longEdgeFactor = ctx.floatIn("longEdgeFactor", 1, 100, true, false);
-  o.maxDihedralDeg = ctx.floatIn("maxDihedral", 0, 180, true, false);
-  o.maxPasses = ctx.intIn("maxPasses", 1, 1000);
+  o.longEdgeFactor = ctx.floatIn("longEdgeFactor");
+  o.maxDihedralDeg = ctx.floatIn("maxDihedral");
+  o.maxPasses = ctx.intIn("maxPasses");
   requireManifold(mm);
   const bool quads = pectus::hasFauxEdges(mm.cm);
   const auto pm = pq::fromCMesh(mm.cm, quads);

@@ -14,6 +14,13 @@ using pectus::ml::FilterContext;
 using pectus::ml::fmt;
 using pectus::ml::defaultLandmarkLayer;
 namespace vol = pectus::vol;
+using pectus::ml::addFloat;
+using pectus::ml::addInt;
+
+namespace {
+/// a height along z (mm): the given range of the volume filters, the search range of the pectus index
+constexpr pectus::ParamRange kHeightRange{-1e6, 1e6};
+}  // namespace
 
 namespace {
 
@@ -48,10 +55,10 @@ void addCommon(const MeshDocument& md, RichParameterList& par, int lowerDefault)
   par.addParam(RichEnum("lowerLimit", lowerDefault, lowerLimits(), "Lower limit landmark",
                         "Lower end of the range when it comes from landmarks: 700 the dome of the diaphragm (thesis "
                         "6.3.1, slice method) or 500 the lower end of the sternum (thesis 6.3.2, envelope)."));
-  par.addParam(RichFloat("zLow", 0.0f, "Lower height (mm)",
-                         "Lower end of the range in mm along z, used with 'Range from' = Given heights."));
-  par.addParam(RichFloat("zHigh", 200.0f, "Upper height (mm)",
-                         "Upper end of the range in mm along z, used with 'Range from' = Given heights."));
+  addFloat(par, "zLow", 0.0f, "Lower height (mm)",
+           "Lower end of the range in mm along z, used with 'Range from' = Given heights.", kHeightRange);
+  addFloat(par, "zHigh", 200.0f, "Upper height (mm)",
+           "Upper end of the range in mm along z, used with 'Range from' = Given heights.", kHeightRange);
 }
 
 struct Common {
@@ -103,8 +110,8 @@ Common readCommon(FilterContext& ctx, bool needRange = true) {
     }
   }
   if (src == 1) {
-    c.range.zLo = ctx.floatIn("zLow", -1e6, 1e6);
-    c.range.zHi = ctx.floatIn("zHigh", -1e6, 1e6);
+    c.range.zLo = ctx.floatIn("zLow");
+    c.range.zHi = ctx.floatIn("zHigh");
   }
   if (needRange) vol::requireRange(c.range, "z = " + fmt(c.range.zLo, 2) + " .. " + fmt(c.range.zHi, 2) + " mm");
   return c;
@@ -195,32 +202,33 @@ FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
 void FilterThoracicVolumePlugin::initParameters(int id, const MeshDocument& md, RichParameterList& par) {
   if (id == FP_SLICE_VOLUME) {
     addCommon(md, par, 0);
-    par.addParam(RichFloat("spacing", 2.6f, "Spacing (mm)",
-                           "Distance between the cutting planes along z (thesis: about 2.6 mm); adjusted down so that "
-                           "a whole number of layers fills the range."));
-    par.addParam(RichInt("resolution", 512, "Resolution (pixels)",
-                         "Pixels along the longer side of the slices' common raster (thesis: 512 x 512)."));
-    par.addParam(RichInt("rays", 720, "Rays",
-                         "Rays from the slice centroid that find the inner boundary of the sections; more rays follow "
-                         "the wall more closely."));
+    addFloat(par, "spacing", 2.6f, "Spacing (mm)",
+             "Distance between the cutting planes along z (thesis: about 2.6 mm); adjusted down so that "
+             "a whole number of layers fills the range.", {0.01, 1000});
+    addInt(par, "resolution", 512, "Resolution (pixels)",
+           "Pixels along the longer side of the slices' common raster (thesis: 512 x 512).", vol::kResolutionRange);
+    addInt(par, "rays", 720, "Rays",
+           "Rays from the slice centroid that find the inner boundary of the sections; more rays follow "
+           "the wall more closely.", vol::kRaysRange);
   } else if (id == FP_ENVELOPE_VOLUME) {
     addCommon(md, par, 1);
-    par.addParam(RichInt("patchesLong", 16, "Patches along z (n)",
-                         "Number of Ferguson patches along the long axis (thesis 16). Denser patches fall into the "
-                         "intercostal gaps (thesis Fig. 6-11)."));
-    par.addParam(RichInt("patchesAround", 16, "Patches around (m)", "Number of Ferguson patches around the axis (thesis 16)."));
-    par.addParam(RichFloat("initialStep", 0.0f, "Initial step (mm)",
-                           "First radial step of the key points; 0 = a quarter of the start radius. Halved after "
-                           "every key point is held."));
-    par.addParam(RichFloat("minStep", 0.05f, "Final step (mm)",
-                           "The convergence stops once the halved step falls below this value: the envelope's "
-                           "accuracy in mm."));
+    addInt(par, "patchesLong", 16, "Patches along z (n)",
+           "Number of Ferguson patches along the long axis (thesis 16). Denser patches fall into the "
+           "intercostal gaps (thesis Fig. 6-11).", vol::kPatchesLongRange);
+    addInt(par, "patchesAround", 16, "Patches around (m)",
+           "Number of Ferguson patches around the axis (thesis 16).", vol::kPatchesAroundRange);
+    addFloat(par, "initialStep", 0.0f, "Initial step (mm)",
+             "First radial step of the key points; 0 = a quarter of the start radius. Halved after "
+             "every key point is held.", {0, 1e5});
+    addFloat(par, "minStep", 0.05f, "Final step (mm)",
+             "The convergence stops once the halved step falls below this value: the envelope's "
+             "accuracy in mm.", {1e-4, 1e4});
     par.addParam(RichBool("smoothing", true, "Smoothing (eq. 6-1)",
                           "Raise each key point to the mean radius of its neighbours along z when that is larger, "
                           "so that the envelope does not fall into the intercostal gaps."));
-    par.addParam(RichInt("tessellation", 8, "Output samples per patch",
-                         "Samples per patch side of the envelope layer (the volume is integrated on the patches "
-                         "themselves)."));
+    addInt(par, "tessellation", 8, "Output samples per patch",
+           "Samples per patch side of the envelope layer (the volume is integrated on the patches "
+           "themselves).", {1, 64});
   } else if (id == FP_PECTUS_INDEX) {
     par.addParam(RichBool("compare", false, "Compare with a before layer",
                           "Also measure the 'Before layer' and log both indices side by side."));
@@ -234,9 +242,12 @@ void FilterThoracicVolumePlugin::initParameters(int id, const MeshDocument& md, 
     par.addParam(pectus::ml::richMesh("landmarkLayer", defaultLandmarkLayer(md), md, "Landmark layer",
                           "Point layer of landmarks (vertex quality = code); by default the layer whose label ends in "
                           "'landmarks'."));
-    par.addParam(RichFloat("zLow", 0.0f, "Lower height (mm)", "Automatic level: lower end of the search along z."));
-    par.addParam(RichFloat("zHigh", 200.0f, "Upper height (mm)", "Automatic level: upper end of the search along z."));
-    par.addParam(RichInt("rays", 720, "Rays", "Rays from the slice centroid that find the inner boundary."));
+    addFloat(par, "zLow", 0.0f, "Lower height (mm)",
+             "Automatic level: lower end of the search along z.", kHeightRange);
+    addFloat(par, "zHigh", 200.0f, "Upper height (mm)",
+             "Automatic level: upper end of the search along z.", kHeightRange);
+    addInt(par, "rays", 720, "Rays",
+           "Rays from the slice centroid that find the inner boundary.", vol::kRaysRange);
   }
 }
 
@@ -263,9 +274,9 @@ void requireEnclosure(const vol::SliceResult& r, const std::string& layer, const
 
 void FilterThoracicVolumePlugin::runSlice(FilterContext& ctx) {
   vol::SliceParams p;
-  p.spacing = ctx.floatIn("spacing", 0.01, 1000);
-  p.resolution = ctx.intIn("resolution", 16, 20000);
-  p.rays = ctx.intIn("rays", 16, 100000);
+  p.spacing = ctx.floatIn("spacing");
+  p.resolution = ctx.intIn("resolution");
+  p.rays = ctx.intIn("rays");
   Common c = readCommon(ctx);
   auto measure = [&](const vol::Soup& s, MeshModel& mm, int p0, int p1) {
     const auto t0 = std::chrono::steady_clock::now();
@@ -290,12 +301,12 @@ void FilterThoracicVolumePlugin::runSlice(FilterContext& ctx) {
 
 void FilterThoracicVolumePlugin::runEnvelope(FilterContext& ctx) {
   vol::EnvelopeParams p;
-  p.nLong = ctx.intIn("patchesLong", 1, 200);
-  p.mAround = ctx.intIn("patchesAround", 3, 200);
-  p.initialStep = ctx.floatIn("initialStep", 0, 1e5);
-  p.minStep = ctx.floatIn("minStep", 1e-4, 1e4);
+  p.nLong = ctx.intIn("patchesLong");
+  p.mAround = ctx.intIn("patchesAround");
+  p.initialStep = ctx.floatIn("initialStep");
+  p.minStep = ctx.floatIn("minStep");
   p.smoothing = ctx.boolean("smoothing");
-  p.tessellation = ctx.intIn("tessellation", 1, 64);
+  p.tessellation = ctx.intIn("tessellation");
   Common c = readCommon(ctx);
   if (auto e = pectus::findLandmark(c.landmarks, pectus::kSternumLowerEnd)) p.sternumEnd = *e;
   struct Out {
@@ -359,7 +370,7 @@ void FilterThoracicVolumePlugin::runIndex(FilterContext& ctx) {
     vol::requireComparablePair(beforeSoup, soup, lab(*before), lab(cur));
   }
   vol::IndexInputs in;
-  in.rays = ctx.intIn("rays", 16, 100000);
+  in.rays = ctx.intIn("rays");
   const int src = ctx.enumIn("levelSource", 2);
   if (src == 0) {
     MeshModel& lm = ctx.mesh("landmarkLayer");
@@ -372,7 +383,7 @@ void FilterThoracicVolumePlugin::runIndex(FilterContext& ctx) {
     in.midlineX = deep->x();
     if (auto v = pectus::findLandmark(lms, pectus::kVertebraAtDeepest)) in.spineY = v->y();
   } else {
-    in.searchRange = {ctx.floatIn("zLow", -1e6, 1e6), ctx.floatIn("zHigh", -1e6, 1e6)};
+    in.searchRange = {ctx.floatIn("zLow"), ctx.floatIn("zHigh")};
   }
   auto measure = [&](const vol::Soup& s, MeshModel& mm) {
     const auto r = vol::pectusIndex(s, in);

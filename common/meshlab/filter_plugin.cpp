@@ -1,5 +1,6 @@
 #include "filter_plugin.h"
 
+#include <QVariant>
 #include <vcg/complex/append.h>
 
 #include <cmath>
@@ -81,8 +82,9 @@ struct FilterContext::Snapshot {
 };
 
 FilterContext::FilterContext(MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb,
-                             std::function<void(const std::string&)> logger, QString filterName)
-    : md_(md), par_(par), cb_(cb), logger_(std::move(logger)), filterName_(std::move(filterName)),
+                             std::function<void(const std::string&)> logger, QString filterName,
+                             const DeclaredRanges* ranges)
+    : md_(md), par_(par), cb_(cb), logger_(std::move(logger)), filterName_(std::move(filterName)), ranges_(ranges),
       previousCurrent_(md.mm()) {}
 
 FilterContext::~FilterContext() {
@@ -159,23 +161,40 @@ namespace {
 std::string q(const QString& s) { return s.toStdString(); }
 }  // namespace
 
-float FilterContext::floatIn(const QString& name, double lo, double hi, bool loOpen, bool hiOpen) const {
+const DeclaredRange& FilterContext::declared(const QString& name, bool integer) const {
+  const auto it = ranges_ ? ranges_->find(name) : DeclaredRanges::const_iterator();
+  if (ranges_ == nullptr || it == ranges_->end() || it->second.integer != integer)
+    throw std::logic_error("parameter '" + q(name) + "' has no range declared with " + (integer ? "addInt" : "addFloat"));
+  return it->second;
+}
+
+float FilterContext::floatIn(const QString& name) const { return checkedFloat(name, declared(name, false).range); }
+int FilterContext::intIn(const QString& name) const { return checkedInt(name, declared(name, true).range); }
+
+float FilterContext::floatCheckedByCore(const QString& name) const {
+  declared(name, false);
+  return par_.getFloat(name);
+}
+
+int FilterContext::intCheckedByCore(const QString& name) const {
+  declared(name, true);
+  return par_.getInt(name);
+}
+
+float FilterContext::checkedFloat(const QString& name, const ParamRange& r) const {
   const double v = par_.getFloat(name);
-  const bool ok = std::isfinite(v) && (loOpen ? v > lo : v >= lo) && (hiOpen ? v < hi : v <= hi);
-  if (!ok) {
+  if (!r.contains(v)) {
     std::ostringstream s;
-    s << "parameter '" << q(name) << "' must be in " << (loOpen ? "(" : "[") << lo << ", " << hi
-      << (hiOpen ? ")" : "]") << ", got " << v;
+    s << "parameter '" << q(name) << "' must be in " << r.text() << ", got " << v;
     throw InputError(s.str());
   }
   return float(v);
 }
 
-int FilterContext::intIn(const QString& name, int lo, int hi) const {
+int FilterContext::checkedInt(const QString& name, const ParamRange& r) const {
   const int v = par_.getInt(name);
-  if (v < lo || v > hi)
-    throw InputError("parameter '" + q(name) + "' must be an integer in [" + std::to_string(lo) + ", " +
-                     std::to_string(hi) + "], got " + std::to_string(v));
+  if (!r.contains(v))
+    throw InputError("parameter '" + q(name) + "' must be an integer in " + r.text(true) + ", got " + std::to_string(v));
   return v;
 }
 
@@ -191,6 +210,36 @@ MeshModel& FilterContext::mesh(const QString& name) const {
   MeshModel* m = meshParam(par_, md_, name);
   if (m == nullptr) throw InputError("parameter '" + q(name) + "' does not name an existing layer");
   return *m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// declared parameters
+
+namespace {
+// the ranges of the filter whose parameters are being declared (FilterPluginBase::declare), else nullptr
+thread_local DeclaredRanges* tDeclaring = nullptr;
+
+void record(const QString& name, const ParamRange& range, bool integer) {
+  if (!(range.lo <= range.hi)) throw std::logic_error("parameter '" + q(name) + "': empty range " + range.text(integer));
+  if (tDeclaring != nullptr) (*tDeclaring)[name] = DeclaredRange{range, integer};
+}
+}  // namespace
+
+QString tooltipWithRange(const QString& tooltip, const ParamRange& range, bool integer) {
+  const QString t = tooltip.trimmed();
+  return t + (t.isEmpty() ? "" : " ") + "Range: " + QString::fromStdString(range.text(integer)) + ".";
+}
+
+void addFloat(RichParameterList& par, const QString& name, double def, const QString& label, const QString& tooltip,
+              const ParamRange& range) {
+  record(name, range, false);
+  par.addParam(RichFloat(name, float(def), label, tooltipWithRange(tooltip, range, false)));
+}
+
+void addInt(RichParameterList& par, const QString& name, int def, const QString& label, const QString& tooltip,
+            const ParamRange& range) {
+  record(name, range, true);
+  par.addParam(RichInt(name, def, label, tooltipWithRange(tooltip, range, true)));
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -211,6 +260,22 @@ const FilterSpec& FilterPluginBase::spec(int id) const {
     if (s.id == id) return s;
   static const FilterSpec none;
   return none;
+}
+
+void FilterPluginBase::declare(int id, const MeshDocument& md, RichParameterList& par) {
+  DeclaredRanges ranges;
+  struct Restore {
+    DeclaredRanges* previous;
+    ~Restore() { tDeclaring = previous; }
+  } restore{tDeclaring};
+  tDeclaring = &ranges;
+  initParameters(id, md, par);
+  QVariantMap published;
+  for (const auto& [name, d] : ranges)
+    published[name] = QVariantList{d.range.lo, d.range.hi, d.range.loOpen, d.range.hiOpen, d.integer};
+  for (std::size_t i = 0; i < specs_.size(); ++i)
+    if (specs_[i].id == id) (*std::next(actionList.begin(), long(i)))->setProperty(kRangesProperty, published);
+  ranges_[id] = std::move(ranges);
 }
 
 QString FilterPluginBase::filterName(int id) const { return spec(id).name; }
@@ -239,8 +304,12 @@ std::string FilterPluginBase::runFilter(int id, MeshDocument& md, const RichPara
 #endif
   std::string failure;
   {
-    FilterContext ctx(md, par, cb, logger, name);
+    FilterContext ctx(md, par, cb, logger, name, &ranges_[id]);
     try {
+      if (ranges_[id].empty()) {  // the host may run a script without asking for the parameters first
+        RichParameterList declared;
+        declare(id, md, declared);
+      }
       if (spec(id).needsCurrentMesh) ctx.current();
       run(id, ctx);
       ctx.commit();
@@ -274,7 +343,7 @@ QString FilterPluginBase::pythonFilterName(int id) const { return pythonName(id)
 RichParameterList FilterPluginBase::initParameterList(const QAction* a, const MeshDocument& md) {
   RichParameterList par;
   try {
-    initParameters(ID(a), md, par);
+    declare(ID(a), md, par);
   } catch (const std::exception& e) {
     log(GLLogStream::WARNING, (filterName(ID(a)) + ": " + e.what()).toStdString());
   }
@@ -297,7 +366,7 @@ void FilterPluginBase::initParameterSet(QAction* a, MeshModel&, RichParameterLis
 
 void FilterPluginBase::initParameterSet(QAction* a, MeshDocument& md, RichParameterList& par) {
   try {
-    initParameters(ID(a), md, par);
+    declare(ID(a), md, par);
   } catch (const std::exception& e) {
     Log(GLLogStream::WARNING, (filterName(ID(a)) + ": " + e.what()).toUtf8().constData());
   }

@@ -5,7 +5,9 @@
 //    filter" on its own, hence the log line), and in 2021.05 and later it throws MLException, the one
 //    exception MeshLab's GUI, pymeshlab and pectus-mlrun report as a filter failure;
 //  - progress goes through MeshLab's callback;
-//  - parameters are read through checked accessors that name the parameter and its valid range.
+//  - a numeric parameter is declared once, with its valid range (addFloat, addInt): the tool-tip ends with
+//    that range, and run() reads the value through a checked accessor that enforces the same range and
+//    names the parameter and the range when the value lies outside.
 // A plugin derives from FilterPluginBase (and QObject), declares PECTUS_FILTER_PLUGIN_METADATA after
 // Q_OBJECT, registers FilterSpecs in its constructor, and implements initParameters() and run().
 // The two MeshLab APIs differ only here and in ml_compat.h.
@@ -13,11 +15,35 @@
 #include "ml_compat.h"
 
 #include <functional>
+#include <map>
 #include <memory>
 #include <string>
 #include <vector>
 
+#include "pectus/param_range.h"
+
 namespace pectus::ml {
+
+using pectus::ParamRange;
+
+/// A numeric parameter's declared range; integer: declared with addInt
+struct DeclaredRange {
+  ParamRange range;
+  bool integer = false;
+};
+/// the declared ranges of one filter, by parameter name
+using DeclaredRanges = std::map<QString, DeclaredRange>;
+
+/// Declares a Float parameter whose valid values are `range`: the tool-tip shown to users is `tooltip`
+/// followed by "Range: <range>.", and the range is recorded for FilterContext::floatIn(name) (while the
+/// plugin base collects the declaration of a filter, i.e. inside initParameters).
+void addFloat(RichParameterList& par, const QString& name, double def, const QString& label, const QString& tooltip,
+              const ParamRange& range);
+/// The same for an Int parameter, read with FilterContext::intIn(name).
+void addInt(RichParameterList& par, const QString& name, int def, const QString& label, const QString& tooltip,
+            const ParamRange& range);
+/// the tool-tip addFloat/addInt declare: `tooltip` and then the range
+QString tooltipWithRange(const QString& tooltip, const ParamRange& range, bool integer);
 
 struct FilterSpec {
   int id = 0;
@@ -35,8 +61,10 @@ struct FilterSpec {
 
 class FilterContext {
  public:
+  /// ranges: the filter's declared ranges (FilterPluginBase passes them), read by floatIn and intIn
   FilterContext(MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb,
-                std::function<void(const std::string&)> logger, QString filterName);
+                std::function<void(const std::string&)> logger, QString filterName,
+                const DeclaredRanges* ranges = nullptr);
   ~FilterContext();
 
   MeshDocument& doc() { return md_; }
@@ -55,9 +83,16 @@ class FilterContext {
   /// A new layer, removed again if the filter fails.
   MeshModel& addLayer(const QString& label, bool setCurrent = true);
 
-  // Checked parameters: throw InputError("parameter 'X' (...) must be ..., got ...")
-  float floatIn(const QString& name, double lo, double hi, bool loOpen = false, bool hiOpen = false) const;
-  int intIn(const QString& name, int lo, int hi) const;
+  // Checked parameters, in the range declared with addFloat/addInt: a value outside throws
+  // InputError("parameter 'X' must be in [lo, hi], got v"); a parameter declared without a range is a
+  // programming error (std::logic_error).
+  float floatIn(const QString& name) const;
+  int intIn(const QString& name) const;
+  /// A parameter declared with addFloat/addInt whose range the core checks itself, with the same range
+  /// constant and messages of its own (e.g. with ranges that depend on other parameters): its value,
+  /// unchecked here.
+  float floatCheckedByCore(const QString& name) const;
+  int intCheckedByCore(const QString& name) const;
   bool boolean(const QString& name) const { return par_.getBool(name); }
   int enumIn(const QString& name, int count) const;
   MeshModel& mesh(const QString& name) const;
@@ -73,6 +108,10 @@ class FilterContext {
   vcg::CallBackPos* cb_;
   std::function<void(const std::string&)> logger_;
   QString filterName_;
+  const DeclaredRanges* ranges_;
+  const DeclaredRange& declared(const QString& name, bool integer) const;
+  float checkedFloat(const QString& name, const ParamRange& r) const;
+  int checkedInt(const QString& name, const ParamRange& r) const;
   std::vector<std::unique_ptr<Snapshot>> snapshots_;
   std::vector<MeshModel*> added_;
   MeshModel* previousCurrent_ = nullptr;
@@ -104,6 +143,10 @@ class FilterPluginBase : public HostFilter {
 #endif
   /// the pymeshlab name of a filter (also on 2020.09, for the docs and tests)
   QString pythonName(int id) const;
+  /// Name of the QAction property that holds a filter's declared ranges once its parameters were declared:
+  /// a QVariantMap from parameter name to the list {lo, hi, loOpen, hiOpen, integer} (for tools that load
+  /// the plugin, such as pectus_layer_check --params).
+  static constexpr const char* kRangesProperty = "pectusParameterRanges";
 
  protected:
   /// call from the derived constructor with `this` (MeshLab finds the plugin as the action's parent)
@@ -114,6 +157,9 @@ class FilterPluginBase : public HostFilter {
 
  private:
   std::vector<FilterSpec> specs_;
+  std::map<int, DeclaredRanges> ranges_;
+  /// initParameters(id, ...) with the ranges its addFloat/addInt calls declare recorded for filter id
+  void declare(int id, const MeshDocument& md, RichParameterList& par);
   /// the outcome of a run: empty on success, else the message (already logged)
   std::string runFilter(int id, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb);
 };

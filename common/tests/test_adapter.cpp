@@ -29,7 +29,8 @@ class FakePlugin : public QObject, public pectus::ml::FilterPluginBase {
   }
 #endif
   void initParameters(int, const MeshDocument&, RichParameterList& par) override {
-    par.addParam(RichFloat("x", 1.0f, "x", "x"));
+    pectus::ml::addFloat(par, "x", 1.0, "x", "A length (mm).", {0, 10, true, false});
+    pectus::ml::addInt(par, "n", 3, "n", "", {1, 5});
   }
   void run(int id, pectus::ml::FilterContext& ctx) override {
     if (id == FP_CRASH) throw std::runtime_error("boom");
@@ -133,14 +134,58 @@ TEST(Adapter, CheckedParametersNameTheParameter) {
   md.addNewMesh("", "a");
   RichParameterList par;
   par.addParam(RichFloat("accuracy", -1.0f, "Accuracy", ""));
-  pectus::ml::FilterContext ctx(md, par, nullptr, nullptr, "t");
+  par.addParam(RichInt("count", 7, "Count", ""));
+  const pectus::ml::DeclaredRanges ranges{{"accuracy", {{0, 1, true, false}, false}}, {"count", {{1, 5}, true}}};
+  pectus::ml::FilterContext ctx(md, par, nullptr, nullptr, "t", &ranges);
   try {
-    ctx.floatIn("accuracy", 0, 1, true);
+    ctx.floatIn("accuracy");
     FAIL() << "no throw";
   } catch (const pectus::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("'accuracy' must be in (0, 1], got -1"), std::string::npos) << e.what();
   }
+  try {
+    ctx.intIn("count");
+    FAIL() << "no throw";
+  } catch (const pectus::InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("'count' must be an integer in [1, 5], got 7"), std::string::npos) << e.what();
+  }
+  EXPECT_THROW(ctx.intIn("accuracy"), std::logic_error);  // declared as a Float
+  EXPECT_THROW(ctx.floatIn("undeclared"), std::logic_error);
+  EXPECT_FLOAT_EQ(ctx.floatCheckedByCore("accuracy"), -1.0f);  // the core checks it
+  EXPECT_EQ(ctx.intCheckedByCore("count"), 7);
+  EXPECT_THROW(ctx.floatCheckedByCore("undeclared"), std::logic_error);
   ctx.commit();
+}
+
+// One declaration gives the tool-tip's range and the range run() checks, also when the host runs the
+// filter without asking for its parameters first (a script).
+TEST(Adapter, DeclaredRangeIsTheToolTipAndTheCheck) {
+  MeshDocument md;
+  md.addNewMesh("", "a");
+  {
+    FakePlugin p;
+    RichParameterList par = params(p, 1, md);
+    EXPECT_EQ(par.getParameterByName("x").toolTip(), QString("A length (mm). Range: (0, 10]."));
+    EXPECT_EQ(par.getParameterByName("n").toolTip(), QString("Range: [1, 5]."));
+    const QVariantList x = action(p, 1)->property(pectus::ml::FilterPluginBase::kRangesProperty).toMap()["x"].toList();
+    ASSERT_EQ(x.size(), 5);
+    EXPECT_EQ(x[0].toDouble(), 0.0);
+    EXPECT_EQ(x[1].toDouble(), 10.0);
+    EXPECT_TRUE(x[2].toBool());
+    EXPECT_FALSE(x[3].toBool());
+  }
+  FakePlugin p;
+  float seen = 0;
+  p.body = [&](pectus::ml::FilterContext& ctx) { seen = ctx.floatIn("x") + float(ctx.intIn("n")); };
+  RichParameterList ok;
+  ok.addParam(RichFloat("x", 10.0f, "x", ""));
+  ok.addParam(RichInt("n", 1, "n", ""));
+  EXPECT_TRUE(apply(p, 1, md, ok).isEmpty());
+  EXPECT_FLOAT_EQ(seen, 11.0f);
+  RichParameterList bad;
+  bad.addParam(RichFloat("x", 0.0f, "x", ""));
+  bad.addParam(RichInt("n", 1, "n", ""));
+  EXPECT_NE(apply(p, 1, md, bad).indexOf("parameter 'x' must be in (0, 10], got 0"), -1);
 }
 
 TEST(Adapter, NoCurrentLayerIsAMessage) {
@@ -149,5 +194,6 @@ TEST(Adapter, NoCurrentLayerIsAMessage) {
   p.body = [](pectus::ml::FilterContext&) {};
   RichParameterList par;
   par.addParam(RichFloat("x", 1.0f, "x", "x"));
+  par.addParam(RichInt("n", 3, "n", "n"));
   EXPECT_NE(apply(p, 1, md, par).indexOf("no current layer"), -1);
 }

@@ -568,23 +568,27 @@ void searchGradient(NodeSearch& ns, int iterations) {
 
 // thesis step 1, the parameters: throws InputError naming the first one out of its range
 void validateOptions(const Options& opt) {
-  if (opt.population < 3) throw InputError("population must be at least 3, got " + std::to_string(opt.population));
-  if (!(opt.accuracy > 0) || !(opt.accuracy < 0.5))
-    throw InputError("accuracy must be in (0, 0.5), got " + std::to_string(opt.accuracy));
-  if (opt.maxSweeps < 1) throw InputError("maximum sweeps must be at least 1");
-  if (opt.generations < 1) throw InputError("generations per element must be at least 1");
-  if (opt.restarts < 0) throw InputError("restarts must not be negative");
-  if (!(opt.tolerance >= 0)) throw InputError("tolerance must not be negative");
-  if (!(opt.featureAngleDeg > 0 && opt.featureAngleDeg <= 180))
-    throw InputError("feature angle must be in (0, 180] degrees");
-  if (!(opt.worstGuard >= 0 && opt.worstGuard <= 1)) throw InputError("worst-element guard must be in [0, 1]");
-  if (!(opt.minPassBelow >= 0 && opt.minPassBelow <= 1))
-    throw InputError("final worst-element pass threshold must be in [0, 1]");
+  if (opt.population < kPopulationRange.lo)
+    throw InputError("population must be at least " + std::to_string(int(kPopulationRange.lo)) + ", got " + std::to_string(opt.population));
+  if (!kAccuracyRange.contains(opt.accuracy))
+    throw InputError("accuracy must be in " + kAccuracyRange.text() + ", got " + std::to_string(opt.accuracy));
+  if (opt.maxSweeps < kMaxSweepsRange.lo)
+    throw InputError("maximum sweeps must be at least " + std::to_string(int(kMaxSweepsRange.lo)));
+  if (opt.generations < kGenerationsRange.lo)
+    throw InputError("generations per element must be at least " + std::to_string(int(kGenerationsRange.lo)));
+  if (opt.restarts < kRestartsRange.lo) throw InputError("restarts must not be negative");
+  if (!(opt.tolerance >= kToleranceRange.lo)) throw InputError("tolerance must not be negative");
+  if (!kAngleRange.contains(opt.featureAngleDeg))
+    throw InputError("feature angle must be in " + kAngleRange.text() + " degrees");
+  if (!kQualityRange.contains(opt.worstGuard)) throw InputError("worst-element guard must be in " + kQualityRange.text());
+  if (!kQualityRange.contains(opt.minPassBelow))
+    throw InputError("final worst-element pass threshold must be in " + kQualityRange.text());
   if (opt.minPassSweeps < 0) throw InputError("final worst-element pass sweeps must not be negative");
-  if (!(opt.singularAngleDeg > 0 && opt.singularAngleDeg <= 180))
-    throw InputError("singular angle must be in (0, 180] degrees");
-  if (opt.method == Method::ConjugateGradient && (opt.cgIterations < 1 || opt.cgIterations > 10000))
-    throw InputError("conjugate gradient iterations must be in [1, 10000], got " + std::to_string(opt.cgIterations));
+  if (!kAngleRange.contains(opt.singularAngleDeg))
+    throw InputError("singular angle must be in " + kAngleRange.text() + " degrees");
+  if (opt.method == Method::ConjugateGradient && !kCgIterationsRange.contains(opt.cgIterations))
+    throw InputError("conjugate gradient iterations must be in " + kCgIterationsRange.text(true) + ", got " +
+                     std::to_string(opt.cgIterations));
 }
 
 // the mesh the sweeps move: tm's compact nodes (toM: node -> m.vert index) and em's elements on them

@@ -57,11 +57,26 @@
 #include "mga.h"
 #include "pectus/cmesh.h"
 #include "pectus/elements.h"
+#include "pectus/param_range.h"
 #include "pectus/quality.h"
 
 namespace pectus::smooth {
 
 constexpr double kMinQualityGuard = 0.35;  ///< default guard (bench/mga_smooth.py: 0.5 costs mean, 0.3 min)
+
+// Valid ranges of the Options validateOptions checks (the integer counts and the tolerance only at their
+// lower end); the filters declare their parameters with the same constants.
+inline constexpr ParamRange kMaxSweepsRange{1, 100000};
+inline constexpr ParamRange kToleranceRange{0, 1};
+inline constexpr ParamRange kAccuracyRange{0, 0.5, true, true};
+inline constexpr ParamRange kGenerationsRange{1, 100000};
+inline constexpr ParamRange kRestartsRange{0, 100000};
+inline constexpr ParamRange kPopulationRange{3, 1000};
+inline constexpr ParamRange kCgIterationsRange{1, 10000};
+/// worstGuard and minPassBelow: element qualities
+inline constexpr ParamRange kQualityRange{0, 1};
+/// featureAngleDeg and singularAngleDeg (degrees)
+inline constexpr ParamRange kAngleRange{0, 180, true, false};
 
 /// MicroGA: which elements around a node the micro-GA searches
 enum class ElementSearch {

@@ -343,7 +343,8 @@ void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const
   // by the height difference of the two bars' exits (centre of the sternum's section at that height)
   if (pl.secondSpace == pl.intercostalSpace)
     throw InputError("The second bar must go into another intercostal space than the first (both in " + std::to_string(pl.secondSpace) + ").");
-  if (!(pl.secondShare > 0 && pl.secondShare < 1)) throw InputError("The second bar's share of the force must lie in (0, 1).");
+  if (!kSecondShareRange.contains(pl.secondShare))
+    throw InputError("The second bar's share of the force must lie in " + kSecondShareRange.text() + ".");
   const auto exits2 = barSupports(pl.secondSpace, " second");
   const double z2 = sp.z() + 0.5 * (exits2[0].z() + exits2[1].z() - exits1[0].z() - exits1[1].z());
   Vector3d c2 = Vector3d::Zero();
@@ -579,10 +580,10 @@ Target resolveTarget(const CageSurface& cage, const std::vector<Landmark>& lms, 
 
 void validate(const Options& opt) {
   fe::validate(opt.mesh);
-  if (!(opt.nuBone > -1 && opt.nuBone < 0.5) || !(opt.nuCartilage > -1 && opt.nuCartilage < 0.5))
-    throw InputError("Poisson's ratios must lie in (-1, 0.5).");
-  if (!(opt.eBone > 0 && std::isfinite(opt.eBone)) || !(opt.eCartilage > 0 && std::isfinite(opt.eCartilage)))
-    throw InputError("Young's moduli must be positive (MPa): bone about 11500, costal cartilage 11-50.");
+  if (!kPoissonRange.contains(opt.nuBone) || !kPoissonRange.contains(opt.nuCartilage))
+    throw InputError("Poisson's ratios must lie in " + kPoissonRange.text() + ".");
+  if (!kModulusRange.contains(opt.eBone) || !kModulusRange.contains(opt.eCartilage))
+    throw InputError("Young's moduli must lie in " + kModulusRange.text() + " MPa: bone about 11500, costal cartilage 11-50.");
   if (opt.targetElevation <= 0 && !(opt.force > 0)) throw InputError("The elevating force must be positive (N).");
   if (!(opt.curveStep > 0)) throw InputError("The force-displacement curve step must be positive (N).");
   if (!(opt.maxForce > 0) || !(opt.tolerance > 0)) throw InputError("The maximum force and the calibration tolerance must be positive.");

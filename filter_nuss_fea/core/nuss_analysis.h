@@ -29,8 +29,14 @@
 #include "pectus/fe/solver.h"
 #include "pectus/fe/tetgen_mesher.h"
 #include "pectus/labels.h"
+#include "pectus/param_range.h"
 
 namespace pectus::nuss {
+
+// Valid ranges validate() and the bar placement check; the filters declare their parameters with them.
+inline constexpr ParamRange kPoissonRange{-1, 0.5, true, true};  ///< Poisson's ratio of every tissue
+inline constexpr ParamRange kModulusRange{0, 1e6, true, false};  ///< Young's modulus of every tissue (MPa)
+inline constexpr ParamRange kSecondShareRange{0, 1, true, true}; ///< the second bar's share of the force
 
 /// The cage surface as the FE core wants it: live vertices compacted, micro-edges welded, labels per
 /// face. m.vert[i] is FE node nodeOfVertex[i] (-1: deleted, or referenced by no face), so results map

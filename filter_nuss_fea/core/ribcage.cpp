@@ -117,34 +117,37 @@ double transverse(const CageModel& m, const CageField& f, double* xin = nullptr)
 Dimensions validate(const RibCageParams& p) {
   Dimensions d{};
   if (p.fromAge) {
-    if (!(p.age >= 5 && p.age <= 17)) bad("age", "in [5, 17] years", p.age);
+    if (!kAgeRange.contains(p.age)) bad("age", "in " + kAgeRange.text() + " years", p.age);
     d = fromAge(p.age);
   } else {
-    if (!(p.chestWidth >= 120 && p.chestWidth <= 320)) bad("chestWidth", "in [120, 320] mm", p.chestWidth);
-    if (!(p.chestDepth >= 0.25 * p.chestWidth && p.chestDepth <= 0.7 * p.chestWidth))
-      bad("chestDepth", "in [" + num(0.25 * p.chestWidth) + ", " + num(0.7 * p.chestWidth) + "] mm (0.25-0.7 x chestWidth)",
-          p.chestDepth);
-    if (!(p.spineHeight >= 120 && p.spineHeight <= 320)) bad("spineHeight", "in [120, 320] mm", p.spineHeight);
-    const double ageEq = std::clamp(5 + (p.chestWidth - 165) / 8, 5.0, 17.0);
+    if (!kChestWidthRange.contains(p.chestWidth)) bad("chestWidth", "in " + kChestWidthRange.text() + " mm", p.chestWidth);
+    const ParamRange depth{kChestDepthShare.lo * p.chestWidth, kChestDepthShare.hi * p.chestWidth};
+    if (!depth.contains(p.chestDepth))
+      bad("chestDepth", "in [" + num(depth.lo) + ", " + num(depth.hi) + "] mm (" + num(kChestDepthShare.lo) + "-" +
+          num(kChestDepthShare.hi) + " x chestWidth)", p.chestDepth);
+    if (!kSpineHeightRange.contains(p.spineHeight)) bad("spineHeight", "in " + kSpineHeightRange.text() + " mm", p.spineHeight);
+    const double ageEq = std::clamp(5 + (p.chestWidth - 165) / 8, kAgeRange.lo, kAgeRange.hi);
     d = fromAge(ageEq);
     d.chestWidth = p.chestWidth;
     d.chestDepth = p.chestDepth;
     d.spineHeight = p.spineHeight;
   }
-  if (!(p.ribPairs >= 10 && p.ribPairs <= 12)) bad("ribPairs", "in [10, 12]", p.ribPairs);
-  if (!(p.hallerIndex >= 1 && p.hallerIndex <= 12)) bad("hallerIndex", "in [1, 12] (normal ~2.5, pectus excavatum > 3.25)", p.hallerIndex);
-  if (!(p.edgeLength >= 0.4 && p.edgeLength <= 8)) bad("edgeLength", "in [0.4, 8] mm", p.edgeLength);
+  if (!kRibPairsRange.contains(p.ribPairs)) bad("ribPairs", "in " + kRibPairsRange.text(true), p.ribPairs);
+  if (!kHallerIndexRange.contains(p.hallerIndex))
+    bad("hallerIndex", "in " + kHallerIndexRange.text() + " (normal ~2.5, pectus excavatum > 3.25)", p.hallerIndex);
+  if (!kEdgeLengthRange.contains(p.edgeLength)) bad("edgeLength", "in " + kEdgeLengthRange.text() + " mm", p.edgeLength);
   if (!(p.blend <= 10)) bad("blend", "in [0, 10] mm (negative: automatic)", p.blend);
-  if (!(p.funnelWidth >= 20 && p.funnelWidth <= d.chestWidth))
-    bad("funnelWidth", "in [20, " + num(d.chestWidth) + "] mm (at most the chest's inner width)", p.funnelWidth,
+  if (!(p.funnelWidth >= kFunnelMinSize && p.funnelWidth <= d.chestWidth))
+    bad("funnelWidth", "in [" + num(kFunnelMinSize) + ", " + num(d.chestWidth) + "] mm (at most the chest's inner width)", p.funnelWidth,
         "a funnel cannot be wider than the chest");
-  if (!(p.funnelHeight >= 20 && p.funnelHeight <= 0.8 * d.spineHeight))
-    bad("funnelHeight", "in [20, " + num(0.8 * d.spineHeight) + "] mm", p.funnelHeight);
-  if (!(std::abs(p.funnelCenterX) <= 0.4 * p.funnelWidth))
-    bad("funnelCenterX", "in [" + num(-0.4 * p.funnelWidth) + ", " + num(0.4 * p.funnelWidth) + "] mm (0.4 x funnelWidth, so the funnel still depresses the sternum)",
+  if (!(p.funnelHeight >= kFunnelMinSize && p.funnelHeight <= kFunnelHeightShare * d.spineHeight))
+    bad("funnelHeight", "in [" + num(kFunnelMinSize) + ", " + num(kFunnelHeightShare * d.spineHeight) + "] mm", p.funnelHeight);
+  if (!(std::abs(p.funnelCenterX) <= kFunnelCenterXShare * p.funnelWidth))
+    bad("funnelCenterX", "in [" + num(-kFunnelCenterXShare * p.funnelWidth) + ", " + num(kFunnelCenterXShare * p.funnelWidth) + "] mm (" +
+        num(kFunnelCenterXShare) + " x funnelWidth, so the funnel still depresses the sternum)",
         p.funnelCenterX);
-  if (!(p.funnelCenterZ >= 0 && p.funnelCenterZ <= 1.2))
-    bad("funnelCenterZ", "in [0, 1.2] (0 jugular notch, 1 xiphisternal junction)", p.funnelCenterZ);
+  if (!kFunnelCenterZRange.contains(p.funnelCenterZ))
+    bad("funnelCenterZ", "in " + kFunnelCenterZRange.text() + " (0 jugular notch, 1 xiphisternal junction)", p.funnelCenterZ);
   d.sternumLength = 0;  // set by the model
   return d;
 }

@@ -15,8 +15,23 @@
 
 #include "pectus/cmesh.h"
 #include "pectus/labels.h"
+#include "pectus/param_range.h"
 
 namespace pectus::ribcage {
+
+// The valid ranges validate() checks; the filter declares its parameters with the same constants.
+inline constexpr ParamRange kAgeRange{5, 17};            ///< years
+inline constexpr ParamRange kChestWidthRange{120, 320};  ///< mm
+inline constexpr ParamRange kChestDepthShare{0.25, 0.7}; ///< x chest width
+inline constexpr ParamRange kSpineHeightRange{120, 320}; ///< mm
+inline constexpr ParamRange kRibPairsRange{10, 12};
+/// the upper end; the lower end is at least the index of the same chest without funnel
+inline constexpr ParamRange kHallerIndexRange{1, 12};
+inline constexpr ParamRange kEdgeLengthRange{0.4, 8};    ///< mm
+inline constexpr ParamRange kFunnelCenterZRange{0, 1.2}; ///< 0 jugular notch, 1 xiphisternal junction
+inline constexpr double kFunnelMinSize = 20;             ///< mm, the funnel's least width and height
+inline constexpr double kFunnelCenterXShare = 0.4;       ///< |funnelCenterX| <= this x funnel width
+inline constexpr double kFunnelHeightShare = 0.8;        ///< funnelHeight <= this x spine height
 
 struct RibCageParams {
   bool fromAge = true;      ///< size from age, else from the three explicit dimensions below

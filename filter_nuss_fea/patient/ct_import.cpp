@@ -636,7 +636,9 @@ void readMeshFile(const std::string& path, CMeshO& out) {
 
 std::vector<Structure> importSegmentation(const std::string& path, const ImportOptions& opt, ImportReport* report,
                                           const std::function<void(int, const char*)>& progress) {
-  if (opt.minVoxels < 0) throw InputError("minimum voxel count must be >= 0, got " + std::to_string(opt.minVoxels));
+  if (opt.minVoxels < kMinVoxelsRange.lo)
+    throw InputError("minimum voxel count must be >= " + std::to_string(int(kMinVoxelsRange.lo)) + ", got " +
+                     std::to_string(opt.minVoxels));
   std::error_code ec;
   if (trim(path).empty()) throw InputError("no path given: give a segmentation file or a folder of them");
   if (!fs::exists(path, ec)) throw IOError("'" + path + "' does not exist: give a segmentation file or a folder of them");

@@ -9,8 +9,12 @@
 #include <vector>
 
 #include "pectus/cmesh.h"
+#include "pectus/param_range.h"
 
 namespace pectus::patient {
+
+/// ImportOptions::minVoxels (importCt checks its lower end); the filter declares its parameter with it
+inline constexpr ParamRange kMinVoxelsRange{0, 1000000000};
 
 /// One imported structure: a layer of its own, named after the structure.
 struct Structure {

@@ -1,6 +1,6 @@
 """Every filter has a page in docs/filters whose parameter table lists exactly the parameters the plugin
 declares (the plugins loaded in-process by pectus_layer_check --params), in the declared order, with the
-same type and default; the README links every page; no relative link of the README or docs/ is broken.
+same type and default, and every numeric parameter with the range the plugin declares; the README links every page; no relative link of the README or docs/ is broken.
 Every filter python/pectus_filters.py defines has the plugin's parameters, in order, with the same types,
 defaults and enum labels."""
 from __future__ import annotations
@@ -21,15 +21,20 @@ BUILD = os.environ.get("PECTUS_BUILD", os.path.join(SOURCE, "build"))
 PLUGINS = os.environ.get("PECTUS_PLUGINS", os.path.join(BUILD, "plugins"))
 
 
-def declared() -> dict:
-    """filter name -> [(name, type, default text, enum labels)] as the plugins declare them"""
+def declared() -> tuple[dict, dict]:
+    """filter name -> [(name, type, default text, enum labels)] as the plugins declare them, and
+    filter name -> {parameter name -> (lo, hi, lo open, hi open)} for the numeric parameters"""
     out = subprocess.run(["xvfb-run", "-a", os.path.join(BUILD, "bin", "pectus_layer_check"), "--params", PLUGINS],
                          capture_output=True, text=True, timeout=300)
     if out.returncode != 0:
         raise SystemExit(f"pectus_layer_check --params failed ({out.returncode}): {out.stderr}")
-    filters = {}
+    filters, ranges = {}, {}
     for f in ET.fromstring(out.stdout).iter("filter"):
         params = []
+        ranges[f.attrib["name"]] = {
+            p.attrib["name"]: (float(p.attrib["min"]), float(p.attrib["max"]), p.attrib["minOpen"] == "true",
+                               p.attrib["maxOpen"] == "true")
+            for p in f.iter("Param") if "min" in p.attrib}
         for p in f.iter("Param"):
             a = p.attrib
             kind = a["type"][len("Rich"):] if a["type"].startswith("Rich") else a["type"]
@@ -40,7 +45,40 @@ def declared() -> dict:
                 value = a.get("value", "")
             params.append((a["name"], kind, value, labels))
         filters[f.attrib["name"]] = params
-    return filters
+    return filters, ranges
+
+
+# a number as the docs write it: 100,000 (thousands), 0.05, 1e6, -1e6, –0.4 (an en dash as minus)
+NUMBER = r"[-–−]?(?:\d{1,3}(?:,\d{3})+|\d+(?:\.\d+)?)(?:e[+-]?\d+)?"
+BRACKETS = re.compile(r"([\[(])\s*(" + NUMBER + r")\s*,\s*(" + NUMBER + r")\s*([\])])")
+DASH = re.compile(r"(" + NUMBER + r")\s+[–-]\s+(" + NUMBER + r")")
+
+
+def number(text: str) -> float:
+    return float(text.replace(",", "").replace("–", "-").replace("−", "-"))
+
+
+def doc_range(cell: str):
+    """(lo, hi, lo open, hi open) of the first range a docs table cell gives: an interval "[0, 1)",
+    "(0, 1e6]", or "lo – hi" (both ends included); None if it gives none"""
+    cell = cell.replace("`", "")
+    found = [m for m in (BRACKETS.search(cell), DASH.search(cell)) if m]
+    if not found:
+        return None
+    m = min(found, key=lambda m: m.start())
+    if m.re is BRACKETS:
+        return number(m.group(2)), number(m.group(3)), m.group(1) == "(", m.group(4) == ")"
+    return number(m.group(1)), number(m.group(2)), False, False
+
+
+def range_text(r) -> str:
+    lo, hi, lo_open, hi_open = r
+    return f"{'(' if lo_open else '['}{lo:g}, {hi:g}{')' if hi_open else ']'}"
+
+
+def same_range(doc, code) -> bool:
+    return doc is not None and same_number(str(doc[0]), str(code[0])) and same_number(str(doc[1]), str(code[1])) \
+        and doc[2:] == code[2:]
 
 
 def same_number(doc: str, code: str) -> bool:
@@ -104,7 +142,7 @@ def check_python_filters(filters: dict):
 
 
 def main():
-    filters = declared()
+    filters, ranges = declared()
     check_python_filters(filters)
     check(len(filters) >= 14, f"the plugins declare {len(filters)} filters")
     pages = {}
@@ -132,6 +170,11 @@ def main():
             check(default_matches(kind, r[2], value, labels), f"{page}: {name} defaults to {shown}",
                   f"page says {r[2]!r}")
             check(r[4] != "", f"{page}: {name} is described")
+            if kind in ("Float", "Int"):
+                code = ranges[fname].get(name)
+                if check(code is not None, f"{fname}: {name} is declared with its range"):
+                    check(same_range(doc_range(r[3]), code), f"{page}: {name}'s range is {range_text(code)}",
+                          f"page says {r[3]!r}")
     readme = read(os.path.join(SOURCE, "README.md"))
     for path in FILTER_PAGES:
         rel = os.path.relpath(path, SOURCE)

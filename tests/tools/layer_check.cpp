@@ -7,7 +7,9 @@
 //
 // --params prints every filter of the plugins in <plugin dir> with its parameters as the plugin declares them
 // (name, type, default, description, tool-tip; MeshLab's own .mlx form of each parameter) as one XML document,
-// for the test that checks the docs' parameter tables. The document holds the given layers, or one tetrahedron.
+// for the test that checks the docs' parameter tables. A numeric parameter declared with its range (addFloat,
+// addInt in common/meshlab/filter_plugin.h) also has the attributes min, max, minOpen and maxOpen ("true" for
+// an end that excludes its bound). The document holds the given layers, or one tetrahedron.
 //
 // params file: one parameter per line, "<type> <name> <value...>" with type Float, Int, Bool, Enum,
 // Mesh (layer index), Point3 (x y z), String or SaveFile (the rest of the line). Parameters not listed
@@ -96,7 +98,20 @@ int listParameters(int argc, char** argv) {
     QDomElement e = doc.createElement("filter");
     e.setAttribute("name", f.plugin->filterName(f.action));
     e.setAttribute("library", f.library);
-    for (const RichParameter& p : par) e.appendChild(p.fillToXMLDocument(doc, true));
+    // the ranges the plugin base recorded during initParameterSet, on the filter's action
+    // (FilterPluginBase::kRangesProperty: {lo, hi, loOpen, hiOpen, integer} by parameter name)
+    const QVariantMap ranges = f.action->property("pectusParameterRanges").toMap();
+    for (const RichParameter& p : par) {
+      QDomElement pe = p.fillToXMLDocument(doc, true);
+      const QVariantList r = ranges.value(p.name()).toList();
+      if (r.size() == 5) {
+        pe.setAttribute("min", QString::number(r[0].toDouble(), 'g', 17));
+        pe.setAttribute("max", QString::number(r[1].toDouble(), 'g', 17));
+        pe.setAttribute("minOpen", r[2].toBool() ? "true" : "false");
+        pe.setAttribute("maxOpen", r[3].toBool() ? "true" : "false");
+      }
+      e.appendChild(pe);
+    }
     root.appendChild(e);
   }
   std::cout << doc.toString(1).toStdString();

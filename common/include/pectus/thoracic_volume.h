@@ -13,9 +13,17 @@
 #include <Eigen/Dense>
 
 #include "pectus/cmesh.h"
+#include "pectus/param_range.h"
 #include "pectus/surface.h"
 
 namespace pectus::vol {
+
+// Valid ranges of SliceParams and EnvelopeParams (sliceVolume and envelopeVolume check their lower ends);
+// the filters declare their parameters with the same constants.
+inline constexpr ParamRange kResolutionRange{16, 20000};  ///< SliceParams::resolution (pixels)
+inline constexpr ParamRange kRaysRange{16, 100000};       ///< boundary rays of a slice
+inline constexpr ParamRange kPatchesLongRange{1, 200};    ///< EnvelopeParams::nLong
+inline constexpr ParamRange kPatchesAroundRange{3, 200};  ///< EnvelopeParams::mAround
 
 /// A triangle soup in double precision (what every core here reads): the cores' surface type
 using Soup = pectus::Surface;

@@ -554,7 +554,9 @@ class Shrink {
 
 EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const EnvelopeParams& p, const Progress& progress) {
   requireRange(range, "of the envelope");
-  if (p.nLong < 1 || p.mAround < 3) throw InputError("the envelope needs at least 1 x 3 patches");
+  if (p.nLong < kPatchesLongRange.lo || p.mAround < kPatchesAroundRange.lo)
+    throw InputError("the envelope needs at least " + std::to_string(int(kPatchesLongRange.lo)) + " x " +
+                     std::to_string(int(kPatchesAroundRange.lo)) + " patches");
   if (!(p.minStep > 0)) throw InputError("the envelope's minimum step must be positive");
   const Grid g = gridFor(range, p);
   Eigen::Vector2d lo, hi;

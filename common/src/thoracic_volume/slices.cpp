@@ -288,8 +288,10 @@ long long rasterCount(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vec
 SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p, const Progress& progress) {
   requireRange(range, "of the slice method");
   if (!(p.spacing > 0)) throw InputError("the slice spacing must be positive");
-  if (p.resolution < 16) throw InputError("the raster resolution must be at least 16 pixels");
-  if (p.rays < 16) throw InputError("the number of boundary rays must be at least 16");
+  if (p.resolution < kResolutionRange.lo)
+    throw InputError("the raster resolution must be at least " + std::to_string(int(kResolutionRange.lo)) + " pixels");
+  if (p.rays < kRaysRange.lo)
+    throw InputError("the number of boundary rays must be at least " + std::to_string(int(kRaysRange.lo)));
   SliceResult res;
   const int N = std::max(1, int(std::ceil((range.zHi - range.zLo) / p.spacing - 1e-9)));
   const double h = (range.zHi - range.zLo) / N;
