@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pectus/c1_surface.h"
+#include "pectus/c1/surface.h"
 #include "pectus/surface_cmesh.h"
-#include "pectus/c1_surface.h"
+#include "pectus/c1/surface.h"
 #include "pectus/errors.h"
 
 using pectus::ml::FilterContext;

@@ -7,13 +7,13 @@
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
-#include "haller.h"
-#include "bar_planner.h"
-#include "nuss_analysis.h"
-#include "nuss_output.h"
-#include "tissue_join.h"
+#include "pectus/ribcage/haller.h"
+#include "pectus/nuss/bar_planner.h"
+#include "pectus/nuss/nuss_analysis.h"
+#include "pectus/nuss/nuss_output.h"
+#include "pectus/nuss/tissue_join.h"
 #include "plot.h"
-#include "ribcage.h"
+#include "pectus/ribcage/ribcage.h"
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;

@@ -9,8 +9,8 @@
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
-#include "ct_import.h"
-#include "prepare.h"
+#include "pectus/patient/ct_import.h"
+#include "pectus/patient/prepare.h"
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;

@@ -7,7 +7,7 @@
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 using pectus::InputError;
 using pectus::ml::FilterContext;

@@ -3,7 +3,7 @@
 #include <array>
 #include <vector>
 
-#include "pectus/c1_surface.h"
+#include "pectus/c1/surface.h"
 
 namespace pectus::c1 {
 

@@ -8,7 +8,7 @@
 #include <mutex>
 
 #include "c1_internal.h"
-#include "pectus/c1_surface.h"
+#include "pectus/c1/surface.h"
 #include "pectus/errors.h"
 #include "pectus/grid_cell.h"
 

@@ -1,7 +1,7 @@
 // Goodman-Said C1 surface: topology checks, vertex gradients (thesis eqs. 3-1..3-5, a quadratic fit or
 // the global minimum-curvature estimate),
 // control nets (eqs. 3-9..3-15, b111 re-derived below), evaluation with the rational blend (eq. 3-16).
-#include "pectus/c1_surface.h"
+#include "pectus/c1/surface.h"
 
 #include <Eigen/Sparse>
 #include <algorithm>

@@ -9,8 +9,8 @@
 #include <omp.h>
 #endif
 
-#include "pectus/c1_shapes.h"
-#include "pectus/c1_surface.h"
+#include "pectus/c1/shapes.h"
+#include "pectus/c1/surface.h"
 #include "pectus/errors.h"
 
 using namespace pectus::c1;

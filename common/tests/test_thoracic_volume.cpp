@@ -6,7 +6,7 @@
 
 #include "analytic_cages.h"
 #include "pectus/errors.h"
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 using namespace pectus::vol;
 using namespace pectus::vol::testing;

@@ -7,13 +7,13 @@
 #include <cstdio>
 #include <numeric>
 
-#include "nuss_analysis.h"
-#include "nuss_output.h"
-#include "tissue_join.h"
+#include "pectus/nuss/nuss_analysis.h"
+#include "pectus/nuss/nuss_output.h"
+#include "pectus/nuss/tissue_join.h"
 #include "pectus/errors.h"
 #include "pectus/labels.h"
 #include "coarse_cage.h"
-#include "ribcage.h"
+#include "pectus/ribcage/ribcage.h"
 
 using namespace pectus;
 

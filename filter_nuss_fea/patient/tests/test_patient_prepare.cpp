@@ -11,9 +11,9 @@
 #include <vcg/complex/algorithms/create/platonic.h>
 
 #include "pectus/errors.h"
-#include "prepare.h"
-#include "ribcage.h"
-#include "soup.h"
+#include "pectus/patient/prepare.h"
+#include "pectus/ribcage/ribcage.h"
+#include "pectus/patient/soup.h"
 #include "temp_dir.h"
 
 using namespace pectus;

@@ -10,13 +10,13 @@
 #include <cstdio>
 #include <set>
 
-#include "ct_phantom_core.h"
-#include "label_volume.h"
-#include "nuss_analysis.h"
+#include "pectus/phantom/ct_phantom_core.h"
+#include "pectus/patient/label_volume.h"
+#include "pectus/nuss/nuss_analysis.h"
 #include "pectus/errors.h"
-#include "pectus/thoracic_volume.h"
-#include "prepare.h"
-#include "soup.h"
+#include "pectus/vol/thoracic_volume.h"
+#include "pectus/patient/prepare.h"
+#include "pectus/patient/soup.h"
 
 using namespace pectus;
 using namespace pectus::patient;
