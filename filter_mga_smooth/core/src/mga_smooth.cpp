@@ -653,17 +653,10 @@ void sharpEdgeNodes(const C1Surface& S, const std::vector<Vec3>& fn, const std::
 
 // Angles: the nodes whose faces' normal cone (the largest angle between two of their normals) is wider
 // than the singular angle: large curvature variation within one ring (thesis 4.3)
-void wideConeNodes(const c1::TriMesh& tm, const std::vector<Vec3>& fn, double singularAngleDeg, std::vector<char>& singular) {
-  const std::size_t nv = tm.V.size();
-  std::vector<int> start(nv + 1, 0), vf(3 * tm.F.size());
-  for (const auto& F : tm.F)
-    for (int k = 0; k < 3; ++k) ++start[std::size_t(F[std::size_t(k)]) + 1];
-  for (std::size_t i = 0; i < nv; ++i) start[i + 1] += start[i];
-  {
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (int f = 0; f < int(tm.F.size()); ++f)
-      for (int k = 0; k < 3; ++k) vf[std::size_t(fill[std::size_t(tm.F[std::size_t(f)][std::size_t(k)])]++)] = f;
-  }
+void wideConeNodes(const Topology& T, const std::vector<Vec3>& fn, double singularAngleDeg, std::vector<char>& singular) {
+  const std::vector<int>& start = T.vfStart;
+  const std::vector<int>& vf = T.vf;
+  const std::size_t nv = start.size() - 1;
   const double cosSing = std::cos(singularAngleDeg * M_PI / 180.0);
   for (std::size_t i = 0; i < nv; ++i) {
     for (int a = start[i]; a < start[i + 1] && !singular[i]; ++a) {
@@ -703,7 +696,7 @@ NodeKinds classifyNodes(const c1::TriMesh& tm, const Mesh& M, const C1Surface& S
     sharpEdgeNodes(S, fn, diagonals, opt.featureAngleDeg, nk.feature);
   }
   if (opt.features == FeatureDetection::Angles && opt.singularAngleDeg < 180)
-    wideConeNodes(tm, fn, opt.singularAngleDeg, nk.singular);
+    wideConeNodes(S.topology(), fn, opt.singularAngleDeg, nk.singular);
   return nk;
 }
 

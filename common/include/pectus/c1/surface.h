@@ -137,6 +137,8 @@ class C1Surface {
   };
   /// the mesh's edges, from the topology the patches were built on (ascending (a, b))
   std::vector<EdgeFaces> edges() const;
+  /// the topology the patches were built on (checked: closed or with a boundary, manifold)
+  const Topology& topology() const { return *topo_; }
   /// per face, the face across local edge l (the edge opposite local vertex l); -1 on the boundary
   std::vector<std::array<int, 3>> faceNeighbours() const;
 
