@@ -20,7 +20,8 @@ struct Surface {
 
 /// The topology of a Surface, built once. It never throws: what it finds (an index out of range, edges in
 /// more than two faces, vertices whose faces form more than one fan, collapsed edges) is recorded for the
-/// caller to judge, each caller with its own message. When a face has a vertex index out of range nothing else is built.
+/// caller to judge, each caller with its own message. When a face has a vertex index out of range nothing
+/// else is built.
 class Topology {
  public:
   struct Edge {

@@ -142,7 +142,8 @@ Solid toSolid(const TissueLayer& l, Tissue tissue) {
                      "): each tissue layer must be a closed surface; close its holes (Filters > Remeshing > Close Holes) "
                      "or export the segmentation as closed surfaces.");
   PMP::polygon_soup_to_polygon_mesh(pts, polys, s.mesh);
-  for (std::size_t f = 0; f < polys.size(); ++f) soup.F[f] = {int(polys[f][0]), int(polys[f][1]), int(polys[f][2])};  // oriented
+  for (std::size_t f = 0; f < polys.size(); ++f)  // the oriented faces
+    soup.F[f] = {int(polys[f][0]), int(polys[f][1]), int(polys[f][2])};
   if (const auto pairs = selfIntersections(soup.V, soup.F); !pairs.empty())
     throw TopologyError("Layer '" + l.name + "' intersects itself (" + std::to_string(pairs.size()) + " face pairs, e.g. near " +
                      where(pts[polys[std::size_t(pairs.front().a)][0]]) +
