@@ -4,7 +4,11 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <string>
 #include <unordered_map>
+
+#include "pectus/errors.h"
+#include "pectus/surface.h"
 
 namespace pectus::smooth {
 
@@ -17,35 +21,59 @@ struct Edge {
   double dihedral = 0;  ///< degrees, 0 unless the edge has two faces with normals
 };
 
-// The mesh's edges with their faces and dihedral angles, and each face's three edges
+// The mesh's edges with their faces and dihedral angles, and each face's three edges (faceEdges[f][k]: from
+// corner k to k + 1). Edges are numbered in the order the faces (then their corners) first use them, which
+// is the order the chains grow in. A degenerate face's collapsed edge (a repeated vertex) is an edge (v, v)
+// here, one per vertex; it is never sharp (a degenerate face has no normal).
 struct EdgeTable {
   std::vector<Edge> E;
   std::vector<std::array<int, 3>> faceEdges;
 
   EdgeTable(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& F) : faceEdges(F.size()) {
-    std::vector<Vec3> fn(F.size(), Vec3::Zero());
-    for (std::size_t f = 0; f < F.size(); ++f) {
-      const Vec3 n = (V[std::size_t(F[f][1])] - V[std::size_t(F[f][0])]).cross(V[std::size_t(F[f][2])] - V[std::size_t(F[f][0])]);
-      if (n.norm() > 0 && n.allFinite()) fn[f] = n.normalized();
-    }
-    std::unordered_map<std::uint64_t, int> index;
-    index.reserve(F.size() * 2);
-    for (std::size_t f = 0; f < F.size(); ++f)
-      for (int k = 0; k < 3; ++k) {
-        const int a = F[f][std::size_t(k)], b = F[f][std::size_t((k + 1) % 3)];
-        auto [it, added] = index.emplace(edgeKey(a, b), int(E.size()));
-        if (added) E.push_back(Edge{std::min(a, b), std::max(a, b)});
-        Edge& e = E[std::size_t(it->second)];
-        (e.faces == 0 ? e.f0 : e.f1) = int(f);
-        ++e.faces;
-        faceEdges[f][std::size_t(k)] = it->second;
-      }
+    const Surface s{V, F};
+    const Topology topo(s);
+    if (topo.badFace >= 0)
+      throw InternalError("crease detection: face " + std::to_string(topo.badFace) + " uses vertex index " +
+                          std::to_string(topo.badIndex) + " of " + std::to_string(V.size()));
+    number(s, topo);
     for (auto& e : E) {
       if (e.faces != 2) continue;
-      const Vec3& a = fn[std::size_t(e.f0)];
-      const Vec3& b = fn[std::size_t(e.f1)];
+      const Vec3 a = unitNormal(V, F[std::size_t(e.f0)]), b = unitNormal(V, F[std::size_t(e.f1)]);
       if (a.squaredNorm() > 0 && b.squaredNorm() > 0) e.dihedral = std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180.0 / M_PI;
     }
+  }
+  // the unit normal of face f, zero if it has none
+  static Vec3 unitNormal(const std::vector<Vec3>& V, const std::array<int, 3>& f) {
+    const Vec3 n = (V[std::size_t(f[1])] - V[std::size_t(f[0])]).cross(V[std::size_t(f[2])] - V[std::size_t(f[0])]);
+    return n.norm() > 0 && n.allFinite() ? Vec3(n.normalized()) : Vec3::Zero();
+  }
+  // E in first-use order from the topology's edges; f0 the first face of an edge, f1 its last other one
+  void number(const Surface& s, const Topology& topo) {
+    std::vector<int> ofEdge(topo.edges.size(), -1), ofCollapsed(s.V.size(), -1);
+    for (std::size_t f = 0; f < s.F.size(); ++f)
+      for (int k = 0; k < 3; ++k) {
+        const int e = topo.faceEdge[f][std::size_t((k + 2) % 3)];  // local edge l is opposite corner l
+        const int a = s.F[f][std::size_t(k)];
+        int& id = e >= 0 ? ofEdge[std::size_t(e)] : ofCollapsed[std::size_t(a)];
+        if (id < 0) {
+          id = int(E.size());
+          E.push_back(e >= 0 ? fromTopology(topo, e) : Edge{a, a});
+        }
+        if (e < 0) {  // a collapsed edge: its faces counted here, in face order
+          Edge& c = E[std::size_t(id)];
+          (c.faces == 0 ? c.f0 : c.f1) = int(f);
+          ++c.faces;
+        }
+        faceEdges[f][std::size_t(k)] = id;
+      }
+  }
+  static Edge fromTopology(const Topology& topo, int e) {
+    const Topology::Edge& t = topo.edges[std::size_t(e)];
+    Edge out{t.a, t.b};
+    out.faces = t.faces;
+    out.f0 = t.f0 / 3;
+    if (t.faces >= 2) out.f1 = *(topo.edgeFacesEnd(e) - 1) / 3;
+    return out;
   }
   double dihedral(int i) const { return E[std::size_t(i)].dihedral; }
   // the wings of edge i: the other edges of its two faces

@@ -23,6 +23,7 @@
 
 #include "pectus/errors.h"
 #include "pectus/self_intersections.h"
+#include "pectus/surface.h"
 
 namespace pectus::nuss {
 
@@ -66,6 +67,36 @@ std::string where(const Point& p) {
   return s.str();
 }
 
+// no edge in more than two faces, no vertex in more than one fan
+bool manifold(const Topology& t) {
+  return t.nonManifoldEdges() == 0 && std::all_of(t.fans.begin(), t.fans.end(), [](int n) { return n <= 1; });
+}
+
+// the edge of face f between vertices a and b
+const Topology::Edge& edgeOf(const Topology& t, std::size_t f, std::size_t a, std::size_t b) {
+  for (int e : t.faceEdge[f]) {
+    if (e < 0) continue;
+    const Topology::Edge& E = t.edges[std::size_t(e)];  // E.a < E.b
+    if (std::size_t(E.a) == std::min(a, b) && std::size_t(E.b) == std::max(a, b)) return E;
+  }
+  throw InternalError("tissue join: a face's corners are not the ends of its edges");
+}
+
+// The border edges of a manifold soup, and where the last one starts in the oriented polygons' face and
+// corner order: the point the message names, where polygon_soup_to_polygon_mesh ends its last border
+// halfedge (it creates the edges in that order, a border halfedge opposite its face's).
+struct Border {
+  int edges = 0;
+  std::size_t lastStart = 0;
+};
+Border border(const Topology& t, const std::vector<std::vector<std::size_t>>& polys) {
+  Border b;
+  for (std::size_t f = 0; f < polys.size(); ++f)
+    for (std::size_t j = 0; j < 3; ++j)
+      if (edgeOf(t, f, polys[f][j], polys[f][(j + 1) % 3]).faces == 1) ++b.edges, b.lastStart = polys[f][j];
+  return b;
+}
+
 // the layer as a closed, outward-oriented, self-intersection-free CGAL mesh; the face labels' parts
 // (if any) kept in face order
 Solid toSolid(const TissueLayer& l, Tissue tissue) {
@@ -97,24 +128,23 @@ Solid toSolid(const TissueLayer& l, Tissue tissue) {
     s.part.push_back(labels ? labels->part[f] : 0);
   }
   if (polys.empty()) throw TopologyError("Layer '" + l.name + "' has no faces: each tissue layer must be a closed surface.");
-  if (!PMP::orient_polygon_soup(pts, polys) || !PMP::is_polygon_soup_a_polygon_mesh(polys))
+  Surface soup;
+  for (const auto& p : pts) soup.V.emplace_back(p.x(), p.y(), p.z());
+  for (const auto& q : polys) soup.F.push_back({int(q[0]), int(q[1]), int(q[2])});
+  const Topology topo(soup);
+  // CGAL's orientation fails on a non-manifold soup too, and on a non-orientable one
+  if (!manifold(topo) || !PMP::orient_polygon_soup(pts, polys) || !PMP::is_polygon_soup_a_polygon_mesh(polys))
     throw TopologyError("Layer '" + l.name + "' is not a 2-manifold surface (an edge in more than two faces): repair it "
                      "(e.g. Filters > Cleaning and Repairing > Repair non Manifold Edges) before the analysis.");
-  PMP::polygon_soup_to_polygon_mesh(pts, polys, s.mesh);
-  if (!CGAL::is_closed(s.mesh)) {
-    int border = 0;
-    Point at;
-    for (auto h : halfedges(s.mesh))
-      if (is_border(h, s.mesh)) at = s.mesh.point(target(h, s.mesh)), ++border;
-    throw TopologyError("Layer '" + l.name + "' is open (" + std::to_string(border) + " border edges, e.g. at " + where(at) +
+  if (const Border b = border(topo, polys); b.edges > 0)
+    throw TopologyError("Layer '" + l.name + "' is open (" + std::to_string(b.edges) + " border edges, e.g. at " +
+                     where(pts[b.lastStart]) +
                      "): each tissue layer must be a closed surface; close its holes (Filters > Remeshing > Close Holes) "
                      "or export the segmentation as closed surfaces.");
-  }
-  std::vector<Eigen::Vector3d> soupPts;
-  for (const auto& p : pts) soupPts.emplace_back(p.x(), p.y(), p.z());
-  std::vector<std::array<int, 3>> soupTris;
-  for (const auto& q : polys) soupTris.push_back({int(q[0]), int(q[1]), int(q[2])});
-  if (const auto pairs = selfIntersections(soupPts, soupTris); !pairs.empty())
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, s.mesh);
+  for (std::size_t f = 0; f < polys.size(); ++f)  // the oriented faces
+    soup.F[f] = {int(polys[f][0]), int(polys[f][1]), int(polys[f][2])};
+  if (const auto pairs = selfIntersections(soup.V, soup.F); !pairs.empty())
     throw TopologyError("Layer '" + l.name + "' intersects itself (" + std::to_string(pairs.size()) + " face pairs, e.g. near " +
                      where(pts[polys[std::size_t(pairs.front().a)][0]]) +
                      "): repair it (Filters > Cleaning and Repairing > Select Self Intersecting Faces shows where).");

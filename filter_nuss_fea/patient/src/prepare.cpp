@@ -883,17 +883,8 @@ void Preparation::repairColumn(const Structure& s) {
   const double v0 = volume(c);
   const int dup = removeDuplicateFaces(c);
   int holes = 0, border = 0;
-  auto countBorder = [&] {
-    std::map<std::pair<int, int>, int> use;
-    for (const auto& f : c.F)
-      for (int e = 0; e < 3; ++e) {
-        const int a = f[std::size_t(e)], b = f[std::size_t((e + 1) % 3)];
-        ++use[{std::min(a, b), std::max(a, b)}];
-      }
-    int n = 0;
-    for (const auto& [e, k] : use) n += k == 1;
-    return n;
-  };
+  // edges in one face, a degenerate face's collapsed edge included (as defects() counts them)
+  auto countBorder = [&] { return int(Topology(c).edgeUse().once); };
   if (countBorder() > 0) holes = closeHoles(c);
   border = countBorder();
   constexpr double kColumnAlpha = 2.0, kOpenAlpha = 4.0;

@@ -167,52 +167,24 @@ int closeHoles(Soup& s) {
 
 std::string defects(const Soup& s) {
   if (s.F.empty()) return "no faces";
+  const Topology t(s);
+  if (t.badFace >= 0)
+    return "invalid (face " + std::to_string(t.badFace) + " uses vertex index " + std::to_string(t.badIndex) + ")";
   std::set<std::array<int, 3>> seen;
   std::size_t dup = 0;
-  std::map<std::pair<int, int>, int> edgeUse;
   for (const auto& f : s.F) {
     auto k = f;
     std::sort(k.begin(), k.end());
     if (!seen.insert(k).second) ++dup;
-    for (int e = 0; e < 3; ++e) {
-      const int a = f[std::size_t(e)], b = f[std::size_t((e + 1) % 3)];
-      ++edgeUse[{std::min(a, b), std::max(a, b)}];
-    }
   }
   if (dup) return std::to_string(dup) + " duplicate faces";
-  std::size_t border = 0, nonManifold = 0;
-  for (const auto& [e, n] : edgeUse) border += n == 1, nonManifold += n > 2;
-  if (nonManifold) return std::to_string(nonManifold) + " non-manifold edges";
-  if (border) return "open (" + std::to_string(border) + " border edges)";
+  // edges as a table of every face's local edges counts them: a degenerate face's collapsed edge too
+  const Topology::EdgeUse use = t.edgeUse();
+  if (use.moreThanTwice) return std::to_string(use.moreThanTwice) + " non-manifold edges";
+  if (use.once) return "open (" + std::to_string(use.once) + " border edges)";
   // a vertex whose faces form more than one fan (two sheets touching at a point)
-  {
-    std::vector<std::vector<int>> vf(s.V.size());
-    for (std::size_t i = 0; i < s.F.size(); ++i)
-      for (int v : s.F[i]) vf[std::size_t(v)].push_back(int(i));
-    std::size_t pinched = 0;
-    for (std::size_t v = 0; v < vf.size(); ++v) {
-      if (vf[v].empty()) continue;
-      // walk the fan from one face across edges at v
-      std::vector<char> done(vf[v].size(), 0);
-      std::vector<int> stack{0};
-      done[0] = 1;
-      std::size_t reached = 1;
-      while (!stack.empty()) {
-        const auto& f = s.F[std::size_t(vf[v][std::size_t(stack.back())])];
-        stack.pop_back();
-        for (std::size_t j = 0; j < vf[v].size(); ++j) {
-          if (done[j]) continue;
-          const auto& g = s.F[std::size_t(vf[v][j])];
-          int shared = 0;
-          for (int a : f)
-            for (int b : g) shared += (a == b && a != int(v));
-          if (shared) done[j] = 1, ++reached, stack.push_back(int(j));
-        }
-      }
-      pinched += reached != vf[v].size();
-    }
-    if (pinched) return std::to_string(pinched) + " non-manifold vertices";
-  }
+  if (const auto pinched = std::count_if(t.fans.begin(), t.fans.end(), [](int n) { return n > 1; }))
+    return std::to_string(pinched) + " non-manifold vertices";
   if (const auto pairs = selfIntersections(s.V, s.F); !pairs.empty())
     return "intersects itself (" + std::to_string(pairs.size()) + " face pairs)";
   return "";
