@@ -528,7 +528,7 @@ void Preparation::classify(const std::vector<InputLayer>& layers) {
   prog(2, "classifying the layers");
   std::vector<Structure> unknown;
   for (const auto& l : layers) {
-    Structure s{l.name, classifyName(l.name), soupOf(*l.mesh)};
+    Structure s{l.name, classifyName(l.name), surfaceOf(*l.mesh, kFiniteFaces)};
     if (s.soup.empty()) {
       log.push_back("'" + l.name + "': no faces, left out");
       continue;

@@ -54,7 +54,7 @@ bool logHas(const PrepareResult& r, const std::string& words) {
 }
 // the connected pieces of m, one mesh each
 std::vector<std::unique_ptr<OwnedMesh>> piecesOf(const CMeshO& m) {
-  Soup s = soupOf(m);
+  Soup s = surfaceOf(m, kFiniteFaces);
   weld(s);
   std::vector<std::unique_ptr<OwnedMesh>> out;
   for (const auto& p : components(s)) {
@@ -270,7 +270,7 @@ namespace {
 // of one vertex removed), each holed one with a fin as well when `fin` (a triangle on one of its edges: a
 // non-manifold edge, so that the hole cannot be closed)
 void punch(OwnedMesh& m, std::size_t holed, bool fin) {
-  Soup s = soupOf(m);
+  Soup s = surfaceOf(m, kFiniteFaces);
   weld(s);
   auto pieces = components(s);
   std::sort(pieces.begin(), pieces.end(), [](const Soup& a, const Soup& b) { return volume(a) > volume(b); });
