@@ -366,3 +366,18 @@ TEST(PatientPrepare, RefusesALandmarkThatCannotBePlacedUnlessPicked) {
   ASSERT_TRUE(got);
   EXPECT_LT((got->p - (r.inputToModel * deep->p.homogeneous()).head<3>()).norm(), 1e-6);
 }
+
+// the options are checked against the ranges the filter declares (prepare.h) before any layer is read
+TEST(PatientPrepare, OptionsOutsideTheirRangesAreRefused) {
+  OwnedMesh cage;
+  auto refused = [&](auto change, const std::string& words) {
+    PrepareOptions o;
+    change(o);
+    EXPECT_NE(errorOf([&] { preparePatientCage({}, o, cage); }).find(words), std::string::npos) << words;
+  };
+  refused([](PrepareOptions& o) { o.minVolume = -1; }, "minimum volume must lie in [0, 100000] mm^3");
+  refused([](PrepareOptions& o) { o.alpha = kAlphaRange.lo / 2; }, "wrap detail alpha must lie in [0.2, 20] mm");
+  refused([](PrepareOptions& o) { o.offset = kOffsetRange.hi + 1; }, "wrap offset must lie in [0.01, 5] mm");
+  refused([](PrepareOptions& o) { o.edgeLength = kMinEdgeLength / 2; },
+          "target edge length must be 0 or lie in [0.5, 10] mm");
+}
