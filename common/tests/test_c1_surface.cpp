@@ -283,6 +283,13 @@ TEST(C1Surface, PlaneIsReproducedIn3DFrame) {
   }
 }
 
+TEST(C1Surface, RefinementChecksTheDeclaredRange) {
+  const C1Surface s(ellipsoid(1));
+  for (int k : {int(kSubdivisionsRange.lo) - 1, int(kSubdivisionsRange.hi) + 1})
+    EXPECT_THROW(s.refine(k), pectus::InputError) << k;
+  EXPECT_EQ(s.refine(int(kSubdivisionsRange.lo)).F.size(), s.mesh().F.size());
+}
+
 TEST(C1Surface, SphereRefinementIsCloseToTheSphereAndConforming) {
   const TriMesh m = ellipsoid(2);  // 320 faces
   const C1Surface s(m);

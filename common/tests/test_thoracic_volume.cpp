@@ -220,6 +220,19 @@ TEST(ThoracicVolumeBadInput, DegenerateAxisAndRange) {
   EXPECT_THROW(fergusonEnvelope(line, {10, 90}, EnvelopeParams{}), pectus::InputError);
 }
 
+// the cores check the lower ends of the declared spacing and minimum step (thoracic_volume.h)
+TEST(ThoracicVolumeBadInput, SpacingAndMinimumStepBelowTheirRanges) {
+  const auto cage = bandedCylinder(130, 90, 8, 0, 240, 180, 60);
+  SliceParams slice;
+  slice.spacing = kSpacingRange.lo / 2;
+  EXPECT_THROW(sliceVolume(cage, {60, 180}, slice), pectus::InputError);
+  slice.spacing = 10 * kSpacingRange.hi;  // one slice, as the envelope filter's coverage probe may ask
+  EXPECT_NO_THROW(sliceVolume(cage, {60, 180}, slice));
+  EnvelopeParams env;
+  env.minStep = kMinStepRange.lo / 2;
+  EXPECT_THROW(fergusonEnvelope(cage, {60, 180}, env), pectus::InputError);
+}
+
 TEST(ThoracicVolumeBadInput, PairMismatch) {
   const auto a = bandedCylinder(130, 90, 8, 0, 240, 180, 60);
   const auto b = bandedCylinder(130, 90, 8, 0, 240, 180, 61);

@@ -186,6 +186,25 @@ TEST(NussAnalysis, JointWithoutNodesWithinTheRadiusIsFixedAtItsNearestNodes) {
   EXPECT_NE(e.find("does not belong to this cage"), std::string::npos) << e;
 }
 
+// validate() checks the options against the ranges the filters declare (nuss_analysis.h)
+TEST(NussAnalysis, ValidateChecksTheDeclaredRanges) {
+  const nuss::Options ok;
+  EXPECT_NO_THROW(nuss::validate(ok));
+  auto refused = [&](auto change, const std::string& words) {
+    nuss::Options o = ok;
+    change(o);
+    EXPECT_NE(errorOf([&] { nuss::validate(o); }).find(words), std::string::npos) << words;
+  };
+  refused([](nuss::Options& o) { o.force = nuss::kForceRange.hi * 2; }, "elevating force must lie in (0, 100000] N");
+  refused([](nuss::Options& o) { o.maxForce = 0; }, "maximum force must lie in (0, 1e+06] N");
+  refused([](nuss::Options& o) { o.tolerance = 51; }, "calibration tolerance must lie in (0, 50] mm");
+  refused([](nuss::Options& o) { o.targetElevation = -1; }, "target elevation must lie in [0, 300] mm");
+  nuss::Options calibrated = ok;  // the force is not used when calibrating
+  calibrated.targetElevation = 20;
+  calibrated.force = 0;
+  EXPECT_NO_THROW(nuss::validate(calibrated));
+}
+
 TEST(NussAnalysis, UnlabelledOrEmptyLayersAreRefused) {
   pectus::OwnedMesh m;
   EXPECT_NE(errorOf([&] { nuss::cageFromMesh(m); }).find("no faces"), std::string::npos);

@@ -625,7 +625,7 @@ SurfacePoint C1Surface::at(int face, const Vec3& bary) const {
 // refinement
 
 TriMesh C1Surface::refine(int k, std::vector<Vec3>* outNormals) const {
-  if (k < 1) throw InputError("refinement: k must be at least 1");
+  if (!kSubdivisionsRange.contains(k)) throw InputError("refinement: k must be an integer in " + kSubdivisionsRange.text(true));
   const Topology& topo = *topo_;
   const int nv = int(mesh_.V.size()), nf = int(mesh_.F.size()), ne = int(topo.edges.size());
   TriMesh out;

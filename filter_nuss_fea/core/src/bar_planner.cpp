@@ -101,6 +101,8 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
                      "or take it from the chest line.");
   if (opt.levels.empty()) throw InputError("No bar level given: list the intercostal spaces to compare, e.g. '3,4,5'.");
   if (!opt.oneBar && !opt.twoBars) throw InputError("Neither one bar nor two bars asked for: choose at least one configuration.");
+  if (opt.twoBars && !kSecondOffsetRange.contains(opt.secondOffset))
+    throw InputError("The second bar's offset must lie in " + kSecondOffsetRange.text(true) + " intercostal spaces.");
   if (opt.twoBars && opt.secondOffset == 0) throw InputError("The second bar's offset must not be 0: it would share the first bar's space.");
 
   // the options, each placement checked before any solve

@@ -231,8 +231,9 @@ double meanEdgeLength(const fe::SurfaceMesh& s) {
 
 // the fixed nodes, the Fe nodes and the four Fsr patches, into s (s.mesh: the tet mesh of cage)
 void checkRadii(const Placement& pl) {
-  if (!(pl.jointRadius > 0 && pl.sternumLoadRadius > 0 && pl.ribSupportRadius > 0))
-    throw InputError("The joint, sternum load and rib support radii must be positive (mm).");
+  if (!kPatchRadiusRange.contains(pl.jointRadius) || !kPatchRadiusRange.contains(pl.sternumLoadRadius) ||
+      !kPatchRadiusRange.contains(pl.ribSupportRadius))
+    throw InputError("The joint, sternum load and rib support radii must lie in " + kPatchRadiusRange.text() + " mm.");
   if (pl.direction.norm() < 1e-12 || !pl.direction.allFinite()) throw InputError("The force direction must be a non-zero vector.");
 }
 
@@ -584,10 +585,15 @@ void validate(const Options& opt) {
     throw InputError("Poisson's ratios must lie in " + kPoissonRange.text() + ".");
   if (!kModulusRange.contains(opt.eBone) || !kModulusRange.contains(opt.eCartilage))
     throw InputError("Young's moduli must lie in " + kModulusRange.text() + " MPa: bone about 11500, costal cartilage 11-50.");
-  if (opt.targetElevation <= 0 && !(opt.force > 0)) throw InputError("The elevating force must be positive (N).");
+  if (!kTargetElevationRange.contains(opt.targetElevation))
+    throw InputError("The target elevation must lie in " + kTargetElevationRange.text() +
+                     " mm (0: a given force, or the chest line's depth).");
+  if (opt.targetElevation <= 0 && !kForceRange.contains(opt.force))
+    throw InputError("The elevating force must lie in " + kForceRange.text() + " N.");
   if (!(opt.curveStep > 0)) throw InputError("The force-displacement curve step must be positive (N).");
-  if (!(opt.maxForce > 0) || !(opt.tolerance > 0)) throw InputError("The maximum force and the calibration tolerance must be positive.");
-  if (!std::isfinite(opt.targetElevation)) throw InputError("The target elevation must be a finite number (mm).");
+  if (!kMaxForceRange.contains(opt.maxForce)) throw InputError("The maximum force must lie in " + kMaxForceRange.text() + " N.");
+  if (!kToleranceRange.contains(opt.tolerance))
+    throw InputError("The calibration tolerance must lie in " + kToleranceRange.text() + " mm.");
 }
 
 namespace {

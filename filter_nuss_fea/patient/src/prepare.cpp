@@ -479,8 +479,15 @@ int dropTinyShells(CMeshO& m, double minVolume) {
 class Preparation {
  public:
   Preparation(const PrepareOptions& o, const std::function<void(int, const char*)>& progress) : opt(o), progress_(progress) {
-    if (!(opt.minVolume >= 0) || !(opt.alpha > 0) || !(opt.offset > 0) || !(opt.edgeLength >= 0))
-      throw InputError("parameters: the minimum volume and edge length must be >= 0, alpha and offset > 0");
+    if (!kMinVolumeRange.contains(opt.minVolume))
+      throw InputError("parameters: the minimum volume must lie in " + kMinVolumeRange.text() + " mm^3");
+    if (!kAlphaRange.contains(opt.alpha))
+      throw InputError("parameters: the wrap detail alpha must lie in " + kAlphaRange.text() + " mm");
+    if (!kOffsetRange.contains(opt.offset))
+      throw InputError("parameters: the wrap offset must lie in " + kOffsetRange.text() + " mm");
+    if (!kEdgeLengthRange.contains(opt.edgeLength) || (opt.edgeLength > 0 && opt.edgeLength < kMinEdgeLength))
+      throw InputError("parameters: the target edge length must be 0 or lie in " +
+                       ParamRange{kMinEdgeLength, kEdgeLengthRange.hi}.text() + " mm");
   }
   void classify(const std::vector<InputLayer>& layers);  ///< 1. each layer's kind from its name, else its shape
   void toMillimetres();                                  ///< 2. the units
@@ -521,7 +528,7 @@ void Preparation::classify(const std::vector<InputLayer>& layers) {
   prog(2, "classifying the layers");
   std::vector<Structure> unknown;
   for (const auto& l : layers) {
-    Structure s{l.name, classifyName(l.name), soupOf(*l.mesh)};
+    Structure s{l.name, classifyName(l.name), surfaceOf(*l.mesh, kFiniteFaces)};
     if (s.soup.empty()) {
       log.push_back("'" + l.name + "': no faces, left out");
       continue;

@@ -42,9 +42,13 @@
 #include <string>
 #include <vector>
 
+#include "pectus/param_range.h"
 #include "pectus/surface.h"
 
 namespace pectus::c1 {
+
+/// the k of C1Surface::refine (each triangle split k x k); the refinement filter declares it with this range
+inline constexpr ParamRange kSubdivisionsRange{1, 32};
 
 using Vec3 = Eigen::Vector3d;
 using Vec2 = Eigen::Vector2d;
@@ -142,7 +146,8 @@ class C1Surface {
   /// per face, the face across local edge l (the edge opposite local vertex l); -1 on the boundary
   std::vector<std::array<int, 3>> faceNeighbours() const;
 
-  /// Each triangle split k x k; new vertices on the patches, edge vertices shared (conforming output).
+  /// Each triangle split k x k (k in kSubdivisionsRange, else InputError); new vertices on the patches, edge
+  /// vertices shared (conforming output).
   /// Vertex order: the input's referenced vertices (in input order), then edge, then interior vertices.
   /// `normals`, if given, receives the patch normal at every output vertex.
   TriMesh refine(int k, std::vector<Vec3>* normals = nullptr) const;

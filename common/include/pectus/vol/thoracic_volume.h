@@ -18,12 +18,17 @@
 
 namespace pectus::vol {
 
-// Valid ranges of SliceParams and EnvelopeParams (sliceVolume and envelopeVolume check their lower ends);
-// the filters declare their parameters with the same constants.
+// Valid ranges of SliceParams and EnvelopeParams; the filters declare their parameters with the same
+// constants. sliceVolume and fergusonEnvelope check the lower ends only: the upper ends bound what a user
+// asks for, and the cores' other callers go beyond them with values that scale with the model: the envelope
+// filter's coverage probe slices at an eighth of the range whatever its height, the volume fuzz target
+// takes the envelope's minimum step as 1/64 of the model's width.
+inline constexpr ParamRange kSpacingRange{0.01, 1000};    ///< SliceParams::spacing (mm)
 inline constexpr ParamRange kResolutionRange{16, 20000};  ///< SliceParams::resolution (pixels)
 inline constexpr ParamRange kRaysRange{16, 100000};       ///< boundary rays of a slice
 inline constexpr ParamRange kPatchesLongRange{1, 200};    ///< EnvelopeParams::nLong
 inline constexpr ParamRange kPatchesAroundRange{3, 200};  ///< EnvelopeParams::mAround
+inline constexpr ParamRange kMinStepRange{1e-4, 1e4};     ///< EnvelopeParams::minStep (mm)
 
 /// A triangle soup in double precision (what every core here reads): the cores' surface type
 using Soup = pectus::Surface;

@@ -26,6 +26,9 @@ namespace pectus::nuss {
 /// space below 1; duplicates are dropped, order kept.
 std::vector<int> parseLevels(const std::string& text);
 
+/// PlanOptions::secondOffset (intercostal spaces; 0 is refused as well: both bars in one space)
+inline constexpr ParamRange kSecondOffsetRange{-10, 10};
+
 struct PlanOptions {
   std::vector<int> levels;    ///< intercostal spaces of the (first) bar
   bool oneBar = true, twoBars = true;
@@ -65,8 +68,9 @@ struct Plan {
 };
 
 /// Runs every option. Throws InputError before any solve for empty levels, a level outside the ribs
-/// (no rib s or s+1), a second bar outside the ribs or the sternum, a missing range landmark or a
-/// non-positive target; and as the analysis does for anything it refuses.
+/// (no rib s or s+1), a second bar's offset outside kSecondOffsetRange or 0, a second bar outside the ribs
+/// or the sternum, a missing range landmark or a non-positive target; and as the analysis does for anything
+/// it refuses.
 Plan planBars(const CageSurface& cage, const std::vector<Landmark>& landmarks, const PlanOptions& opt);
 
 /// One line per row, comma-separated, quoted where needed; throws IOError when it cannot be written.

@@ -37,6 +37,13 @@ namespace pectus::nuss {
 inline constexpr ParamRange kPoissonRange{-1, 0.5, true, true};  ///< Poisson's ratio of every tissue
 inline constexpr ParamRange kModulusRange{0, 1e6, true, false};  ///< Young's modulus of every tissue (MPa)
 inline constexpr ParamRange kSecondShareRange{0, 1, true, true}; ///< the second bar's share of the force
+inline constexpr ParamRange kForceRange{0, 1e5, true, false};    ///< Options::force, the given Fe (N)
+inline constexpr ParamRange kMaxForceRange{0, 1e6, true, false}; ///< Options::maxForce (N)
+inline constexpr ParamRange kToleranceRange{0, 50, true, false}; ///< Options::tolerance, of the calibration (mm)
+/// Options::targetElevation (mm); 0: a given force (or the chest line's depth, Options::targetFromChestLine)
+inline constexpr ParamRange kTargetElevationRange{0, 300};
+/// Placement's jointRadius, sternumLoadRadius and ribSupportRadius (mm)
+inline constexpr ParamRange kPatchRadiusRange{0, 100, true, false};
 
 /// The cage surface as the FE core wants it: live vertices compacted, micro-edges welded, labels per
 /// face. m.vert[i] is FE node nodeOfVertex[i] (-1: deleted, or referenced by no face), so results map
@@ -165,8 +172,9 @@ struct Target {
 Target resolveTarget(const CageSurface& cage, const std::vector<Landmark>& lms, const Options& opt);
 
 /// Throws InputError naming what to change for options no analysis can run with: the mesh options
-/// (fe::validate), Poisson's ratios outside (-1, 0.5), moduli that are not positive, a force, curve step,
-/// maximum force or tolerance that is not positive, a target that is not a number. analyze() calls it first.
+/// (fe::validate), Poisson's ratios, moduli, the given force (when no target is set), the maximum force, the
+/// tolerance or the target elevation outside their ranges above, a curve step that is not positive.
+/// analyze() calls it first.
 void validate(const Options& opt);
 
 /// Where a value sits: the tet, its centroid, tissue and anatomical part, and whether it lies near the

@@ -53,8 +53,18 @@
 
 #include "pectus/cmesh.h"
 #include "pectus/labels.h"
+#include "pectus/param_range.h"
 
 namespace pectus::patient {
+
+// Valid ranges of PrepareOptions (preparePatientCage checks them); 'Prepare Patient Rib Cage' declares its
+// parameters with the same constants.
+inline constexpr ParamRange kMinVolumeRange{0, 100000};  ///< PrepareOptions::minVolume (mm^3)
+inline constexpr ParamRange kAlphaRange{0.2, 20};        ///< PrepareOptions::alpha (mm)
+inline constexpr ParamRange kOffsetRange{0.01, 5};       ///< PrepareOptions::offset (mm)
+/// PrepareOptions::edgeLength (mm): 0 keeps every face, else at least kMinEdgeLength
+inline constexpr ParamRange kEdgeLengthRange{0, 10};
+inline constexpr double kMinEdgeLength = 0.5;
 
 /// What a layer holds, from its name.
 enum class Kind { Rib, Cartilage, Sternum, Vertebra, Bone, NotCage, Unknown };
@@ -109,7 +119,7 @@ struct PrepareResult {
 };
 
 /// Builds the labelled cage into `cage` (cleared first; face labels by writeFaceLabels). Throws InputError
-/// naming what to fix: no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised by
+/// naming what to fix: an option outside its range above, no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised by
 /// name or shape (rename the layers), a frame that cannot be found, a landmark that cannot be placed and is
 /// not given; TopologyError for a structure alpha wrapping cannot close or follow at the requested detail or
 /// that is hollow.

@@ -15,13 +15,9 @@ namespace pectus::patient {
 /// The cores' surface type (pectus/surface.h)
 using Soup = pectus::Surface;
 
-/// The live faces of m (faces touching a non-finite vertex are dropped) and the vertices they use
-inline Soup soupOf(const CMeshO& m) {
-  SurfaceOf how;
-  how.vertices = SurfaceOf::Vertices::UsedByFaces;
-  how.skipNonFiniteFaces = true;
-  return surfaceOf(m, how);
-}
+/// What the patient core takes of a layer (surfaceOf(m, kFiniteFaces)): its live faces, those touching a
+/// non-finite vertex dropped, and the vertices they use
+inline const SurfaceOf kFiniteFaces{SurfaceOf::Vertices::UsedByFaces, true, {}};
 /// Vertices at exactly the same position merged, faces repeating a vertex and unused vertices dropped
 void weld(Soup& s);
 void append(Soup& to, const Soup& s);
