@@ -15,8 +15,8 @@
 #include <map>
 #include <string>
 
-#include "pectus/c1_shapes.h"
-#include "pectus/c1_surface.h"
+#include "pectus/c1/shapes.h"
+#include "pectus/c1/surface.h"
 
 using namespace pectus::c1;
 

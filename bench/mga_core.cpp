@@ -17,9 +17,9 @@
 #include <map>
 #include <string>
 
-#include "mga_smooth.h"
+#include "pectus/smooth/mga_smooth.h"
 #include "off_reader.h"
-#include "pectus/c1_surface.h"
+#include "pectus/c1/surface.h"
 #include "pectus/surface_cmesh.h"
 
 namespace sm = pectus::smooth;

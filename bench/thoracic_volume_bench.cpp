@@ -8,7 +8,7 @@
 #include <cstdlib>
 
 #include "../common/tests/analytic_cages.h"
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 #ifdef PECTUS_HAVE_CGAL
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>

@@ -3,9 +3,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "pectus/c1_surface.h"
+#include "pectus/c1/surface.h"
 #include "pectus/surface_cmesh.h"
-#include "pectus/c1_surface.h"
+#include "pectus/c1/surface.h"
 #include "pectus/errors.h"
 
 using pectus::ml::FilterContext;
@@ -95,7 +95,7 @@ void FilterC1SurfacePlugin::initParameters(int id, const MeshDocument& md, RichP
   if (id == FP_C1_REFINE) {
     addInt(par, "subdivisions", 3, "Subdivisions k",
            "Every triangle is split into k&times;k triangles; k = 1 keeps the mesh. "
-           "The new vertices lie on the C1 patches.", {1, 32});
+           "The new vertices lie on the C1 patches.", c1::kSubdivisionsRange);
     par.addParam(RichEnum("gradientMethod", 0, kGradient, "Gradient estimation", kGradientHelp));
     par.addParam(RichEnum("frame", 0, kFrame, "Surface type", kFrameHelp));
     par.addParam(RichBool("newLayer", true, "Result in a new layer",

@@ -1,5 +1,5 @@
 // MeshLab adapter of the C1 surface plugin (thesis chapter 3): maps parameters, layers, progress and
-// errors to the host-free core common/include/pectus/c1_surface.h. No algorithm lives here.
+// errors to the host-free core common/include/pectus/c1/surface.h. No algorithm lives here.
 #pragma once
 #include "filter_plugin.h"
 

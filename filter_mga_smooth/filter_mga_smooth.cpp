@@ -5,7 +5,7 @@
 #include "pectus/element_quality.h"
 #include "pectus/errors.h"
 #include "pectus/mesh_checks.h"
-#include "mga_smooth.h"
+#include "pectus/smooth/mga_smooth.h"
 
 #include <vcg/complex/algorithms/update/bounding.h>
 #include <vcg/complex/algorithms/update/normal.h>

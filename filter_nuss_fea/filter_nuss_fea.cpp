@@ -7,13 +7,13 @@
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
-#include "haller.h"
-#include "bar_planner.h"
-#include "nuss_analysis.h"
-#include "nuss_output.h"
-#include "tissue_join.h"
+#include "pectus/ribcage/haller.h"
+#include "pectus/nuss/bar_planner.h"
+#include "pectus/nuss/nuss_analysis.h"
+#include "pectus/nuss/nuss_output.h"
+#include "pectus/nuss/tissue_join.h"
 #include "plot.h"
-#include "ribcage.h"
+#include "pectus/ribcage/ribcage.h"
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
@@ -31,8 +31,6 @@ constexpr ParamRange kFunnelWidthEnvelope{rc::kFunnelMinSize, rc::kChestWidthRan
 constexpr ParamRange kFunnelHeightEnvelope{rc::kFunnelMinSize, rc::kFunnelHeightShare * rc::kSpineHeightRange.hi};
 constexpr ParamRange kFunnelCenterXEnvelope{-rc::kFunnelCenterXShare * rc::kChestWidthRange.hi,
                                             rc::kFunnelCenterXShare * rc::kChestWidthRange.hi};
-/// the radii of the joints' fixed nodes and of the load patches (mm)
-constexpr ParamRange kPatchRadiusRange{0, 100, true, false};
 QString num(double v) { return QString::number(v); }
 }  // namespace
 
@@ -282,11 +280,13 @@ void addCalibrationParams(RichParameterList& par) {
            "Measured rise of the lower sternum end (CT before, X-ray after; thesis Table 6-1: 34.0-44.7 mm, "
            "patient 1: 44.7 mm). 0: from the model, the rise that brings the lower sternum end onto the chest "
            "line (the line between the most anterior rib or cartilage points right and left of it, at its "
-           "level). A target beyond twice that depth is refused before any solve, with the reachable range.", {0, 300});
+           "level). A target beyond twice that depth is refused before any solve, with the reachable range.",
+           pectus::nuss::kTargetElevationRange);
   addFloat(par, "maxForce", 1000.0f, "Maximum force (N)",
-           "Calibration gives up (with a message) if this force does not reach the target.", {0, 1e6, true, false});
+           "Calibration gives up (with a message) if this force does not reach the target.",
+           pectus::nuss::kMaxForceRange);
   addFloat(par, "tolerance", 0.1f, "Calibration tolerance (mm)",
-           "|simulated - target elevation| allowed.", {0, 50, true, false});
+           "|simulated - target elevation| allowed.", pectus::nuss::kToleranceRange);
   par.addParam(RichEnum("calibration", entryOf(kCalibrations, pectus::nuss::Options{}.calibration), calibrations(), "Calibration method",
                         "Force search: solves for trial forces until the elevation is within the tolerance (each a whole "
                         "load path in large displacement). Displacement control: one large-displacement solve that "
@@ -332,13 +332,13 @@ void addPatchParams(RichParameterList& par) {
   addFloat(par, "jointRadius", 6.0f, "Joint radius (mm)",
            "Nodes within this distance of a costovertebral joint landmark are fixed (head and tubercle); a joint with "
            "fewer than 4 nodes of its rib that near (a coarse or smoothed mesh) is fixed at the 4 nodes of its rib nearest to it, and the Log says so.",
-           kPatchRadiusRange);
+           pectus::nuss::kPatchRadiusRange);
   addFloat(par, "sternumLoadRadius", 8.0f, "Fe patch radius (mm)",
            "Fe is spread evenly over the sternum surface nodes within this distance of the lower sternum end.",
-           kPatchRadiusRange);
+           pectus::nuss::kPatchRadiusRange);
   addFloat(par, "ribSupportRadius", 6.0f, "Fsr patch radius (mm)",
            "Each Fsr is spread over the rib's surface nodes within this distance of the rib point nearest "
-           "to the bar exit.", kPatchRadiusRange);
+           "to the bar exit.", pectus::nuss::kPatchRadiusRange);
 }
 
 std::vector<pectus::Landmark> readLandmarkParam(FilterContext& ctx) {
@@ -405,7 +405,7 @@ void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList&
                         "Calibrate: find Fe so the sternum end rises by the target elevation (by the calibration method "
                         "below). Given: apply the elevating force below."));
   addFloat(par, "force", 140.0f, "Elevating force Fe (N)",
-           "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N.", {0, 1e5, true, false});
+           "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N.", pectus::nuss::kForceRange);
   addCalibrationParams(par);
   addModelParams(par);
   addInt(par, "intercostalSpace", 4, "Bar intercostal space",
@@ -542,7 +542,8 @@ void FilterNussFeaPlugin::initBarPlanner(const MeshDocument& md, RichParameterLi
                         "One bar per level, two bars per level, or both (one row each)."));
   addInt(par, "secondOffset", -1, "Second bar: offset (spaces)",
          "The second bar goes into space s + offset: -1 = the space above the first bar, -2 = two above. "
-         "Not 0. The first bar's load stays at the lower sternum end, so the second bar goes above it.", {-10, 10});
+         "Not 0. The first bar's load stays at the lower sternum end, so the second bar goes above it.",
+         pectus::nuss::kSecondOffsetRange);
   addFloat(par, "secondShare", 0.5f, "Second bar: share of the force",
            "Part of the total elevating force carried by the second bar; the first bar carries the rest.",
            pectus::nuss::kSecondShareRange);

@@ -9,8 +9,8 @@
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
-#include "ct_import.h"
-#include "prepare.h"
+#include "pectus/patient/ct_import.h"
+#include "pectus/patient/prepare.h"
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
@@ -18,9 +18,8 @@ using pectus::ml::addFloat;
 using pectus::ml::addInt;
 
 namespace {
-/// the target edge length of the prepared cage (mm): 0 keeps every face, else at least kMinEdgeLength
-constexpr pectus::ParamRange kEdgeLengthRange{0, 10};
-constexpr double kMinEdgeLength = 0.5;
+using pectus::patient::kEdgeLengthRange;
+using pectus::patient::kMinEdgeLength;
 std::string num(double v) { return QString::number(v).toStdString(); }
 }  // namespace
 
@@ -109,14 +108,14 @@ void FilterNussFeaPlugin::initPreparePatient(RichParameterList& par) {
                         "the ribs' slope, the patient's left from the right-handed scanner frame (or from the names)."));
   addFloat(par, "minVolume", d.minVolume, "Fragment volume (mm^3)",
            "Connected pieces smaller than this are fragments and are dropped (a child's rib "
-           "holds 2000-10000 mm^3).", {0, 100000});
+           "holds 2000-10000 mm^3).", pectus::patient::kMinVolumeRange);
   addFloat(par, "alpha", d.alpha, "Wrap detail, alpha (mm)",
            "Alpha wrapping (of the costal cartilages, and of structures that stay open, non-manifold or "
            "self-intersecting after removing duplicate faces and closing holes): the smallest gap kept "
-           "open (smaller: closer to the input, slower).", {0.2, 20});
+           "open (smaller: closer to the input, slower).", pectus::patient::kAlphaRange);
   addFloat(par, "offset", d.offset, "Wrap offset (mm)",
            "Distance of the wrap from the input (it adds about offset x area to the volume; the "
-           "wrapped cartilages overlap the ribs and sternum they join by this much).", {0.01, 5});
+           "wrapped cartilages overlap the ribs and sternum they join by this much).", pectus::patient::kOffsetRange);
   addFloat(par, "edgeLength", d.edgeLength, "Target edge length (mm)",
            "The joined surface is decimated to this edge length; 0 keeps every face, else " + QString::number(kMinEdgeLength) + " mm at least. The FE analysis's "
            "time and memory grow with the cube of 1/edge: 4 mm suits it, 2 mm shows the anatomy finer.",

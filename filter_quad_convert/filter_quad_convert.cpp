@@ -5,15 +5,15 @@
 #include <vcg/complex/algorithms/update/normal.h>
 #include <vcg/complex/algorithms/update/topology.h>
 
-#include "pectus/c1_surface.h"
+#include "pectus/c1/surface.h"
 #include "pectus/surface_cmesh.h"
 #include "pectus/elements.h"
 #include "pectus/errors.h"
 #include "pectus/mesh_checks.h"
-#include "poly_io.h"
-#include "poly_mesh.h"
-#include "quad_convert.h"
-#include "structure.h"
+#include "pectus/quad/poly_io.h"
+#include "pectus/quad/poly_mesh.h"
+#include "pectus/quad/quad_convert.h"
+#include "pectus/quad/structure.h"
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;

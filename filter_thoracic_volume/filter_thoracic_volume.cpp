@@ -7,7 +7,7 @@
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 using pectus::InputError;
 using pectus::ml::FilterContext;
@@ -204,7 +204,7 @@ void FilterThoracicVolumePlugin::initParameters(int id, const MeshDocument& md, 
     addCommon(md, par, 0);
     addFloat(par, "spacing", 2.6f, "Spacing (mm)",
              "Distance between the cutting planes along z (thesis: about 2.6 mm); adjusted down so that "
-             "a whole number of layers fills the range.", {0.01, 1000});
+             "a whole number of layers fills the range.", vol::kSpacingRange);
     addInt(par, "resolution", 512, "Resolution (pixels)",
            "Pixels along the longer side of the slices' common raster (thesis: 512 x 512).", vol::kResolutionRange);
     addInt(par, "rays", 720, "Rays",
@@ -222,7 +222,7 @@ void FilterThoracicVolumePlugin::initParameters(int id, const MeshDocument& md, 
              "every key point is held.", {0, 1e5});
     addFloat(par, "minStep", 0.05f, "Final step (mm)",
              "The convergence stops once the halved step falls below this value: the envelope's "
-             "accuracy in mm.", {1e-4, 1e4});
+             "accuracy in mm.", vol::kMinStepRange);
     par.addParam(RichBool("smoothing", true, "Smoothing (eq. 6-1)",
                           "Raise each key point to the mean radius of its neighbours along z when that is larger, "
                           "so that the envelope does not fall into the intercostal gaps."));
@@ -316,7 +316,7 @@ void FilterThoracicVolumePlugin::runEnvelope(FilterContext& ctx) {
   std::vector<Out> outs;
   auto measure = [&](const vol::Soup& s, MeshModel& mm, int p0, int p1) {
     vol::SliceParams probe;  // coarse: only whether the layer surrounds the range at all
-    probe.spacing = std::max(0.01, (c.range.zHi - c.range.zLo) / 8);
+    probe.spacing = std::max(vol::kSpacingRange.lo, (c.range.zHi - c.range.zLo) / 8);
     probe.resolution = 64;
     probe.rays = 64;
     requireEnclosure(vol::sliceVolume(s, c.range, probe), lab(mm), c.range);

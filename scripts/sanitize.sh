@@ -19,9 +19,9 @@ if [ "$MODE" = ci ]; then
   # every GoogleTest suite except the six that generate a rib cage (test_ribcage, test_nuss,
   # test_bar_planner, test_tissue_join, test_patient_prepare, test_ct_phantom: ~6 min in Release, 2-4x that
   # under ASan, and CGAL's corefinement is a long ASan compile); those run with `scripts/sanitize.sh`
-  SUITES=(test_quality test_elements test_c1_surface test_mga test_mga_smooth test_quad_convert
-          test_thoracic_volume test_fe_io test_fe_mesher test_fe_solver test_label_volume test_ct_import
-          test_ct_import_nifti)
+  SUITES=(test_quality test_elements test_surface test_errors test_c1_surface test_mga test_mga_smooth
+          test_quad_convert test_thoracic_volume test_fe_io test_fe_mesher test_fe_solver test_label_volume
+          test_ct_import test_ct_import_nifti)
   REPLAYS=(c1 mga quad volume)
   cmake --preset asan >/dev/null
   cmake --build --preset asan -j"$(nproc)" --target "${SUITES[@]}" "${REPLAYS[@]/#/replay_}"

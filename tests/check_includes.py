@@ -6,13 +6,17 @@ the filter_* folders and fails, naming the file, the line and the include, when
   tests/) includes Qt or MeshLab's headers, or a file outside its own plugin folder and the common cores;
 - an adapter (the files directly in a filter_* folder) includes another plugin's folder or anything outside
   its own plugin folder and common/;
-- common/ includes a plugin's folder.
+- common/ includes a plugin's folder;
+
+and, for the header layout, when a core's public header is not under an `include/pectus/` folder, or a header
+in `include/pectus/<area>/` does not declare `namespace pectus::<area>` (one in `include/pectus/` itself:
+`namespace pectus`). A core's private headers sit beside its sources in `src/`; test fixtures in `tests/`.
 
 A quoted include is resolved as the compiler does: beside the including file first, then in the include
 directories the CMakeLists.txt files declare (target_include_directories). An include that names headers in
 two of those directories is reported too, since which one the compiler takes depends on the target.
 
-    tests/check_includes.py [ROOT]        exit 0: the tree keeps the rule; 1: the violations are listed
+    tests/check_includes.py [ROOT]        exit 0: the tree keeps the rules; 1: the violations are listed
 """
 from __future__ import annotations
 
@@ -112,6 +116,30 @@ def scanned_files(root: str) -> tuple[list[str], list[str]]:
     return sources, cmakes
 
 
+NAMESPACE = re.compile(r"^\s*namespace\s+([A-Za-z_][\w:]*)\s*\{", re.M)
+
+
+def layout_violation(rel: str, text: str) -> str | None:
+    """why the header `rel` (relative to the root) with source `text` breaks the header layout, or None"""
+    owner, role = zone(rel)
+    if role != "core" or not rel.endswith((".h", ".hpp")):
+        return None
+    parts = rel.split("/")
+    if "tests" in parts or "src" in parts:
+        return None  # a test fixture, or a core's private header beside its sources
+    if "include" not in parts or parts[parts.index("include") + 1:parts.index("include") + 2] != ["pectus"]:
+        return "a core's public header outside an include/pectus/ folder (move it to include/pectus/<area>/)"
+    below = parts[parts.index("include") + 2:]
+    want = "pectus" if len(below) == 1 else "pectus::" + "::".join(below[:-1])
+    declared = [n for n in NAMESPACE.findall(text) if n.startswith("pectus")]
+    if not declared:
+        return f"declares no namespace; its folder says {want}"
+    wrong = sorted({n for n in declared if n != want and not n.startswith(want + "::detail")})
+    if wrong:
+        return f"declares namespace {', '.join(wrong)}; its folder says {want}"
+    return None
+
+
 def resolve(root: str, dirs: list[str], includer: str, delim: str, include: str) -> list[str]:
     """the files in the tree the include can name, relative to the root"""
     if delim == '"':
@@ -129,24 +157,41 @@ def resolve(root: str, dirs: list[str], includer: str, delim: str, include: str)
 def self_check() -> list[str]:
     """the rule on known cases, so that a rule that lets everything through fails too"""
     cases = [
-        ("filter_nuss_fea/core/bar_planner.h", "mga_smooth.h", "filter_mga_smooth/core/mga_smooth.h", True),
-        ("filter_nuss_fea/core/bar_planner.h", "QString", None, True),
+        ("filter_nuss_fea/core/include/pectus/nuss/bar_planner.h", "pectus/smooth/mga_smooth.h",
+         "filter_mga_smooth/core/include/pectus/smooth/mga_smooth.h", True),
+        ("filter_nuss_fea/core/include/pectus/nuss/bar_planner.h", "QString", None, True),
         ("filter_nuss_fea/fe/src/io.cpp", "common/globals.h", None, True),
         ("common/src/quality.cpp", "QObject", None, True),
-        ("common/src/quality.cpp", "ribcage.h", "filter_nuss_fea/core/ribcage.h", True),
-        ("filter_mga_smooth/core/mga.cpp", "filter_plugin.h", "common/meshlab/filter_plugin.h", True),
-        ("filter_mga_smooth/core/mga.cpp", "filter_mga_smooth.h", "filter_mga_smooth/filter_mga_smooth.h", True),
+        ("common/src/quality.cpp", "pectus/ribcage/ribcage.h", "filter_nuss_fea/core/include/pectus/ribcage/ribcage.h",
+         True),
+        ("filter_mga_smooth/core/src/mga.cpp", "filter_plugin.h", "common/meshlab/filter_plugin.h", True),
+        ("filter_mga_smooth/core/src/mga.cpp", "filter_mga_smooth.h", "filter_mga_smooth/filter_mga_smooth.h", True),
         ("common/src/labels.cpp", "plot.h", "common/meshlab/plot.h", True),
-        ("filter_thoracic_volume/filter_thoracic_volume.cpp", "ribcage.h", "filter_nuss_fea/core/ribcage.h", True),
-        ("filter_nuss_fea/core/bar_planner.h", "pectus/thoracic_volume.h", "common/include/pectus/thoracic_volume.h",
-         False),
+        ("filter_thoracic_volume/filter_thoracic_volume.cpp", "pectus/ribcage/ribcage.h",
+         "filter_nuss_fea/core/include/pectus/ribcage/ribcage.h", True),
+        ("filter_nuss_fea/core/include/pectus/nuss/bar_planner.h", "pectus/vol/thoracic_volume.h",
+         "common/include/pectus/vol/thoracic_volume.h", False),
         ("filter_nuss_fea/filter_nuss_fea.cpp", "plot.h", "common/meshlab/plot.h", False),
         ("filter_nuss_fea/filter_nuss_fea.cpp", "QFileInfo", None, False),
-        ("filter_nuss_fea/filter_patient.cpp", "prepare.h", "filter_nuss_fea/patient/prepare.h", False),
+        ("filter_nuss_fea/filter_patient.cpp", "pectus/patient/prepare.h",
+         "filter_nuss_fea/patient/include/pectus/patient/prepare.h", False),
         ("common/include/pectus/cmesh.h", "common/ml_mesh_type.h", None, False),
         ("common/include/pectus/labels.h", "common/ml_mesh_type.h", None, True),
     ]
+    layouts = [
+        ("filter_nuss_fea/core/include/pectus/nuss/bar_planner.h", "namespace pectus::nuss {", False),
+        ("filter_nuss_fea/core/include/pectus/nuss/bar_planner.h", "namespace pectus::ribcage {", True),
+        ("filter_nuss_fea/core/bar_planner.h", "namespace pectus::nuss {", True),
+        ("common/include/pectus/errors.h", "namespace pectus {", False),
+        ("common/include/pectus/c1/surface.h", "namespace pectus {", True),
+        ("filter_mga_smooth/core/src/private.h", "namespace pectus::smooth {", False),
+        ("filter_nuss_fea/tests/coarse_cage.h", "namespace pectus::fixture {", False),
+        ("filter_nuss_fea/filter_nuss_fea.h", "namespace pectus::ml {", False),
+    ]
     wrong = []
+    for rel, text, bad in layouts:
+        if (layout_violation(rel, text) is not None) != bad:
+            wrong.append(f"self-check: {rel} with '{text}' should {'fail' if bad else 'pass'} the header layout")
     for includer, include, target, bad in cases:
         if (violation(includer, include, target) is not None) != bad:
             wrong.append(f"self-check: {includer}: #include {include} should {'fail' if bad else 'pass'}")
@@ -161,28 +206,32 @@ def main() -> int:
     count = 0
     for rel in sources:
         with open(os.path.join(root, rel), encoding="utf-8", errors="replace") as fh:
-            for k, line in enumerate(fh, 1):
-                m = INCLUDE.match(line)
-                if not m:
-                    continue
-                count += 1
-                delim, include = m.groups()
-                shown = f'"{include}"' if delim == '"' else f"<{include}>"
-                targets = resolve(root, dirs, rel, delim, include)
-                if len(targets) > 1:
-                    problems.append(f"{rel}:{k}: #include {shown} names {len(targets)} headers ({', '.join(targets)}); "
-                                    "give it a unique path")
-                    continue
-                why = violation(rel, include, targets[0] if targets else None)
-                if why:
-                    problems.append(f"{rel}:{k}: #include {shown}: {why}")
+            text = fh.read()
+        why = layout_violation(rel, text)
+        if why:
+            problems.append(f"{rel}: {why}")
+        for k, line in enumerate(text.splitlines(), 1):
+            m = INCLUDE.match(line)
+            if not m:
+                continue
+            count += 1
+            delim, include = m.groups()
+            shown = f'"{include}"' if delim == '"' else f"<{include}>"
+            targets = resolve(root, dirs, rel, delim, include)
+            if len(targets) > 1:
+                problems.append(f"{rel}:{k}: #include {shown} names {len(targets)} headers ({', '.join(targets)}); "
+                                "give it a unique path")
+                continue
+            why = violation(rel, include, targets[0] if targets else None)
+            if why:
+                problems.append(f"{rel}:{k}: #include {shown}: {why}")
     if len(sources) < 50 or len(dirs) < 5:
         problems.append(f"only {len(sources)} sources and {len(dirs)} include directories found under {root}")
     for p in problems:
         print(p)
     print(f"{count} includes in {len(sources)} files checked ({len(dirs)} include directories): "
-          + (f"{len(problems)} violations of the include rule (docs/DEVELOPING.md, 'The layers')" if problems
-             else "the include rule holds"))
+          + (f"{len(problems)} violations of the include rule or the header layout (docs/DEVELOPING.md, "
+                "'The layers')" if problems else "the include rule and the header layout hold"))
     return 1 if problems else 0
 
 

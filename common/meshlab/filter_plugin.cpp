@@ -276,6 +276,7 @@ void FilterPluginBase::declare(int id, const MeshDocument& md, RichParameterList
   for (std::size_t i = 0; i < specs_.size(); ++i)
     if (specs_[i].id == id) (*std::next(actionList.begin(), long(i)))->setProperty(kRangesProperty, published);
   ranges_[id] = std::move(ranges);
+  declared_.insert(id);
 }
 
 QString FilterPluginBase::filterName(int id) const { return spec(id).name; }
@@ -306,7 +307,7 @@ std::string FilterPluginBase::runFilter(int id, MeshDocument& md, const RichPara
   {
     FilterContext ctx(md, par, cb, logger, name, &ranges_[id]);
     try {
-      if (ranges_[id].empty()) {  // the host may run a script without asking for the parameters first
+      if (!declared_.count(id)) {  // the host may run a script without asking for the parameters first
         RichParameterList declared;
         declare(id, md, declared);
       }

@@ -17,6 +17,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -158,6 +159,8 @@ class FilterPluginBase : public HostFilter {
  private:
   std::vector<FilterSpec> specs_;
   std::map<int, DeclaredRanges> ranges_;
+  /// the filters whose parameters were declared (their ranges_ entry is complete, possibly empty)
+  std::set<int> declared_;
   /// initParameters(id, ...) with the ranges its addFloat/addInt calls declare recorded for filter id
   void declare(int id, const MeshDocument& md, RichParameterList& par);
   /// the outcome of a run: empty on success, else the message (already logged)

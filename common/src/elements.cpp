@@ -3,10 +3,32 @@
 #include <string>
 #include <unordered_map>
 
-#include "pectus/edge_map.h"
 #include "pectus/errors.h"
+#include "pectus/surface.h"
+#include "pectus/surface_cmesh.h"
 
 namespace pectus {
+
+namespace {
+
+// The faces (Surface face indices, ascending, once per use) of the edge from corner k to corner k + 1 of
+// face f. A collapsed edge (f has a repeated vertex there) is not an edge of the topology: it is held by
+// every face with a collapsed edge at that vertex, as a table keyed by every local edge holds it.
+std::vector<int> facesOfEdge(const Surface& s, const Topology& t, int f, int k) {
+  std::vector<int> out;
+  const int e = t.faceEdge[std::size_t(f)][std::size_t((k + 2) % 3)];  // local edge l is opposite corner l
+  if (e >= 0) {
+    for (const int* p = t.edgeFacesBegin(e); p != t.edgeFacesEnd(e); ++p) out.push_back(*p / 3);
+    return out;
+  }
+  const int a = s.F[std::size_t(f)][std::size_t(k)];
+  for (std::size_t g = 0; g < s.F.size(); ++g)
+    for (int l = 0; l < 3; ++l)
+      if (s.F[g][std::size_t((l + 1) % 3)] == a && s.F[g][std::size_t((l + 2) % 3)] == a) out.push_back(int(g));
+  return out;
+}
+
+}  // namespace
 
 std::size_t ElementMesh::quads() const {
   std::size_t n = 0;
@@ -40,7 +62,11 @@ ElementMesh buildElements(const CMeshO& m, ElementKind kind) {
     return out;
   }
 
-  const EdgeMap edges(m);
+  // the live faces over every entry of m.vert (Surface vertex i is m.vert[i]), and back to m.face
+  std::vector<int> faceOf, surfaceFace(m.face.size(), -1);
+  const Surface s = surfaceOf(m, {SurfaceOf::Vertices::All}, nullptr, &faceOf);
+  for (std::size_t i = 0; i < faceOf.size(); ++i) surfaceFace[std::size_t(faceOf[i])] = int(i);
+  const Topology topo(s);
   for (std::size_t fi = 0; fi < m.face.size(); ++fi) {
     const auto& f = m.face[fi];
     if (f.IsD() || out.faceToElement[fi] >= 0) continue;
@@ -57,7 +83,8 @@ ElementMesh buildElements(const CMeshO& m, ElementKind kind) {
         throw TopologyError("face " + std::to_string(fi) + " has " + std::to_string(nfaux) +
                          " faux edges: the layer holds polygons with more than four sides, not quads");
       const int a = vi(f, faux), b = vi(f, (faux + 1) % 3), c = vi(f, (faux + 2) % 3);
-      const EdgeMap::Faces nb = edges.faces(a, b);
+      std::vector<int> nb = facesOfEdge(s, topo, surfaceFace[fi], faux);
+      for (int& g : nb) g = faceOf[std::size_t(g)];
       if (nb.size() != 2)
         throw TopologyError("face " + std::to_string(fi) + " has a faux edge " +
                          (nb.size() < 2 ? std::string("on the boundary") : std::string("shared by more than two faces")) +

@@ -6,8 +6,9 @@
 #include <sstream>
 #include <vector>
 
-#include "pectus/edge_map.h"
 #include "pectus/errors.h"
+#include "pectus/surface.h"
+#include "pectus/surface_cmesh.h"
 
 namespace pectus {
 
@@ -23,56 +24,79 @@ std::string MeshReport::summary() const {
   return s.str();
 }
 
-MeshReport inspectMesh(const CMeshO& m) {
-  MeshReport r;
-  std::vector<int> valence(m.vert.size(), 0);
-  for (std::size_t i = 0; i < m.vert.size(); ++i) {
-    const auto& v = m.vert[i];
+namespace {
+
+// Live vertices and those with NaN/Inf coordinates.
+void countVertices(const CMeshO& m, MeshReport& r) {
+  for (const auto& v : m.vert) {
     if (v.IsD()) continue;
     ++r.vertices;
     const auto& p = v.cP();
     if (!std::isfinite(p[0]) || !std::isfinite(p[1]) || !std::isfinite(p[2])) ++r.nonFiniteVertices;
   }
+}
+
+// Live faces and the degenerate ones (a repeated vertex, or no area in the mesh's own precision).
+void countFaces(const CMeshO& m, MeshReport& r) {
   for (const auto& f : m.face) {
     if (f.IsD()) continue;
     ++r.faces;
-    for (int k = 0; k < 3; ++k) ++valence[vcg::tri::Index(m, f.cV(k))];
     const auto a = f.cP(0), b = f.cP(1), c = f.cP(2);
     const double area = double(((b - a) ^ (c - a)).Norm());
     if (f.cV(0) == f.cV(1) || f.cV(1) == f.cV(2) || f.cV(0) == f.cV(2) || !(area > 0.0)) ++r.degenerateFaces;
   }
-  for (std::size_t i = 0; i < m.vert.size(); ++i)
-    if (!m.vert[i].IsD() && valence[i] == 0) ++r.unreferencedVertices;
-  {
-    std::vector<std::array<std::size_t, 3>> tri;
-    for (const auto& f : m.face) {
-      if (f.IsD()) continue;
-      std::array<std::size_t, 3> v{vcg::tri::Index(m, f.cV(0)), vcg::tri::Index(m, f.cV(1)), vcg::tri::Index(m, f.cV(2))};
-      std::sort(v.begin(), v.end());
-      tri.push_back(v);
-    }
-    std::sort(tri.begin(), tri.end());
-    for (std::size_t i = 1; i < tri.size(); ++i)
-      if (tri[i] == tri[i - 1]) ++r.duplicateFaces;
-  }
+}
 
-  const EdgeMap edges(m);
-  // per vertex: count of incident boundary edges and of faces, to detect non-manifold vertices
-  // (a manifold vertex's fan is one cycle: #edges-in-fan == #faces, or a chain with 2 boundary edges)
-  std::vector<int> vBoundary(m.vert.size(), 0), vEdges(m.vert.size(), 0);
-  edges.forEach([&](int a, int b, const EdgeMap::Faces& fs) {
-    if (fs.size() == 1) { ++r.boundaryEdges; ++vBoundary[a]; ++vBoundary[b]; }
-    if (fs.size() > 2) ++r.nonManifoldEdges;
-    ++vEdges[a];
-    ++vEdges[b];
-  });
-  // Euler check on each vertex star: for a single disk, edges = faces (closed fan) or faces + 1 (open fan).
-  // Two fans glued at the vertex give more edges than faces + 1, or more than two boundary edges.
+// Faces with the same three vertices as an earlier face, in any order.
+std::size_t duplicateFaces(const Surface& s) {
+  std::vector<std::array<int, 3>> tri(s.F);
+  for (auto& t : tri) std::sort(t.begin(), t.end());
+  std::sort(tri.begin(), tri.end());
+  std::size_t n = 0;
+  for (std::size_t i = 1; i < tri.size(); ++i) n += tri[i] == tri[i - 1];
+  return n;
+}
+
+// The vertex test of the checks, by counting on each vertex's star: one disk has as many edges as faces
+// (a closed fan) or one more, two of them boundary edges (an open fan). A collapsed edge of a degenerate
+// face counts as an edge (v, v), twice at v, a boundary edge when no other face collapses there. The count
+// misses a closed fan touching another fan (Topology::fans sees it); the filters accept what it accepts.
+std::vector<char> countTestNonManifold(const Topology& t) {
+  const std::size_t nv = t.boundary.size();
+  std::vector<int> vEdges(nv, 0), vBoundary(nv, 0);
+  for (const auto& e : t.edges) {
+    ++vEdges[std::size_t(e.a)], ++vEdges[std::size_t(e.b)];
+    if (e.faces == 1) ++vBoundary[std::size_t(e.a)], ++vBoundary[std::size_t(e.b)];
+  }
+  for (std::size_t v = 0; v < nv; ++v)
+    if (const int c = t.collapsedEdges[v]) vEdges[v] += 2, vBoundary[v] += c == 1 ? 2 : 0;
+  std::vector<char> bad(nv, 0);
+  for (std::size_t v = 0; v < nv; ++v) {
+    const int faces = t.vfStart[v + 1] - t.vfStart[v];  // a face once per corner at v
+    bad[v] = !((vBoundary[v] == 0 && vEdges[v] == faces) || (vBoundary[v] == 2 && vEdges[v] == faces + 1));
+  }
+  return bad;
+}
+
+}  // namespace
+
+MeshReport inspectMesh(const CMeshO& m) {
+  MeshReport r;
+  countVertices(m, r);
+  countFaces(m, r);
+  // the live faces over every entry of m.vert: Surface vertex i is m.vert[i]
+  const Surface s = surfaceOf(m, {SurfaceOf::Vertices::All});
+  const Topology t(s);
+  r.duplicateFaces = duplicateFaces(s);
+  const Topology::EdgeUse use = t.edgeUse();
+  r.boundaryEdges = use.once;
+  r.nonManifoldEdges = use.moreThanTwice;
+  const std::vector<char> bad = countTestNonManifold(t);
   for (std::size_t i = 0; i < m.vert.size(); ++i) {
-    if (m.vert[i].IsD() || valence[i] == 0) continue;
-    const int fcount = valence[i];
-    const bool ok = (vBoundary[i] == 0 && vEdges[i] == fcount) || (vBoundary[i] == 2 && vEdges[i] == fcount + 1);
-    if (!ok) ++r.nonManifoldVertices;
+    if (m.vert[i].IsD()) continue;
+    const bool used = t.vfStart[i + 1] > t.vfStart[i];
+    r.unreferencedVertices += !used;
+    r.nonManifoldVertices += used && bad[i];
   }
   return r;
 }

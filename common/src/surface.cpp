@@ -43,10 +43,14 @@ Topology::Topology(const Surface& m) {
   // 3. edges: one sort of (min, max, face*3 + local); local edge l is opposite local vertex l
   std::vector<std::pair<std::uint64_t, int>> keys;
   keys.reserve(3 * std::size_t(nf));
+  collapsedEdges.assign(std::size_t(nv), 0);
   for (int f = 0; f < nf; ++f)
     for (int l = 0; l < 3; ++l) {
       int a = m.F[std::size_t(f)][std::size_t((l + 1) % 3)], b = m.F[std::size_t(f)][std::size_t((l + 2) % 3)];
-      if (a == b) continue;  // repeated vertex: the face is degenerate, the "edge" is a point
+      if (a == b) {  // repeated vertex: the face is degenerate, the "edge" is a point
+        ++collapsedEdges[std::size_t(a)];
+        continue;
+      }
       if (a > b) std::swap(a, b);
       keys.push_back({(std::uint64_t(std::uint32_t(a)) << 32) | std::uint32_t(b), f * 3 + l});
     }
@@ -97,6 +101,41 @@ Topology::Topology(const Surface& m) {
     const bool ok = (vBnd[si] == 0 && vEdges[si] == nfv) || (vBnd[si] == 2 && vEdges[si] == nfv + 1);
     nonManifoldVertex[si] = !ok;
   }
+
+  // 5. fans around each vertex, by walking them
+  countFans(m);
+}
+
+void Topology::countFans(const Surface& m) {
+  const std::size_t nv = vfStart.size() - 1;
+  fans.assign(nv, 0);
+  // per vertex: its faces get local slots, joined (union-find) across every edge at the vertex
+  std::vector<int> slot(m.F.size(), -1), parent;
+  for (std::size_t v = 0; v < nv; ++v) {
+    parent.clear();
+    for (int q = vfStart[v]; q < vfStart[v + 1]; ++q) {
+      int& s = slot[std::size_t(vf[std::size_t(q)])];
+      if (s < 0) s = int(parent.size()), parent.push_back(s);  // a face with a repeated vertex: one slot
+    }
+    for (int q = vfStart[v]; q < vfStart[v + 1]; ++q) {
+      const int f = vf[std::size_t(q)];
+      for (int l = 0; l < 3; ++l) {
+        const int e = faceEdge[std::size_t(f)][std::size_t(l)];
+        if (e < 0 || (edges[std::size_t(e)].a != int(v) && edges[std::size_t(e)].b != int(v))) continue;
+        for (const int* g = edgeFacesBegin(e); g != edgeFacesEnd(e); ++g)
+          parent[std::size_t(findRoot(parent, slot[std::size_t(*g / 3)]))] = findRoot(parent, slot[std::size_t(f)]);
+      }
+    }
+    for (std::size_t i = 0; i < parent.size(); ++i) fans[v] += findRoot(parent, int(i)) == int(i);
+    for (int q = vfStart[v]; q < vfStart[v + 1]; ++q) slot[std::size_t(vf[std::size_t(q)])] = -1;
+  }
+}
+
+Topology::EdgeUse Topology::edgeUse() const {
+  EdgeUse u;
+  for (const auto& e : edges) u.once += e.faces == 1, u.moreThanTwice += e.faces > 2;
+  for (int c : collapsedEdges) u.once += c == 1, u.moreThanTwice += c > 2;
+  return u;
 }
 
 std::size_t Topology::boundaryEdges() const {

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <functional>
 
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 namespace pectus::vol::testing {
 

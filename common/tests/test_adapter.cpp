@@ -3,6 +3,8 @@
 // failure the host's way (2020.09: false + errorMessage; 2021.05+: MLException).
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <vcg/complex/algorithms/create/platonic.h>
 
 #include "filter_plugin.h"
@@ -13,13 +15,15 @@ namespace {
 
 class FakePlugin : public QObject, public pectus::ml::FilterPluginBase {
  public:
-  enum { FP_BREAK, FP_OK, FP_CRASH };
+  enum { FP_BREAK, FP_OK, FP_CRASH, FP_PLAIN };  ///< FP_PLAIN: no numeric parameter
   std::function<void(pectus::ml::FilterContext&)> body;
+  std::map<int, int> declarations;  ///< initParameters calls per filter
   FakePlugin() {
     pectus::ml::FilterSpec s;
     s.id = FP_BREAK; s.name = "Break"; s.info = "x"; addFilter(this, s);
     s.id = FP_OK; s.name = "Ok"; addFilter(this, s);
     s.id = FP_CRASH; s.name = "Crash"; addFilter(this, s);
+    s.id = FP_PLAIN; s.name = "Plain"; addFilter(this, s);
   }
   QString pluginName() const override { return "Fake"; }
 #if PECTUS_MESHLAB_API >= 2021
@@ -28,7 +32,12 @@ class FakePlugin : public QObject, public pectus::ml::FilterPluginBase {
     return {meshlab::meshlabVersion(), meshlab::builtWithDoublePrecision()};
   }
 #endif
-  void initParameters(int, const MeshDocument&, RichParameterList& par) override {
+  void initParameters(int id, const MeshDocument&, RichParameterList& par) override {
+    ++declarations[id];
+    if (id == FP_PLAIN) {
+      par.addParam(RichBool("flag", false, "flag", "A switch."));
+      return;
+    }
     pectus::ml::addFloat(par, "x", 1.0, "x", "A length (mm).", {0, 10, true, false});
     pectus::ml::addInt(par, "n", 3, "n", "", {1, 5});
   }
@@ -186,6 +195,32 @@ TEST(Adapter, DeclaredRangeIsTheToolTipAndTheCheck) {
   bad.addParam(RichFloat("x", 0.0f, "x", ""));
   bad.addParam(RichInt("n", 1, "n", ""));
   EXPECT_NE(apply(p, 1, md, bad).indexOf("parameter 'x' must be in (0, 10], got 0"), -1);
+}
+
+// A script run declares a filter's parameters before its first run only, also when the filter has no numeric
+// parameter (no range to record).
+TEST(Adapter, ParametersAreDeclaredOnceWithoutNumericParameters) {
+  MeshDocument md;
+  md.addNewMesh("", "a");
+  FakePlugin p;
+  int runs = 0;
+  p.body = [&](pectus::ml::FilterContext&) { ++runs; };
+  RichParameterList plain;
+  plain.addParam(RichBool("flag", true, "flag", ""));
+  for (int i = 0; i < 3; ++i) EXPECT_TRUE(apply(p, FakePlugin::FP_PLAIN, md, plain).isEmpty());
+  EXPECT_EQ(runs, 3);
+  EXPECT_EQ(p.declarations[FakePlugin::FP_PLAIN], 1);
+  RichParameterList numeric;
+  numeric.addParam(RichFloat("x", 1.0f, "x", ""));
+  numeric.addParam(RichInt("n", 3, "n", ""));
+  for (int i = 0; i < 2; ++i) EXPECT_TRUE(apply(p, FakePlugin::FP_OK, md, numeric).isEmpty());
+  EXPECT_EQ(p.declarations[FakePlugin::FP_OK], 1);
+  // declared when the host asks for the parameters: a run after that declares nothing more
+  FakePlugin asked;
+  asked.body = [](pectus::ml::FilterContext&) {};
+  params(asked, FakePlugin::FP_PLAIN, md);
+  EXPECT_TRUE(apply(asked, FakePlugin::FP_PLAIN, md, plain).isEmpty());
+  EXPECT_EQ(asked.declarations[FakePlugin::FP_PLAIN], 1);
 }
 
 TEST(Adapter, NoCurrentLayerIsAMessage) {

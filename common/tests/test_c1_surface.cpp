@@ -9,8 +9,8 @@
 #include <omp.h>
 #endif
 
-#include "pectus/c1_shapes.h"
-#include "pectus/c1_surface.h"
+#include "pectus/c1/shapes.h"
+#include "pectus/c1/surface.h"
 #include "pectus/errors.h"
 
 using namespace pectus::c1;
@@ -281,6 +281,13 @@ TEST(C1Surface, PlaneIsReproducedIn3DFrame) {
     EXPECT_NEAR((sp.point - o).dot(n), 0, 1e-12);
     EXPECT_NEAR(std::abs(sp.normal.dot(n)), 1, 1e-12);
   }
+}
+
+TEST(C1Surface, RefinementChecksTheDeclaredRange) {
+  const C1Surface s(ellipsoid(1));
+  for (int k : {int(kSubdivisionsRange.lo) - 1, int(kSubdivisionsRange.hi) + 1})
+    EXPECT_THROW(s.refine(k), pectus::InputError) << k;
+  EXPECT_EQ(s.refine(int(kSubdivisionsRange.lo)).F.size(), s.mesh().F.size());
 }
 
 TEST(C1Surface, SphereRefinementIsCloseToTheSphereAndConforming) {

@@ -102,6 +102,51 @@ TEST(Topology, NonManifoldEdgeAndVertex) {
   for (int v = 1; v < 5; ++v) EXPECT_FALSE(b.nonManifoldVertex[std::size_t(v)]) << v;
 }
 
+TEST(Topology, FansOfAClosedSurface) {
+  const Topology t(twoTetrahedra());
+  for (int v = 0; v < 8; ++v) EXPECT_EQ(t.fans[std::size_t(v)], 1) << v;
+  Surface s = twoTetrahedra();
+  s.V.push_back(V3(9, 9, 9));  // a vertex no face uses
+  EXPECT_EQ(Topology(s).fans[8], 0);
+}
+
+TEST(Topology, FansOfABowTie) {
+  // two tetrahedra glued at one vertex: every edge in two faces, vertex 0 in two closed fans. The count
+  // test (nonManifoldVertex) cannot see it: the star has as many edges as faces.
+  Surface s = twoTetrahedra();
+  for (auto& f : s.F)
+    for (int& v : f)
+      if (v == 4) v = 0;
+  s.V[4] = V3(9, 9, 9);  // now unused
+  const Topology t(s);
+  EXPECT_EQ(t.nonManifoldEdges(), 0u);
+  EXPECT_EQ(t.boundaryEdges(), 0u);
+  EXPECT_EQ(t.fans[0], 2);
+  EXPECT_EQ(t.fans[4], 0);
+  for (int v : {1, 2, 3, 5, 6, 7}) EXPECT_EQ(t.fans[std::size_t(v)], 1) << v;
+  EXPECT_FALSE(t.nonManifoldVertex[0]);
+
+  Surface open;  // two triangles sharing only vertex 0: two open fans, both tests see it
+  open.V = {V3(0, 0, 0), V3(1, 0, 0), V3(1, 1, 0), V3(-1, 0, 0), V3(-1, -1, 0)};
+  open.F = {{0, 1, 2}, {0, 3, 4}};
+  const Topology b(open);
+  EXPECT_EQ(b.fans[0], 2);
+  EXPECT_TRUE(b.nonManifoldVertex[0]);
+}
+
+TEST(Topology, CollapsedEdgesOfDegenerateFaces) {
+  Surface s = tetrahedron();
+  s.F.push_back({0, 0, 1});  // one collapsed edge at 0
+  s.F.push_back({2, 2, 2});  // three at 2
+  const Topology t(s);
+  EXPECT_EQ(t.collapsedEdges, (std::vector<int>{1, 0, 3, 0}));
+  EXPECT_EQ(t.nonManifoldEdges(), 1u);  // (0, 1): two tetrahedron faces and (0, 0, 1) twice
+  const Topology::EdgeUse u = t.edgeUse();
+  EXPECT_EQ(u.once, 1u);           // the "(0, 0)" key
+  EXPECT_EQ(u.moreThanTwice, 2u);  // (0, 1) and the "(2, 2)" key
+  EXPECT_EQ(t.fans[2], 2);         // the tetrahedron's fan and the face (2, 2, 2)
+}
+
 TEST(Topology, ComponentsInFaceOrder) {
   Surface s = twoTetrahedra();
   std::swap(s.F[0], s.F[4]);  // the second piece's face comes first

@@ -6,7 +6,7 @@
 
 #include "analytic_cages.h"
 #include "pectus/errors.h"
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 using namespace pectus::vol;
 using namespace pectus::vol::testing;
@@ -218,6 +218,19 @@ TEST(ThoracicVolumeBadInput, DegenerateAxisAndRange) {
   line.V = {{0, 0, 0}, {0, 0, 100}, {0, 0, 50}};
   line.F = {{0, 1, 2}};
   EXPECT_THROW(fergusonEnvelope(line, {10, 90}, EnvelopeParams{}), pectus::InputError);
+}
+
+// the cores check the lower ends of the declared spacing and minimum step (thoracic_volume.h)
+TEST(ThoracicVolumeBadInput, SpacingAndMinimumStepBelowTheirRanges) {
+  const auto cage = bandedCylinder(130, 90, 8, 0, 240, 180, 60);
+  SliceParams slice;
+  slice.spacing = kSpacingRange.lo / 2;
+  EXPECT_THROW(sliceVolume(cage, {60, 180}, slice), pectus::InputError);
+  slice.spacing = 10 * kSpacingRange.hi;  // one slice, as the envelope filter's coverage probe may ask
+  EXPECT_NO_THROW(sliceVolume(cage, {60, 180}, slice));
+  EnvelopeParams env;
+  env.minStep = kMinStepRange.lo / 2;
+  EXPECT_THROW(fergusonEnvelope(cage, {60, 180}, env), pectus::InputError);
 }
 
 TEST(ThoracicVolumeBadInput, PairMismatch) {

@@ -6,9 +6,9 @@
 #include <map>
 #include <random>
 
-#include "creases.h"
-#include "mga_smooth.h"
-#include "pectus/c1_surface.h"
+#include "pectus/smooth/creases.h"
+#include "pectus/smooth/mga_smooth.h"
+#include "pectus/c1/surface.h"
 #include "pectus/surface_cmesh.h"
 
 using pectus::Vec3;

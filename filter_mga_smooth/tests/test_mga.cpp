@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "mga.h"
+#include "pectus/mga/mga.h"
 #include "pectus/errors.h"
 
 using namespace pectus::mga;

@@ -8,8 +8,8 @@
 #include <memory>
 #include <random>
 
-#include "mga_smooth.h"
-#include "pectus/c1_surface.h"
+#include "pectus/smooth/mga_smooth.h"
+#include "pectus/c1/surface.h"
 #include "pectus/surface_cmesh.h"
 #include "pectus/errors.h"
 

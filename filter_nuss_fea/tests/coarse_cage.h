@@ -7,7 +7,7 @@
 
 #include "pectus/errors.h"
 #include "pectus/labels.h"
-#include "ribcage.h"
+#include "pectus/ribcage/ribcage.h"
 
 namespace pectus::fixture {
 

@@ -8,7 +8,7 @@
 #include <cstdio>
 #include <fstream>
 
-#include "bar_planner.h"
+#include "pectus/nuss/bar_planner.h"
 #include "pectus/errors.h"
 #include "coarse_cage.h"
 

@@ -5,7 +5,7 @@
 #include <map>
 #include <set>
 
-#include "ct_phantom_core.h"
+#include "pectus/phantom/ct_phantom_core.h"
 
 using namespace pectus;
 using namespace pectus::phantom;

@@ -7,13 +7,13 @@
 #include <cstdio>
 #include <numeric>
 
-#include "nuss_analysis.h"
-#include "nuss_output.h"
-#include "tissue_join.h"
+#include "pectus/nuss/nuss_analysis.h"
+#include "pectus/nuss/nuss_output.h"
+#include "pectus/nuss/tissue_join.h"
 #include "pectus/errors.h"
 #include "pectus/labels.h"
 #include "coarse_cage.h"
-#include "ribcage.h"
+#include "pectus/ribcage/ribcage.h"
 
 using namespace pectus;
 
@@ -184,6 +184,25 @@ TEST(NussAnalysis, JointWithoutNodesWithinTheRadiusIsFixedAtItsNearestNodes) {
   const std::string e = errorOf([&] { nuss::analyze(surf, model, far, coarse()); });
   EXPECT_NE(e.find("right rib 4"), std::string::npos) << e;
   EXPECT_NE(e.find("does not belong to this cage"), std::string::npos) << e;
+}
+
+// validate() checks the options against the ranges the filters declare (nuss_analysis.h)
+TEST(NussAnalysis, ValidateChecksTheDeclaredRanges) {
+  const nuss::Options ok;
+  EXPECT_NO_THROW(nuss::validate(ok));
+  auto refused = [&](auto change, const std::string& words) {
+    nuss::Options o = ok;
+    change(o);
+    EXPECT_NE(errorOf([&] { nuss::validate(o); }).find(words), std::string::npos) << words;
+  };
+  refused([](nuss::Options& o) { o.force = nuss::kForceRange.hi * 2; }, "elevating force must lie in (0, 100000] N");
+  refused([](nuss::Options& o) { o.maxForce = 0; }, "maximum force must lie in (0, 1e+06] N");
+  refused([](nuss::Options& o) { o.tolerance = 51; }, "calibration tolerance must lie in (0, 50] mm");
+  refused([](nuss::Options& o) { o.targetElevation = -1; }, "target elevation must lie in [0, 300] mm");
+  nuss::Options calibrated = ok;  // the force is not used when calibrating
+  calibrated.targetElevation = 20;
+  calibrated.force = 0;
+  EXPECT_NO_THROW(nuss::validate(calibrated));
 }
 
 TEST(NussAnalysis, UnlabelledOrEmptyLayersAreRefused) {

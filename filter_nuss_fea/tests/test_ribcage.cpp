@@ -6,12 +6,12 @@
 #include <vcg/complex/algorithms/clean.h>
 #include <vcg/complex/algorithms/update/topology.h>
 
-#include "haller.h"
-#include "marching_tets.h"
+#include "pectus/ribcage/haller.h"
+#include "pectus/ribcage/marching_tets.h"
 #include "pectus/errors.h"
 #include "pectus/labels.h"
 #include "pectus/mesh_checks.h"
-#include "ribcage.h"
+#include "pectus/ribcage/ribcage.h"
 #include "pectus/surface_cmesh.h"
 
 using namespace pectus;

@@ -11,8 +11,8 @@
 #include <vcg/complex/algorithms/create/platonic.h>
 
 #include "pectus/errors.h"
-#include "ribcage.h"
-#include "tissue_join.h"
+#include "pectus/ribcage/ribcage.h"
+#include "pectus/nuss/tissue_join.h"
 
 using namespace pectus;
 

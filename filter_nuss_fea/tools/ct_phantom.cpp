@@ -24,8 +24,8 @@
 #include <sstream>
 #include <string>
 
-#include "ct_phantom_core.h"
-#include "label_volume.h"
+#include "pectus/phantom/ct_phantom_core.h"
+#include "pectus/patient/label_volume.h"
 #include "pectus/errors.h"
 
 using namespace pectus;

@@ -1,4 +1,4 @@
-#include "ct_phantom_core.h"
+#include "pectus/phantom/ct_phantom_core.h"
 
 #include <algorithm>
 #include <chrono>
@@ -8,7 +8,7 @@
 #include <random>
 
 #include "pectus/errors.h"
-#include "ribcage_model.h"
+#include "pectus/ribcage/ribcage_model.h"
 
 namespace pectus::phantom {
 

@@ -8,7 +8,7 @@
 // tissue' input does), runs the analysis and prints one line of key=value figures, the mean displacement
 // of the sternal load patch's nodes and the tets' volume per tissue. --vtu and --inp write the model and its
 // result, and the same model at the final force as a CalculiX deck, through the FE filter's writer
-// (core/nuss_output.h: the same files as its BASE.vtu and BASE.inp, with the same increments and heading),
+// (pectus/nuss/nuss_output.h: the same files as its BASE.vtu and BASE.inp, with the same increments and heading),
 // printing the sternal patch's nodes, which is what bench/fe_vs_ccx.py --cases cage compares. --material: every tissue's large-displacement model;
 // --calibration: how --target is reached (a force search, or one displacement-controlled solve);
 // --line-search, --adaptive-steps: the Newton options of those names (fe/solver.h), on by default as in the
@@ -24,11 +24,11 @@
 #include <cstring>
 #include <string>
 
-#include "nuss_analysis.h"
-#include "nuss_output.h"
+#include "pectus/nuss/nuss_analysis.h"
+#include "pectus/nuss/nuss_output.h"
 #include "pectus/errors.h"
-#include "ribcage.h"
-#include "tissue_join.h"
+#include "pectus/ribcage/ribcage.h"
+#include "pectus/nuss/tissue_join.h"
 
 using namespace pectus;
 

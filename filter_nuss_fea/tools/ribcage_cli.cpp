@@ -12,9 +12,9 @@
 #include <vcg/complex/algorithms/update/topology.h>
 #include <wrap/io_trimesh/export_ply.h>
 
-#include "haller.h"
+#include "pectus/ribcage/haller.h"
 #include "pectus/mesh_checks.h"
-#include "ribcage.h"
+#include "pectus/ribcage/ribcage.h"
 #include "pectus/surface_cmesh.h"
 
 using namespace pectus;

@@ -10,12 +10,12 @@
 #include <random>
 #include <sstream>
 
-#include "matching.h"
+#include "pectus/quad/matching.h"
 #include "pectus/errors.h"
-#include "poly_io.h"
-#include "poly_mesh.h"
-#include "quad_convert.h"
-#include "structure.h"
+#include "pectus/quad/poly_io.h"
+#include "pectus/quad/poly_mesh.h"
+#include "pectus/quad/quad_convert.h"
+#include "pectus/quad/structure.h"
 
 using namespace pectus;
 using namespace pectus::quad;

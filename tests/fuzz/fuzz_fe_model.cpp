@@ -10,7 +10,7 @@
 // so the corpus inputs that need full refinement (TetGen's assertion, its endless refinement, a flat tet)
 // replay as the filter meshes them.
 #include "fuzz_mesh.h"
-#include "nuss_analysis.h"
+#include "pectus/nuss/nuss_analysis.h"
 #include "pectus/errors.h"
 
 #include <cstdlib>

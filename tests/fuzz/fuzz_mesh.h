@@ -9,7 +9,7 @@
 #pragma once
 #include <Eigen/Core>
 
-#include "pectus/c1_surface.h"
+#include "pectus/c1/surface.h"
 #include "pectus/surface_cmesh.h"
 
 #include <array>

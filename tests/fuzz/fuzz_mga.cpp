@@ -2,7 +2,7 @@
 // Properties (mga_smooth.h): finite positions stay finite, and the worst element never drops below
 // min(initial worst, worstGuard).
 #include "fuzz_mesh.h"
-#include "mga_smooth.h"
+#include "pectus/smooth/mga_smooth.h"
 #include "pectus/errors.h"
 
 using namespace pectus;

@@ -5,8 +5,8 @@
 
 #include "fuzz_mesh.h"
 #include "pectus/errors.h"
-#include "quad_convert.h"
-#include "structure.h"
+#include "pectus/quad/quad_convert.h"
+#include "pectus/quad/structure.h"
 
 using namespace pectus;
 

@@ -5,7 +5,7 @@
 
 #include "fuzz_mesh.h"
 #include "pectus/errors.h"
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 using namespace pectus;
 

@@ -14,9 +14,12 @@ struct MeshReport {
   std::size_t nonFiniteVertices = 0; ///< NaN or Inf coordinates
   std::size_t degenerateFaces = 0;   ///< zero area or repeated vertex
   std::size_t duplicateFaces = 0;    ///< faces with the same three vertices as an earlier face
-  std::size_t boundaryEdges = 0;     ///< edges with one face
-  std::size_t nonManifoldEdges = 0;  ///< edges with three or more faces
-  std::size_t nonManifoldVertices = 0; ///< vertices whose face fan is not one disk/half-disk
+  /// edges with one face, and with three or more; a degenerate face's collapsed edge counts (Topology::edgeUse)
+  std::size_t boundaryEdges = 0;
+  std::size_t nonManifoldEdges = 0;
+  /// vertices whose edges and faces do not count as one fan (the count of Topology::nonManifoldVertex, with
+  /// the collapsed edges)
+  std::size_t nonManifoldVertices = 0;
   bool closed() const { return faces > 0 && boundaryEdges == 0 && nonManifoldEdges == 0; }
   std::string summary() const;
 };

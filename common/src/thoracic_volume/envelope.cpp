@@ -11,7 +11,7 @@
 
 #include "pectus/errors.h"
 #include "pectus/grid_cell.h"
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 namespace pectus::vol {
 
@@ -557,7 +557,11 @@ EnvelopeResult fergusonEnvelope(const Soup& soup, const Range& range, const Enve
   if (p.nLong < kPatchesLongRange.lo || p.mAround < kPatchesAroundRange.lo)
     throw InputError("the envelope needs at least " + std::to_string(int(kPatchesLongRange.lo)) + " x " +
                      std::to_string(int(kPatchesAroundRange.lo)) + " patches");
-  if (!(p.minStep > 0)) throw InputError("the envelope's minimum step must be positive");
+  if (!(p.minStep >= kMinStepRange.lo)) {
+    std::ostringstream s;
+    s << "the envelope's minimum step must be at least " << kMinStepRange.lo << " mm";
+    throw InputError(s.str());
+  }
   const Grid g = gridFor(range, p);
   Eigen::Vector2d lo, hi;
   boxInRange(soup, range, lo, hi);

@@ -11,7 +11,7 @@
 #include <sstream>
 
 #include "pectus/errors.h"
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 namespace pectus::vol {
 

@@ -7,7 +7,7 @@
 
 #include "pectus/errors.h"
 #include "pectus/grid_cell.h"
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 namespace pectus::vol {
 
@@ -287,7 +287,11 @@ long long rasterCount(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vec
 
 SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p, const Progress& progress) {
   requireRange(range, "of the slice method");
-  if (!(p.spacing > 0)) throw InputError("the slice spacing must be positive");
+  if (!(p.spacing >= kSpacingRange.lo)) {
+    std::ostringstream s;
+    s << "the slice spacing must be at least " << kSpacingRange.lo << " mm";
+    throw InputError(s.str());
+  }
   if (p.resolution < kResolutionRange.lo)
     throw InputError("the raster resolution must be at least " + std::to_string(int(kResolutionRange.lo)) + " pixels");
   if (p.rays < kRaysRange.lo)

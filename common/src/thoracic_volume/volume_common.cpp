@@ -5,7 +5,7 @@
 #include "pectus/errors.h"
 #include "pectus/labels.h"
 #include "pectus/surface_cmesh.h"
-#include "pectus/thoracic_volume.h"
+#include "pectus/vol/thoracic_volume.h"
 
 namespace pectus::vol {
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include "ct_import.h"
+#include "pectus/patient/ct_import.h"
 #include "temp_dir.h"
 #include "pectus/errors.h"
 

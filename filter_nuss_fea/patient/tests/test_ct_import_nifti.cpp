@@ -7,9 +7,9 @@
 #include <random>
 #include <string>
 
-#include "ct_import.h"
+#include "pectus/patient/ct_import.h"
 #include "temp_dir.h"
-#include "label_volume.h"
+#include "pectus/patient/label_volume.h"
 #include "pectus/errors.h"
 
 namespace fs = std::filesystem;

@@ -9,7 +9,7 @@
 #include <set>
 #include <unistd.h>
 
-#include "label_volume.h"
+#include "pectus/patient/label_volume.h"
 #include "pectus/errors.h"
 #include "pectus/mesh_checks.h"
 

@@ -11,9 +11,9 @@
 #include <vcg/complex/algorithms/create/platonic.h>
 
 #include "pectus/errors.h"
-#include "prepare.h"
-#include "ribcage.h"
-#include "soup.h"
+#include "pectus/patient/prepare.h"
+#include "pectus/ribcage/ribcage.h"
+#include "pectus/patient/soup.h"
 #include "temp_dir.h"
 
 using namespace pectus;
@@ -54,7 +54,7 @@ bool logHas(const PrepareResult& r, const std::string& words) {
 }
 // the connected pieces of m, one mesh each
 std::vector<std::unique_ptr<OwnedMesh>> piecesOf(const CMeshO& m) {
-  Soup s = soupOf(m);
+  Soup s = surfaceOf(m, kFiniteFaces);
   weld(s);
   std::vector<std::unique_ptr<OwnedMesh>> out;
   for (const auto& p : components(s)) {
@@ -270,7 +270,7 @@ namespace {
 // of one vertex removed), each holed one with a fin as well when `fin` (a triangle on one of its edges: a
 // non-manifold edge, so that the hole cannot be closed)
 void punch(OwnedMesh& m, std::size_t holed, bool fin) {
-  Soup s = soupOf(m);
+  Soup s = surfaceOf(m, kFiniteFaces);
   weld(s);
   auto pieces = components(s);
   std::sort(pieces.begin(), pieces.end(), [](const Soup& a, const Soup& b) { return volume(a) > volume(b); });
@@ -365,4 +365,19 @@ TEST(PatientPrepare, RefusesALandmarkThatCannotBePlacedUnlessPicked) {
   const Landmark* got = find(r.landmarks, kFunnelDeepest);
   ASSERT_TRUE(got);
   EXPECT_LT((got->p - (r.inputToModel * deep->p.homogeneous()).head<3>()).norm(), 1e-6);
+}
+
+// the options are checked against the ranges the filter declares (prepare.h) before any layer is read
+TEST(PatientPrepare, OptionsOutsideTheirRangesAreRefused) {
+  OwnedMesh cage;
+  auto refused = [&](auto change, const std::string& words) {
+    PrepareOptions o;
+    change(o);
+    EXPECT_NE(errorOf([&] { preparePatientCage({}, o, cage); }).find(words), std::string::npos) << words;
+  };
+  refused([](PrepareOptions& o) { o.minVolume = -1; }, "minimum volume must lie in [0, 100000] mm^3");
+  refused([](PrepareOptions& o) { o.alpha = kAlphaRange.lo / 2; }, "wrap detail alpha must lie in [0.2, 20] mm");
+  refused([](PrepareOptions& o) { o.offset = kOffsetRange.hi + 1; }, "wrap offset must lie in [0.01, 5] mm");
+  refused([](PrepareOptions& o) { o.edgeLength = kMinEdgeLength / 2; },
+          "target edge length must be 0 or lie in [0.5, 10] mm");
 }

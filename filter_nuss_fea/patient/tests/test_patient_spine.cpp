@@ -10,13 +10,13 @@
 #include <cstdio>
 #include <set>
 
-#include "ct_phantom_core.h"
-#include "label_volume.h"
-#include "nuss_analysis.h"
+#include "pectus/phantom/ct_phantom_core.h"
+#include "pectus/patient/label_volume.h"
+#include "pectus/nuss/nuss_analysis.h"
 #include "pectus/errors.h"
-#include "pectus/thoracic_volume.h"
-#include "prepare.h"
-#include "soup.h"
+#include "pectus/vol/thoracic_volume.h"
+#include "pectus/patient/prepare.h"
+#include "pectus/patient/soup.h"
 
 using namespace pectus;
 using namespace pectus::patient;
@@ -114,8 +114,8 @@ void keptColumnIsPart400OfAClosedManifoldCage() {
       EXPECT_LT(c.y(), 15.0) << "column face in front of the spine at y " << c.y();
     }
   // closed, 2-manifold, not self-intersecting: what the FE analysis' TetGen needs
-  EXPECT_EQ(defects(soupOf(f.keep.cage)), "");
-  EXPECT_EQ(defects(soupOf(f.cut.cage)), "");
+  EXPECT_EQ(defects(surfaceOf(f.keep.cage, kFiniteFaces)), "");
+  EXPECT_EQ(defects(surfaceOf(f.cut.cage, kFiniteFaces)), "");
   EXPECT_TRUE(std::any_of(f.keep.r.log.begin(), f.keep.r.log.end(),
                           [](const std::string& l) { return l.find("kept as the fixed support") != std::string::npos; }));
   // the same landmarks either way (with the column kept they are placed on the cage joined without it)

@@ -1,0 +1,134 @@
+// A patient's rib cage from a CT segmentation, made ready for the analyses: the structures classified,
+// repaired, put in the project's frame, numbered, joined into one labelled surface, and landmarked.
+// Host-free (vcglib + Eigen + CGAL, no Qt): 'Prepare Patient Rib Cage' maps it to layers.
+//
+// The steps, in order (each one Logged):
+//  1. classify every layer by its name (TotalSegmentator's, 3D Slicer's, or generic names): rib (side
+//     and number), costal cartilage, sternum, vertebra, other bone (may hold ribs fused to the spine),
+//     or not rib cage (scapula, clavicle, humerus, organs: left out); layers whose names say nothing
+//     ('Segment_1', ...) by their shape and place among the others, in the input's own frame and units
+//     (shape_classify.h): many long pieces or one piece as wide as the cage -> bone; many small bars ->
+//     cartilage; the elongated one-piece layer nearest the cartilages -> sternum; then, in the axes the
+//     sternum gives, compact midline blocks behind the centre -> vertebrae, thin elongated pieces beside
+//     the midline reaching behind the centre -> ribs (side and number from step 5), plates behind and
+//     beside -> scapulae (left out), the rest left out; no cartilage or sternum by name or shape, or two
+//     equally good sternums: refused, asking to rename the layers;
+//  2. units: metres or centimetres are detected from the size of the whole and scaled to mm;
+//  3. the anatomical frame: anterior from the bone's centre to the sternum, the long axis along the
+//     sternum, snapped to the file's axes when within 30 degrees (CT exports are axis-aligned), superior
+//     where the cage is narrow, the patient's left from the right-handed scanner frame (or from the names);
+//  4. fragments (pieces under the minimum volume) are dropped; bone fused to the vertebral column is cut
+//     at the costovertebral joints (the column is the posterior midline bone running the whole height);
+//     pieces of such a layer that do not reach the cut (scapulae, loose pieces) are left out. The column
+//     (the cut-away bone and the vertebra layers) is left out of the model, as the thesis does, or kept as
+//     the fixed support (PrepareOptions::spine): then it is always wrapped (so that it overlaps the rib heads
+//     it joins, as the cartilages do) and joined as tissue bone, part kVertebralColumn (400);
+//  5. ribs are numbered per side from the top by the height of their vertebral end (or from their names);
+//  6. each structure that is not a closed, 2-manifold, self-intersection-free surface gets the least repair
+//     that makes it one: duplicate faces removed, holes closed, else wrapped (CGAL alpha_wrap_3: detail
+//     alpha, offset), with its volume change reported; clean ones are kept. A wrap that is not closed and
+//     manifold, or holds more than twice the structure grown by the offset (the detail bridges its gaps),
+//     is refused naming the structure and the detail to change. The wrap is given the structure with its
+//     holes closed (where it is 2-manifold): through a hole wider than the detail it would wrap the inside
+//     too, a hollow shell; a wrap holding less than half the structure is refused. The costal cartilages are always
+//     wrapped (before the fragments are counted): a segmentation's labels only touch, and the small offset
+//     makes each cartilage overlap the bone it joins, which the union needs; the wrap also reconnects the
+//     strips a voxel surface splits where voxels meet at an edge or a corner;
+//  7. the structures are joined (corefinement union: joinTissueLayers) into one surface with tissue and
+//     part per face, the union's specks and voids (closed shells under the minimum volume) removed, then
+//     decimated to the target edge length (kept embedded) and relabelled; a column kept as the support is
+//     a structure of its own in a second union;
+//  8. landmarks (labels.h codes) are placed from the anatomy, on the full-detail union without the column
+//     (the same whatever the edge length and the spine mode); user points override them. A landmark that
+//     cannot be placed is refused naming it and its code (pick it: .pp file), unless the user gives it.
+// The result is in the project frame (labels.h): mm, +x patient's left, +y anterior, +z superior, x = 0 on
+// the sternum's midline, y = 0 at the vertebral bodies' anterior surface (else at the costovertebral
+// joints), z = 0 half a rib level below the lowest costovertebral joint.
+#pragma once
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <Eigen/Dense>
+
+#include "pectus/cmesh.h"
+#include "pectus/labels.h"
+#include "pectus/param_range.h"
+
+namespace pectus::patient {
+
+// Valid ranges of PrepareOptions (preparePatientCage checks them); 'Prepare Patient Rib Cage' declares its
+// parameters with the same constants.
+inline constexpr ParamRange kMinVolumeRange{0, 100000};  ///< PrepareOptions::minVolume (mm^3)
+inline constexpr ParamRange kAlphaRange{0.2, 20};        ///< PrepareOptions::alpha (mm)
+inline constexpr ParamRange kOffsetRange{0.01, 5};       ///< PrepareOptions::offset (mm)
+/// PrepareOptions::edgeLength (mm): 0 keeps every face, else at least kMinEdgeLength
+inline constexpr ParamRange kEdgeLengthRange{0, 10};
+inline constexpr double kMinEdgeLength = 0.5;
+
+/// What a layer holds, from its name.
+enum class Kind { Rib, Cartilage, Sternum, Vertebra, Bone, NotCage, Unknown };
+struct NameClass {
+  Kind kind = Kind::Unknown;
+  int side = 0;  ///< 1 right, 2 left, 0 unknown
+  int number = 0;  ///< rib (or cartilage) number, 0 unknown
+};
+/// Classifies a structure name (case-insensitive; '_', '-', ' ' and '.' separate words): 'rib_left_3',
+/// 'Rib R 3', 'left rib 3' -> rib; 'costal_cartilages', 'cartilage_left_5' -> cartilage; 'sternum',
+/// 'manubrium', 'xiphoid' -> sternum; 'vertebrae_T5', 'spine' -> vertebra; 'bone', 'ribs', 'skeleton' ->
+/// bone; 'scapula_left', 'clavicula_*', 'humerus_*', organs -> not cage.
+NameClass classifyName(const std::string& name);
+
+struct InputLayer {
+  std::string name;
+  const CMeshO* mesh = nullptr;
+};
+
+enum class Units { Auto, Millimetres, Centimetres, Metres };
+/// The vertebral column: cut away at the costovertebral joints (the thesis: the joints are the fixed
+/// support), or kept in the model as the fixed support (tissue bone, part kVertebralColumn; the FE
+/// analysis fixes all its nodes). Landmarks are the same either way.
+enum class SpineMode { Cut, Keep };
+enum class FrameMode { Auto, RAS, LPS, Model };
+
+struct PrepareOptions {
+  Units units = Units::Auto;
+  FrameMode frame = FrameMode::Auto;
+  double minVolume = 200;    ///< mm^3: smaller connected pieces are fragments, dropped
+  /// alpha wrapping (costal cartilages always, other structures when they need it): the detail (mm, the
+  /// smallest gap kept open) and the offset from the input (mm). Small, so that the wrap adds little volume:
+  /// the cartilages carry most of the cage's compliance (1 mm voxel export: +4 % cartilage volume)
+  double alpha = 0.5;
+  double offset = 0.03;
+  /// mm: the joined surface is decimated to this edge length (0: kept as is). The FE analysis' cost grows
+  /// with its cube: 4 mm gives about 100,000 tets for a child's cage (2 mm: about 480,000)
+  double edgeLength = 4.0;
+  bool wrapAll = false;      ///< wrap every structure, clean or not
+  SpineMode spine = SpineMode::Cut;
+  /// user landmarks in the INPUT layers' frame and units (picked points); each replaces the automatic
+  /// landmark of its code
+  std::vector<Landmark> userLandmarks;
+};
+
+struct PrepareResult {
+  std::vector<Landmark> landmarks;        ///< in the project frame
+  Eigen::Matrix4d inputToModel = Eigen::Matrix4d::Identity();  ///< input layer coordinates -> result (mm)
+  std::vector<std::string> log;           ///< every decision, one line each
+  int ribsRight = 0, ribsLeft = 0, wrapped = 0, dropped = 0;
+  double seconds = 0;
+};
+
+/// Builds the labelled cage into `cage` (cleared first; face labels by writeFaceLabels). Throws InputError
+/// naming what to fix: an option outside its range above, no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised by
+/// name or shape (rename the layers), a frame that cannot be found, a landmark that cannot be placed and is
+/// not given; TopologyError for a structure alpha wrapping cannot close or follow at the requested detail or
+/// that is hollow.
+PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
+                                 const std::function<void(int, const char*)>& progress = {});
+
+/// Points picked with MeshLab's PickPoints tool (a .pp file: <point x=".." y=".." z=".." name=".." active="1"/>)
+/// as landmarks: the name is the code ("500") or starts with it ("500 lower sternum end"); inactive points
+/// and names without a code are skipped (counted in `skipped`). Throws IOError if the file is unreadable.
+std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped = nullptr);
+
+}  // namespace pectus::patient

@@ -1,0 +1,1131 @@
+#include "pectus/patient/prepare.h"
+
+#include <algorithm>
+#include <cctype>
+#include <chrono>
+#include <cmath>
+#include <exception>
+#include <fstream>
+#include <map>
+#include <numeric>
+#include <regex>
+#include <set>
+#include <sstream>
+#include <tuple>
+
+#include <CGAL/AABB_traits.h>
+#include <CGAL/AABB_tree.h>
+#include <CGAL/AABB_triangle_primitive.h>
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <vcg/complex/allocate.h>
+
+#include "pectus/ribcage/mesh_simplify.h"
+#include "pectus/errors.h"
+#include "pectus/patient/shape_classify.h"
+#include "pectus/patient/soup.h"
+#include "pectus/nuss/tissue_join.h"
+
+namespace pectus::patient {
+
+namespace {
+using Vec3 = Eigen::Vector3d;
+using Mat3 = Eigen::Matrix3d;
+
+std::string mm(double v, int digits = 1) {
+  std::ostringstream s;
+  s.setf(std::ios::fixed);
+  s.precision(digits);
+  s << v;
+  return s.str();
+}
+std::string at(const Vec3& p) { return "(" + mm(p.x()) + ", " + mm(p.y()) + ", " + mm(p.z()) + ")"; }
+std::string sideName(int side) { return side == 2 ? "left" : "right"; }
+
+// ---------------------------------------------------------------------------------------------------
+// 1. the structures, by name
+struct Structure {
+  std::string name;  // layer name, or "<layer> piece k"
+  NameClass cls;
+  Soup soup;
+  bool wrapped = false;  // already wrapped (closed, manifold, embedded by construction)
+};
+
+std::vector<std::string> words(const std::string& name) {
+  std::string n;
+  for (char c : name) n += std::isalnum(static_cast<unsigned char>(c)) ? char(std::tolower(static_cast<unsigned char>(c))) : ' ';
+  // split letters from digits: "rib3" -> "rib 3", "t12" -> "t 12"
+  std::string m;
+  for (std::size_t i = 0; i < n.size(); ++i) {
+    if (i > 0 && n[i] != ' ' && n[i - 1] != ' ' && bool(std::isdigit(static_cast<unsigned char>(n[i]))) !=
+                                                       bool(std::isdigit(static_cast<unsigned char>(n[i - 1]))))
+      m += ' ';
+    m += n[i];
+  }
+  std::istringstream s(m);
+  std::vector<std::string> w;
+  for (std::string x; s >> x;) w.push_back(x);
+  return w;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// 6. repair: CGAL's alpha wrap, refused when the result is no surface of the structure: empty, open or
+// non-manifold (a detail too fine for the input's gaps), or holding far more than the structure grown by the
+// offset (a detail coarser than the structure bridges its gaps and fills its concavities). Grown by the offset o,
+// a bar of thickness t = 2V/A gains about o A + o^2 A / (2 t); twice that much is not the structure any more.
+constexpr double kWrapGrowth = 2.0;
+
+// A hole wider than the detail lets the wrap in: it then wraps the structure's inside as well, and the result is
+// a hollow shell, twice the offset thick where it hugs both sides of the surface (TetGen fills such a shell with
+// hundreds of thousands of slivers). So the wrap is given the structure with its holes closed, where it is
+// 2-manifold; a wrap holding less than half the structure is still hollow and refused.
+constexpr double kWrapHollow = 0.5;
+
+Soup wrapOf(const std::string& name, const Soup& s, const PrepareOptions& opt) {
+  Soup sealed = s;
+  removeDuplicateFaces(sealed);
+  if (closeHoles(sealed) <= 0) sealed = s;
+  Soup w = alphaWrap(sealed, opt.alpha, opt.offset);
+  const std::string still = w.empty() ? std::string("empty") : defects(w);
+  if (!still.empty())
+    throw TopologyError("Alpha wrapping cannot close '" + name + "' at detail " + mm(opt.alpha, 2) + " mm (the result is " + still +
+                     "): raise 'Wrap detail (alpha)' or check the structure.");
+  const double v0 = volume(sealed), a0 = area(sealed), v1 = volume(w);
+  if (v1 < kWrapHollow * v0)
+    throw TopologyError("Alpha wrapping went inside '" + name + "' through a hole wider than its detail (" + mm(opt.alpha, 2) +
+                     " mm): the wrap is a hollow shell of " + mm(v1 / 1000, 2) + " cm3 around a structure of " + mm(v0 / 1000, 2) +
+                     " cm3. Close the structure's holes (e.g. Filters > Remeshing > Close Holes) or raise 'Wrap detail (alpha)' "
+                     "above the holes' width.");
+  const double t = 2 * v0 / std::max(a0, 1e-300), o = opt.offset;
+  const double grown = v0 + o * a0 + o * o * a0 / std::max(2 * t, 1e-300);
+  if (v1 > kWrapGrowth * grown)
+    throw TopologyError("Alpha wrapping cannot follow '" + name + "' at detail " + mm(opt.alpha, 2) + " mm: the wrap holds " +
+                     mm(v1 / 1000, 2) + " cm3, " + mm(v1 / grown, 1) + " times the structure grown by the offset (" +
+                     mm(grown / 1000, 2) + " cm3), so it bridges the structure's gaps. Lower 'Wrap detail (alpha)' towards "
+                     "the structure's thickness (about " + mm(t, 1) + " mm).");
+  return w;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// 3. the frame
+struct Frame {
+  Mat3 R = Mat3::Identity();  // rows: patient's left, anterior, superior (in the scaled input frame)
+  std::string how;
+  bool superiorOpen = false;  // the superior sign is still to be decided from the ribs
+};
+
+// Each rib runs down from its vertebral end to its front end: true if most ribs do so in the current
+// frame (z superior), false if most run up (the frame is upside down).
+bool ribsRunDown(const std::vector<std::pair<Vec3, Vec3>>& ends) {
+  int down = 0, up = 0;
+  for (const auto& [back, front] : ends) (back.z() > front.z() ? down : up) += 1;
+  return down >= up;
+}
+
+Frame findFrame(const std::vector<Structure>& all, const PrepareOptions& opt, double size) {
+  Frame fr;
+  if (opt.frame == FrameMode::Model) return {Mat3::Identity(), "stated: the project frame (+x left, +y anterior, +z superior)"};
+  if (opt.frame == FrameMode::RAS) {
+    fr.R << -1, 0, 0, 0, 1, 0, 0, 0, 1;
+    fr.how = "stated: RAS (x right, y anterior, z superior)";
+    return fr;
+  }
+  if (opt.frame == FrameMode::LPS) {
+    fr.R << 1, 0, 0, 0, -1, 0, 0, 0, 1;
+    fr.how = "stated: LPS (x left, y posterior, z superior)";
+    return fr;
+  }
+  Soup sternum, bone;
+  for (const auto& s : all) {
+    if (s.cls.kind == Kind::Sternum) append(sternum, s.soup);
+    if (s.cls.kind == Kind::Rib || s.cls.kind == Kind::Bone || s.cls.kind == Kind::Vertebra) append(bone, s.soup);
+  }
+  const Vec3 cS = centroid(sternum), cB = centroid(bone);
+  Vec3 a = cS - cB;
+  if (a.norm() < 0.05 * size)
+    throw InputError("Cannot find the anatomical frame: the sternum's centre lies at the centre of the bone (" + at(cS) +
+                     "), so the anterior direction is unknown. Check that the sternum layer holds the sternum, or state "
+                     "the frame (parameter 'Frame': RAS, LPS or the project frame).");
+  a.normalize();
+  // long axis: the sternum's principal direction, square to anterior
+  Vec3 mean = Vec3::Zero();
+  for (const auto& p : sternum.V) mean += p;
+  mean /= double(sternum.V.size());
+  Mat3 C = Mat3::Zero();
+  for (const auto& p : sternum.V) C += (p - mean) * (p - mean).transpose();
+  Eigen::SelfAdjointEigenSolver<Mat3> eig(C);
+  Vec3 s = eig.eigenvectors().col(2);
+  s = (s - s.dot(a) * a);
+  if (s.norm() < 1e-6)
+    throw InputError("Cannot find the anatomical frame: the sternum's long axis points to the back. State the frame "
+                     "(parameter 'Frame').");
+  s.normalize();
+  // CT exports are axis-aligned: snap both axes to the file's axes when each is within 30 degrees of one
+  auto snap = [](const Vec3& v, int& axis) {
+    v.cwiseAbs().maxCoeff(&axis);
+    return std::abs(v[axis]) > std::cos(30.0 * M_PI / 180.0);
+  };
+  int ia = 0, is = 0;
+  if (snap(a, ia) && snap(s, is) && ia != is) {
+    a = Vec3::Unit(ia) * (a[ia] > 0 ? 1 : -1);
+    s = Vec3::Unit(is) * (s[is] > 0 ? 1 : -1);
+    fr.how = "from the anatomy, snapped to the file's axes";
+  } else {
+    fr.how = "from the anatomy (not aligned with the file's axes)";
+  }
+  // superior: from the rib numbers when the names carry them (rib 1 on top), else from the ribs' slope
+  // (a rib runs down from its vertebral end to the front: the anterior bone lies lower)
+  double numZ = 0, num = 0;
+  std::vector<std::pair<double, double>> nz;
+  for (const auto& st : all)
+    if (st.cls.kind == Kind::Rib && st.cls.number > 0) nz.push_back({double(st.cls.number), centroid(st.soup).dot(s)});
+  bool fromNames = false;
+  if (nz.size() >= 2) {
+    double mn = 0, mz = 0;
+    for (auto [n, z] : nz) mn += n, mz += z;
+    mn /= double(nz.size()), mz /= double(nz.size());
+    for (auto [n, z] : nz) numZ += (n - mn) * (z - mz), num += (n - mn) * (n - mn);
+    fromNames = num > 0 && std::abs(numZ) > 0;
+  }
+  if (fromNames) {
+    if (numZ > 0) s = -s;
+    fr.how += "; superior from the rib numbers";
+  } else {
+    fr.superiorOpen = true;  // decided from the ribs' slope once the ribs are separated (superiorFromSlope)
+  }
+  // the patient's left: scanner frames are right-handed (RAS, LPS): left = superior x anterior (names
+  // with sides are checked once the superior direction is final: leftFromNames)
+  const Vec3 l = s.cross(a);
+  fr.R.row(0) = l.transpose();
+  fr.R.row(1) = a.transpose();
+  fr.R.row(2) = s.transpose();
+  return fr;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// 4. the vertebral column inside a bone layer. Kept as the support (SpineMode::Keep), it reaches this far (mm)
+// along each rib beyond the cut, into the rib's end, so that column and rib overlap
+constexpr double kColumnOverlap = 3.0;
+
+// The column: the posterior midline bone that runs the whole height.
+// Returns the half-width of the cut band around the midline (0: no column found).
+double spineHalfWidth(const Soup& bone, double x0, double yMid) {
+  double z0 = 1e300, z1 = -1e300;
+  for (const auto& p : bone.V)
+    if (p.y() < yMid && std::abs(p.x() - x0) < 4) z0 = std::min(z0, p.z()), z1 = std::max(z1, p.z());
+  if (!(z1 - z0 > 40)) return 0;
+  constexpr double bin = 2.0;
+  const int nz = int((z1 - z0) / bin) + 1, nx = 40;
+  std::vector<std::vector<char>> hit(std::size_t(nx), std::vector<char>(std::size_t(nz), 0));
+  for (const auto& p : bone.V) {
+    if (p.y() >= yMid || p.z() < z0 || p.z() > z1) continue;
+    const int ix = int(std::abs(p.x() - x0) / bin);
+    if (ix < nx) hit[std::size_t(ix)][std::size_t(int((p.z() - z0) / bin))] = 1;
+  }
+  auto coverage = [&](int ix) {
+    // a column's front/back walls cover every height; a vertebra's own surface may miss a bin or two
+    int c = 0;
+    for (int k = 0; k < nz; ++k) c += hit[std::size_t(ix)][std::size_t(k)] || (k > 0 && hit[std::size_t(ix)][std::size_t(k - 1)]) ||
+                                      (k + 1 < nz && hit[std::size_t(ix)][std::size_t(k + 1)]);
+    return double(c) / nz;
+  };
+  // the column's bins are covered all the way (1.0 on a voxel export); beside it the ribs, sloping and close
+  // together near the spine, still leave some heights empty (0.84-0.94 there)
+  constexpr double kColumn = 0.97;
+  if (coverage(0) < kColumn) return 0;
+  int ix = 0;
+  while (ix + 1 < nx && coverage(ix + 1) >= kColumn) ++ix;
+  return (ix + 1) * bin + 1.0;
+}
+
+// ---------------------------------------------------------------------------------------------------
+// 8. landmarks
+struct Anatomy {
+  std::map<int, std::vector<Vec3>> rib;  // part -> bone vertices
+  std::vector<Vec3> sternum, cartilage, junction;  // junction: vertices shared by sternum and cartilage faces
+  std::vector<Vec3> spine;               // vertebral column points (from vertebra layers or the cut)
+};
+
+Anatomy anatomyOf(const CMeshO& cage) {
+  Anatomy an;
+  const auto lab = readFaceLabels(cage);
+  std::vector<int> tissueOfVertex(cage.vert.size(), 0);  // bit set of tissues touching the vertex
+  for (std::size_t f = 0; f < cage.face.size(); ++f) {
+    if (cage.face[f].IsD()) continue;
+    for (int k = 0; k < 3; ++k) tissueOfVertex[std::size_t(vcg::tri::Index(cage, cage.face[f].cV(k)))] |= 1 << lab->tissue[f];
+  }
+  std::vector<char> seen(cage.vert.size(), 0);
+  for (std::size_t f = 0; f < cage.face.size(); ++f) {
+    if (cage.face[f].IsD()) continue;
+    for (int k = 0; k < 3; ++k) {
+      const std::size_t v = std::size_t(vcg::tri::Index(cage, cage.face[f].cV(k)));
+      const Vec3 p = toEigen(cage.vert[v].cP());
+      if (lab->tissue[f] == int(Tissue::Bone)) an.rib[lab->part[f]].push_back(p);
+      if (seen[v]) continue;
+      seen[v] = 1;
+      if (lab->tissue[f] == int(Tissue::Sternum)) an.sternum.push_back(p);
+      if (lab->tissue[f] == int(Tissue::Cartilage)) an.cartilage.push_back(p);
+      const int both = (1 << int(Tissue::Sternum)) | (1 << int(Tissue::Cartilage));
+      if ((tissueOfVertex[v] & both) == both) an.junction.push_back(p);
+    }
+  }
+  return an;
+}
+
+Vec3 mean(const std::vector<Vec3>& v) {
+  Vec3 c = Vec3::Zero();
+  for (const auto& p : v) c += p;
+  return v.empty() ? c : Vec3(c / double(v.size()));
+}
+
+// `given`: the codes of the user's points. A landmark that cannot be placed is refused unless the user gives it
+// (then the user's point, placed later, stands for it).
+std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, const std::set<int>& given,
+                                     std::vector<std::string>& log) {
+  std::vector<Landmark> lms;
+  auto fail = [&](int code, const std::string& what, const std::string& why) {
+    if (given.count(code)) {
+      log.push_back("landmark " + std::to_string(code) + " (" + what + ") cannot be placed automatically (" + why +
+                    "): the user's point stands for it");
+      return;
+    }
+    throw InputError("Cannot place the landmark '" + what + "' (code " + std::to_string(code) + "): " + why + ". Pick it "
+                     "with Edit > PickPoints on the input layers and give the .pp file (parameter 'Picked points'), the "
+                     "point named " + std::to_string(code) + ".");
+  };
+  // costovertebral joints: the rib head, the centre of the rib's vertebral end. The heads line up along the
+  // spine: its axis (x0, yAxis) is where the ribs' medial-most posterior points lie (their median y); each
+  // rib's head is its point nearest that axis in the transverse plane, and the joint the centroid of the
+  // rib's surface within one joint radius (6 mm, as the FE analysis fixes) of it.
+  auto medialMost = [&](const std::vector<Vec3>& pts) {
+    const Vec3* best = nullptr;
+    for (const auto& p : pts)
+      if (p.y() < yMid && (!best || std::abs(p.x() - x0) < std::abs(best->x() - x0))) best = &p;
+    return best;
+  };
+  std::vector<double> medialY;
+  for (const auto& [part, pts] : an.rib)
+    if (part >= 101 && part <= 212)
+      if (const Vec3* m = medialMost(pts)) medialY.push_back(m->y());
+  std::nth_element(medialY.begin(), medialY.begin() + long(medialY.size() / 2), medialY.end());
+  const double yAxis = medialY.empty() ? yMid : medialY[medialY.size() / 2];
+  std::map<int, Vec3> cvj;
+  for (const auto& [part, pts] : an.rib) {
+    if (part < 101 || part > 212) continue;
+    if (!medialMost(pts)) {
+      fail(part, "costovertebral joint of the " + sideName(part / 100) + " rib " + std::to_string(part % 100),
+           "the rib has no part behind the cage's middle");
+      continue;
+    }
+    const Vec3* tip = nullptr;
+    auto toAxis = [&](const Vec3& p) { return std::hypot(p.x() - x0, p.y() - yAxis); };
+    for (const auto& p : pts)
+      if (p.y() < yMid && (!tip || toAxis(p) < toAxis(*tip))) tip = &p;
+    std::vector<Vec3> end;
+    for (const auto& p : pts)
+      if ((p - *tip).norm() < 6.0) end.push_back(p);
+    cvj[part] = mean(end);
+    lms.push_back({part, cvj[part]});
+  }
+  // sternum ends
+  if (an.sternum.empty())  // every other landmark is placed from the sternum: no picked point stands for it
+    throw InputError("Cannot place the landmarks: the joined cage has no sternum faces. Check the sternum's layer.");
+  double zLo = 1e300, zHi = -1e300;
+  for (const auto& p : an.sternum) zLo = std::min(zLo, p.z()), zHi = std::max(zHi, p.z());
+  std::vector<Vec3> lo, hi;
+  for (const auto& p : an.sternum) {
+    if (p.z() < zLo + 3) lo.push_back(p);
+    if (p.z() > zHi - 3) hi.push_back(p);
+  }
+  const Vec3 lower = mean(lo), upper = mean(hi);
+  lms.push_back({kSternumLowerEnd, lower});
+  lms.push_back({kSternumUpperEnd, upper});
+  // the spine's front at height z: the vertebral column's most anterior midline point, else the joints'
+  auto spineFront = [&](double z, bool& measured) {
+    double y = -1e300;
+    for (const auto& p : an.spine)
+      if (std::abs(p.x() - x0) < 10 && std::abs(p.z() - z) < 5) y = std::max(y, p.y());
+    measured = y > -1e299;
+    if (measured) return y;
+    double best = 1e300, yb = 0;
+    for (const auto& [part, p] : cvj)
+      if (std::abs(p.z() - z) < best) best = std::abs(p.z() - z), yb = p.y();
+    return yb;
+  };
+  // deepest funnel point: the sternum level with the smallest distance between its front and the spine
+  const double L = zHi - zLo;
+  double bestAp = 1e300, zDeep = 0.5 * (zLo + zHi), yDeep = 0;
+  for (double z = zLo + 0.1 * L; z <= zHi - 0.1 * L; z += 2.0) {
+    double yf = -1e300;
+    for (const auto& p : an.sternum)
+      if (std::abs(p.x() - x0) < 8 && std::abs(p.z() - z) < 1.0) yf = std::max(yf, p.y());
+    if (yf < -1e299) continue;
+    bool m = false;
+    const double ap = yf - spineFront(z, m);
+    if (ap < bestAp) bestAp = ap, zDeep = z, yDeep = yf;
+  }
+  const bool deepFound = bestAp < 1e299;
+  if (!deepFound) fail(kFunnelDeepest, "deepest point of the funnel", "the sternum has no front surface near its midline");
+  else lms.push_back({kFunnelDeepest, Vec3(x0, yDeep, zDeep)});
+  bool spineMeasured = false;
+  const double ySpine = spineFront(zDeep, spineMeasured);
+  if (spineMeasured && deepFound) lms.push_back({kVertebraAtDeepest, Vec3(x0, ySpine, zDeep)});
+  else if (!deepFound) log.push_back("landmark 503 (vertebra at the deepest level) not placed: the deepest point is the user's");
+  else log.push_back("no vertebral column in the input: landmark 503 (vertebra at the deepest level) not placed; the pectus "
+                     "index then measures to the costovertebral joints' line");
+  // bar exits at the mid-axillary line: halfway between the lateral-most points of ribs s and s+1
+  auto lateral = [&](int part, Vec3& out) {
+    const auto it = an.rib.find(part);
+    if (it == an.rib.end()) return false;
+    double dmax = 0;
+    for (const auto& p : it->second) dmax = std::max(dmax, std::abs(p.x() - x0));
+    std::vector<Vec3> side;
+    for (const auto& p : it->second)
+      if (std::abs(p.x() - x0) > dmax - 3) side.push_back(p);
+    out = mean(side);
+    return true;
+  };
+  int exits = 0;
+  for (int side = 1; side <= 2; ++side)
+    for (int s = 1; s <= 9; ++s) {  // codes 600 + 10*side + s hold one digit of space
+      Vec3 a, b;
+      if (lateral(100 * side + s, a) && lateral(100 * side + s + 1, b)) lms.push_back({barExitLandmark(side, s), 0.5 * (a + b)}), ++exits;
+    }
+  // diaphragm dome height: the lowest sternocostal junction (the xiphisternal level); lung apex: top of rib 1
+  double zDome = zLo + 0.15 * L;
+  if (!an.junction.empty()) {
+    zDome = 1e300;
+    for (const auto& p : an.junction) zDome = std::min(zDome, p.z());
+  } else {
+    log.push_back("the cartilages do not meet the sternum: the diaphragm dome height is taken 15 % of the sternum's "
+                  "length above its lower end");
+  }
+  double zApex = -1e300;
+  for (int side = 1; side <= 2; ++side)
+    if (const auto it = an.rib.find(100 * side + 1); it != an.rib.end())
+      for (const auto& p : it->second) zApex = std::max(zApex, p.z());
+  if (zApex < -1e299) fail(kLungApex, "lung apex", "there is no first rib");
+  bool m = false;
+  lms.push_back({kDiaphragmDome, Vec3(x0, 0.5 * (lower.y() + spineFront(zDome, m)), zDome)});
+  if (zApex > -1e299) lms.push_back({kLungApex, Vec3(x0, 0.5 * (upper.y() + spineFront(zApex, m)), zApex)});
+  log.push_back("landmarks: " + std::to_string(cvj.size()) + " costovertebral joints, sternum ends at " + at(lower) + " and " +
+                at(upper) + ", deepest point " + (deepFound ? "at " + at(Vec3(x0, yDeep, zDeep)) : std::string("the user's")) + ", " +
+                std::to_string(exits) + " bar exits, diaphragm dome z " + mm(zDome) + ", lung apex z " +
+                (zApex > -1e299 ? mm(zApex) : std::string("the user's")) + " (before centring)");
+  return lms;
+}
+
+// relabels the faces of `m` from the nearest face of the labelled surface (pts, tris, labels)
+void relabel(CMeshO& m, const CMeshO& from) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Tri = K::Triangle_3;
+  using Prim = CGAL::AABB_triangle_primitive<K, std::vector<Tri>::const_iterator>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Prim>>;
+  const auto lab = readFaceLabels(from);
+  std::vector<Tri> tris;
+  std::vector<std::size_t> faceOf;
+  auto P = [](const Point3m& p) { return K::Point_3(p[0], p[1], p[2]); };
+  for (std::size_t f = 0; f < from.face.size(); ++f)
+    if (!from.face[f].IsD()) tris.emplace_back(P(from.face[f].cP(0)), P(from.face[f].cP(1)), P(from.face[f].cP(2))), faceOf.push_back(f);
+  Tree tree(tris.begin(), tris.end());
+  tree.accelerate_distance_queries();
+  std::vector<int> tissue(m.face.size()), part(m.face.size());
+  for (std::size_t f = 0; f < m.face.size(); ++f) {
+    if (m.face[f].IsD()) continue;
+    const Point3m c = (m.face[f].cP(0) + m.face[f].cP(1) + m.face[f].cP(2)) / 3.0f;
+    const auto hit = tree.closest_point_and_primitive(P(c));
+    const std::size_t src = faceOf[std::size_t(hit.second - tris.begin())];
+    tissue[f] = lab->tissue[src], part[f] = lab->part[src];
+  }
+  writeFaceLabels(m, tissue, part);
+}
+
+// Deletes the closed shells of m whose signed volume is under minVolume: the voids and specks that a union
+// leaves where two structures' surfaces nearly coincide (a wrapped cartilage on the rib it joins). Each would
+// be a piece of its own in the tet mesh. Returns how many.
+int dropTinyShells(CMeshO& m, double minVolume) {
+  std::vector<int> parent(m.vert.size());
+  std::iota(parent.begin(), parent.end(), 0);
+  const auto find = [&](int a) {
+    while (parent[std::size_t(a)] != a) a = parent[std::size_t(a)] = parent[std::size_t(parent[std::size_t(a)])];
+    return a;
+  };
+  const auto idx = [&](const CFaceO& f, int k) { return int(vcg::tri::Index(m, f.cV(k))); };
+  for (const auto& f : m.face)
+    if (!f.IsD()) parent[std::size_t(find(idx(f, 1)))] = find(idx(f, 0)), parent[std::size_t(find(idx(f, 2)))] = find(idx(f, 0));
+  std::map<int, double> vol;
+  for (const auto& f : m.face)
+    if (!f.IsD()) {
+      const auto P = [&](int k) { return Vec3(f.cP(k)[0], f.cP(k)[1], f.cP(k)[2]); };
+      const Vec3 a = P(0), b = P(1), c = P(2);
+      vol[find(idx(f, 0))] += a.dot(b.cross(c)) / 6;
+    }
+  int dropped = 0;
+  for (const auto& [root, v] : vol) dropped += v < minVolume;
+  if (!dropped) return 0;
+  for (auto& f : m.face)
+    if (!f.IsD() && vol[find(idx(f, 0))] < minVolume) vcg::tri::Allocator<CMeshO>::DeleteFace(m, f);
+  for (auto& v : m.vert)
+    if (!v.IsD()) v.ClearV();
+  for (auto& f : m.face)
+    if (!f.IsD())
+      for (int k = 0; k < 3; ++k) f.V(k)->SetV();
+  for (auto& v : m.vert)
+    if (!v.IsD() && !v.IsV()) vcg::tri::Allocator<CMeshO>::DeleteVertex(m, v);
+  return dropped;
+}
+
+// The preparation's state, as each step hands it on to the next: the structures (in the project frame's axes
+// once the frame is found), the vertebral column's points, the frame, and the Log.
+class Preparation {
+ public:
+  Preparation(const PrepareOptions& o, const std::function<void(int, const char*)>& progress) : opt(o), progress_(progress) {
+    if (!kMinVolumeRange.contains(opt.minVolume))
+      throw InputError("parameters: the minimum volume must lie in " + kMinVolumeRange.text() + " mm^3");
+    if (!kAlphaRange.contains(opt.alpha))
+      throw InputError("parameters: the wrap detail alpha must lie in " + kAlphaRange.text() + " mm");
+    if (!kOffsetRange.contains(opt.offset))
+      throw InputError("parameters: the wrap offset must lie in " + kOffsetRange.text() + " mm");
+    if (!kEdgeLengthRange.contains(opt.edgeLength) || (opt.edgeLength > 0 && opt.edgeLength < kMinEdgeLength))
+      throw InputError("parameters: the target edge length must be 0 or lie in " +
+                       ParamRange{kMinEdgeLength, kEdgeLengthRange.hi}.text() + " mm");
+  }
+  void classify(const std::vector<InputLayer>& layers);  ///< 1. each layer's kind from its name, else its shape
+  void toMillimetres();                                  ///< 2. the units
+  void orient();                                         ///< 3. the anatomical frame's axes
+  void separate();                                       ///< 4. the spine cut, fragments and what is not cage
+  void settleSuperiorAndLeft();                          ///< 3, finished on the separated ribs
+  void numberRibs();                                     ///< 5. rib numbers and sides
+  void repair();                                         ///< 6. closed, manifold, embedded structures
+  void join(CMeshO& cage);                               ///< 7. one labelled surface, decimated
+  void placeAndCentre(CMeshO& cage);                     ///< 8. landmarks, the origin, the user's points
+  PrepareResult res;
+
+ private:
+  void prog(int pc, const char* what) const { if (progress_) progress_(pc, what); }
+  void classifyUnknownByShape(std::vector<Structure>& unknown);  ///< 1, for the layers whose names say nothing
+  void checkTheCage(std::size_t layers) const;  ///< 1, finished: a sternum, cartilage and ribs are there
+  Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
+  void repairColumn(const Structure& s);     ///< 6. for the column kept as the support, into `column`
+
+  const PrepareOptions& opt;
+  std::function<void(int, const char*)> progress_;
+  std::vector<std::string>& log = res.log;
+  std::vector<Structure> all;   // recognised layers, then (kept) the structures of the model
+  std::vector<Structure> kept;
+  std::vector<Vec3> spine;      // vertebral column points: vertebra layers and the cut-away bone
+  double diag = 0, scale = 1;   // the input's size (its units) and the factor to mm
+  Frame fr;
+  double x0 = 0, yMid = 0;      // the sternum's midline; halfway between the back of the cage and the sternum
+  Soup bone, cartilage, sternum;
+  std::vector<int> bonePart;    // per face of `bone`: its rib's part id
+  Soup column;                  // the vertebral column kept as the fixed support (SpineMode::Keep), repaired
+  OwnedMesh joined;             // the labelled union of ribs, cartilages and sternum, before decimation
+  void unite(const std::vector<nuss::TissueLayer>& layers, OwnedMesh& out, bool logIt);  ///< 7. the union, cleaned
+  void decimate(OwnedMesh& joinedSurface, CMeshO& cage);                                  ///< 7. to the edge length
+};
+
+void Preparation::classify(const std::vector<InputLayer>& layers) {
+  prog(2, "classifying the layers");
+  std::vector<Structure> unknown;
+  for (const auto& l : layers) {
+    Structure s{l.name, classifyName(l.name), surfaceOf(*l.mesh, kFiniteFaces)};
+    if (s.soup.empty()) {
+      log.push_back("'" + l.name + "': no faces, left out");
+      continue;
+    }
+    if (s.cls.kind == Kind::NotCage) {
+      log.push_back("'" + l.name + "': not part of the rib cage, left out");
+      ++res.dropped;
+      continue;
+    }
+    weld(s.soup);
+    (s.cls.kind == Kind::Unknown ? unknown : all).push_back(std::move(s));
+  }
+  if (!unknown.empty()) classifyUnknownByShape(unknown);
+  checkTheCage(layers.size());
+  for (const auto& s : all)
+    log.push_back("'" + s.name + "': " +
+                  (s.cls.kind == Kind::Rib ? (s.cls.number ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number)
+                                                           : std::string("rib (side and number from its place)"))
+                   : s.cls.kind == Kind::Cartilage ? std::string("costal cartilage")
+                   : s.cls.kind == Kind::Sternum ? std::string("sternum")
+                   : s.cls.kind == Kind::Vertebra ? std::string(opt.spine == SpineMode::Keep ? "vertebral column (kept as the fixed support)" : "vertebral column (frame and landmarks, not in the model)")
+                                                  : std::string("bone (ribs, maybe fused to the spine)")) +
+                  ", " + std::to_string(s.soup.F.size()) + " faces");
+}
+
+void Preparation::classifyUnknownByShape(std::vector<Structure>& unknown) {
+  std::vector<LayerToClassify> in;
+  for (const auto& s : all) in.push_back({s.name, &s.soup, s.cls});
+  for (const auto& s : unknown) in.push_back({s.name, &s.soup, s.cls});
+  log.push_back(std::to_string(unknown.size()) + " layer" + (unknown.size() > 1 ? "s" : "") + " named like no rib cage "
+                "structure: classified by their shape");
+  const auto cls = classifyByShape(in, log);
+  const std::size_t named = all.size();
+  for (std::size_t i = 0; i < unknown.size(); ++i) {
+    const NameClass& c = cls[named + i];
+    if (c.kind == Kind::NotCage || c.kind == Kind::Unknown) {
+      ++res.dropped;
+      continue;
+    }
+    unknown[i].cls = {c.kind, 0, 0};  // side and number of a rib come from its place (numberRibs)
+    all.push_back(std::move(unknown[i]));
+  }
+}
+
+void Preparation::checkTheCage(std::size_t layers) const {
+  auto count = [&](Kind k) { return std::count_if(all.begin(), all.end(), [&](const Structure& s) { return s.cls.kind == k; }); };
+  if (all.empty())
+    throw InputError("None of the " + std::to_string(layers) + " layers is named like a rib cage structure: name them "
+                     "as TotalSegmentator does ('rib_left_1' ... 'rib_right_12', 'costal_cartilages', 'sternum', "
+                     "'vertebrae_T1' ...) or 'bone', 'cartilage', 'sternum'.");
+  if (!count(Kind::Sternum))
+    throw InputError("No sternum: none of the layers is named 'sternum' (or 'manubrium', 'xiphoid'). Import the sternum's "
+                     "segmentation, or rename its layer.");
+  if (!count(Kind::Cartilage))
+    throw InputError("No costal cartilage: none of the layers is named like 'costal_cartilages' or 'cartilage'. The "
+                     "cartilages join the ribs to the sternum; segment them (TotalSegmentator's 'costal_cartilages').");
+  if (!count(Kind::Rib) && !count(Kind::Bone))
+    throw InputError("No ribs: none of the layers is named like 'rib_left_1', 'ribs' or 'bone'.");
+}
+
+void Preparation::toMillimetres() {
+  Eigen::AlignedBox3d box;
+  for (const auto& s : all)
+    for (const auto& p : s.soup.V) box.extend(p);
+  diag = box.diagonal().norm();
+  scale = 1;
+  if (opt.units == Units::Metres || (opt.units == Units::Auto && diag < 3)) scale = 1000;
+  else if (opt.units == Units::Centimetres || (opt.units == Units::Auto && diag < 60)) scale = 10;
+  log.push_back("units: " + std::string(scale == 1000 ? "metres" : scale == 10 ? "centimetres" : "millimetres") +
+                (opt.units == Units::Auto ? " (the structures span " + mm(diag, 3) + " units)" : std::string(" (stated)")) +
+                (scale != 1 ? ", scaled to mm" : ""));
+  if (scale * diag < 100 || scale * diag > 1500)
+    throw InputError("The structures span " + mm(scale * diag) + " mm, not a rib cage (150-700 mm): state the units "
+                     "(parameter 'Units').");
+  for (auto& s : all)
+    for (auto& p : s.soup.V) p *= scale;
+}
+
+void Preparation::orient() {
+  fr = findFrame(all, opt, scale * diag);
+  for (auto& s : all) transform(s.soup, fr.R, Vec3::Zero());
+  log.push_back("frame " + fr.how);
+  Soup sternumAll;
+  for (const auto& s : all)
+    if (s.cls.kind == Kind::Sternum) append(sternumAll, s.soup);
+  x0 = centroid(sternumAll).x();
+  Eigen::AlignedBox3d cageBox;
+  for (const auto& s : all)
+    for (const auto& p : s.soup.V) cageBox.extend(p);
+  yMid = 0.5 * (cageBox.min().y() + centroid(sternumAll).y());
+}
+
+void Preparation::separate() {
+  prog(10, "fragments and the spine");
+  // positions of the bone and sternum vertices: a cartilage sharing any of them touches its neighbours
+  std::set<std::tuple<double, double, double>> bonePoints;
+  for (const auto& s : all)
+    if (s.cls.kind == Kind::Rib || s.cls.kind == Kind::Bone || s.cls.kind == Kind::Sternum)
+      for (const auto& p : s.soup.V) bonePoints.emplace(p.x(), p.y(), p.z());
+  // The cartilages join the ribs to the sternum. Where a segmentation's labels only touch, their surfaces
+  // coincide face to face, which a union cannot join into a manifold: wrapped with the offset, the
+  // cartilage overlaps the bone it joins. The wrap also reconnects the thin strips that a voxel surface
+  // splits where voxels meet at an edge or corner only (so it comes before the fragments are counted).
+  // The wraps are the step's costly part: computed side by side.
+  const auto touches = [&](const Soup& c) {
+    return std::any_of(c.V.begin(), c.V.end(), [&](const Vec3& p) { return bonePoints.count({p.x(), p.y(), p.z()}) > 0; });
+  };
+  std::vector<std::size_t> toWrap;
+  for (std::size_t i = 0; i < all.size(); ++i)
+    if (all[i].cls.kind == Kind::Cartilage && (touches(all[i].soup) || !defects(all[i].soup).empty())) toWrap.push_back(i);
+  std::vector<Soup> wraps(toWrap.size());
+  std::vector<std::exception_ptr> wrapErrors(toWrap.size());
+#pragma omp parallel for schedule(dynamic)
+  for (int k = 0; k < int(toWrap.size()); ++k) {
+    const Structure& c = all[toWrap[std::size_t(k)]];
+    try {
+      wraps[std::size_t(k)] = wrapOf(c.name, c.soup, opt);
+    } catch (...) {
+      wrapErrors[std::size_t(k)] = std::current_exception();
+    }
+  }
+  for (const auto& e : wrapErrors)
+    if (e) std::rethrow_exception(e);
+  for (auto& s : all) {
+    if (s.cls.kind == Kind::Vertebra) {
+      spine.insert(spine.end(), s.soup.V.begin(), s.soup.V.end());
+      if (opt.spine == SpineMode::Keep) kept.push_back({s.name, s.cls, s.soup});  // the support, repaired in step 6
+      continue;
+    }
+    double rCut = 0;
+    if (s.cls.kind == Kind::Bone) {
+      rCut = spineHalfWidth(s.soup, x0, yMid);
+      if (rCut > 0) {
+        Soup cut, away;
+        int removed = 0;
+        for (const auto& f : s.soup.F) {
+          const Vec3 c = (s.soup.V[std::size_t(f[0])] + s.soup.V[std::size_t(f[1])] + s.soup.V[std::size_t(f[2])]) / 3.0;
+          const bool behind = c.y() < yMid;
+          if (behind && std::abs(c.x() - x0) < rCut) {
+            for (int k = 0; k < 3; ++k) spine.push_back(s.soup.V[std::size_t(f[std::size_t(k)])]);
+            ++removed;
+          } else {
+            cut.F.push_back(f);
+          }
+          // the column kept as the support reaches kColumnOverlap mm further along the ribs than the cut, so
+          // that the two solids overlap there (the union then joins them; their cut ends would only touch)
+          if (behind && std::abs(c.x() - x0) < rCut + kColumnOverlap) away.F.push_back(f);
+        }
+        cut.V = s.soup.V;
+        weld(cut);
+        away.V = std::move(s.soup.V);
+        weld(away);
+        const bool keepColumn = opt.spine == SpineMode::Keep;
+        log.push_back("'" + s.name + "': vertebral column found (posterior midline, " + mm(2 * rCut) + " mm wide): cut at the "
+                      "costovertebral joints, " + std::to_string(removed) + " faces removed" +
+                      (keepColumn ? "; the column is kept as the fixed support" : ""));
+        s.soup = std::move(cut);
+        if (keepColumn) kept.push_back({s.name + " vertebral column", {Kind::Vertebra, 0, 0}, std::move(away)});
+      }
+    }
+    if (const auto w = std::find(toWrap.begin(), toWrap.end(), std::size_t(&s - all.data())); w != toWrap.end()) {
+      const double v0 = volume(s.soup);
+      const std::size_t pieces0 = components(s.soup).size();
+      s.soup = std::move(wraps[std::size_t(w - toWrap.begin())]);
+      const double v1 = volume(s.soup);
+      log.push_back("'" + s.name + "': wrapped so that it overlaps the ribs and the sternum it joins (" + std::to_string(pieces0) +
+                    " -> " + std::to_string(components(s.soup).size()) + " pieces, " + mm(v0 / 1000, 2) + " -> " +
+                    mm(v1 / 1000, 2) + " cm3)");
+      s.wrapped = true;
+      ++res.wrapped;
+    }
+    auto pieces = components(s.soup);
+    int fragments = 0, loose = 0;
+    double fragmentVolume = 0;
+    Soup keep;
+    for (auto& p : pieces) {
+      const double v = volume(p);
+      if (v < opt.minVolume) {
+        ++fragments, fragmentVolume += v;
+        continue;
+      }
+      if (rCut > 0) {  // a piece of a fused bone layer is a rib only if it reached the column
+        bool reaches = false;
+        for (const auto& q : p.V) reaches = reaches || (q.y() < yMid && std::abs(q.x() - x0) < rCut + 3.0);
+        if (!reaches) {
+          ++loose;
+          log.push_back("'" + s.name + "': left out a piece of " + std::to_string(p.F.size()) + " faces, " + mm(v / 1000, 2) +
+                        " cm3 at " + at(centroid(p)) + " that does not reach the spine (scapula or loose bone)");
+          continue;
+        }
+      }
+      if (s.cls.kind == Kind::Bone) {
+        kept.push_back({s.name + " piece " + std::to_string(kept.size() + 1), {Kind::Rib, 0, 0}, std::move(p)});
+        continue;
+      }
+      append(keep, p);
+    }
+    if (fragments) log.push_back("'" + s.name + "': dropped " + std::to_string(fragments) + " fragments under " + mm(opt.minVolume, 0) +
+                                 " mm3 (" + mm(fragmentVolume, 0) + " mm3 in all)");
+    res.dropped += fragments + loose;
+    if (s.cls.kind != Kind::Bone && !keep.empty()) kept.push_back({s.name, s.cls, std::move(keep), s.wrapped});
+    else if (s.cls.kind != Kind::Bone) log.push_back("'" + s.name + "': nothing left after dropping fragments");
+  }
+}
+
+Vec3 Preparation::vertebralEnd(const Soup& r) const {
+    Vec3 best(0, 0, 0);
+    double d = 1e300;
+    for (const auto& p : r.V)
+      if (p.y() < yMid && std::abs(p.x() - x0) < d) d = std::abs(p.x() - x0), best = p;
+    if (d > 1e299)
+      for (const auto& p : r.V)
+        if (std::abs(p.x() - x0) < d) d = std::abs(p.x() - x0), best = p;
+    return best;
+}
+
+void Preparation::settleSuperiorAndLeft() {
+  if (fr.superiorOpen) {  // superior: where the ribs' vertebral ends are (each rib runs down to the front)
+    std::vector<std::pair<Vec3, Vec3>> ends;
+    for (const auto& st : kept) {
+      if (st.cls.kind != Kind::Rib) continue;
+      Vec3 front = st.soup.V.front();
+      for (const auto& p : st.soup.V)
+        if (p.y() > front.y()) front = p;
+      ends.push_back({vertebralEnd(st.soup), front});
+    }
+    if (!ribsRunDown(ends)) {  // upside down: turn about the anterior axis (keeps the handedness)
+      const Mat3 turn = Eigen::Vector3d(-1, 1, -1).asDiagonal();
+      for (auto& st : kept) transform(st.soup, turn, Vec3::Zero());
+      for (auto& p : spine) p = turn * p;
+      fr.R = turn * fr.R;
+      x0 = -x0;
+    }
+    log.push_back("superior from the ribs' slope (" + std::to_string(ends.size()) + " ribs: each runs down from its vertebral end)");
+  }
+
+  if (opt.frame == FrameMode::Auto) {  // names with sides decide when they disagree with the handedness
+    double leftMinusRight = 0;
+    for (const auto& st : kept)
+      if ((st.cls.kind == Kind::Rib || st.cls.kind == Kind::Cartilage) && st.cls.side)
+        leftMinusRight += (st.cls.side == 2 ? 1 : -1) * (centroid(st.soup).x() - x0);
+    if (leftMinusRight < 0) {
+      const Mat3 mirror = Eigen::Vector3d(-1, 1, 1).asDiagonal();
+      for (auto& st : kept) transform(st.soup, mirror, Vec3::Zero());
+      for (auto& p : spine) p = mirror * p;
+      fr.R = mirror * fr.R;
+      x0 = -x0;
+      log.push_back("the names put the left ribs on the right of a right-handed scanner frame: the file is mirrored, and "
+                    "the names are followed");
+    }
+  }
+}
+
+void Preparation::numberRibs() {
+  prog(20, "numbering the ribs");
+  std::map<int, std::vector<std::pair<double, Structure*>>> unnamed;  // side -> (end z, rib)
+  std::map<int, std::set<int>> named;
+  for (auto& s : kept) {
+    if (s.cls.kind != Kind::Rib) continue;
+    const Vec3 c = centroid(s.soup);
+    const int geomSide = c.x() > x0 ? 2 : 1;
+    if (s.cls.side && s.cls.side != geomSide)
+      log.push_back("'" + s.name + "': named " + sideName(s.cls.side) + " but lies on the " + sideName(geomSide) + " side; the name is kept");
+    if (!s.cls.side) s.cls.side = geomSide;
+    if (s.cls.number) named[s.cls.side].insert(s.cls.number);
+    else unnamed[s.cls.side].push_back({vertebralEnd(s.soup).z(), &s});
+  }
+  for (auto& [side, list] : unnamed) {
+    std::sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+    if (!named[side].empty()) {
+      log.push_back(std::to_string(list.size()) + " unnamed " + sideName(side) + " bone pieces left out: that side's ribs are named");
+      for (auto& [z, s] : list) s->cls.kind = Kind::NotCage;
+      continue;
+    }
+    int k = 0;
+    for (auto& [z, s] : list) s->cls.number = ++k, named[side].insert(k);
+    log.push_back(sideName(side) + " ribs numbered 1-" + std::to_string(k) + " from the top by the height of their vertebral end");
+  }
+  for (int side = 1; side <= 2; ++side) {
+    const auto& n = named[side];
+    if (n.empty())
+      throw InputError("Ribs on the " + sideName(3 - side) + " side only: the " + sideName(side) + " ribs are missing. Import "
+                       "both sides (the analysis needs the whole cage).");
+    std::string missing;
+    for (int r = 1; r <= std::max(7, *n.rbegin()); ++r)
+      if (!n.count(r)) missing += (missing.empty() ? "" : ", ") + std::to_string(r);
+    if (!missing.empty())
+      throw InputError("Ribs missing on the " + sideName(side) + " side: " + missing + " (found " + std::to_string(n.size()) +
+                       "). The analysis needs ribs 1-7 on each side and no gaps; import the missing ribs' segmentations.");
+  }
+  res.ribsRight = int(named[1].size()), res.ribsLeft = int(named[2].size());
+}
+
+void Preparation::repair() {
+  prog(25, "repairing the structures");
+  int done = 0;
+  for (auto& s : kept) {
+    prog(25 + 35 * done++ / int(kept.size()), "repairing the structures");
+    if (s.cls.kind == Kind::NotCage) continue;
+    if (s.cls.kind == Kind::Vertebra) continue;  // the column kept as the support: last, below
+    if (s.wrapped) {
+      append(cartilage, s.soup);
+      continue;
+    }
+    const std::string label = s.cls.kind == Kind::Rib ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number) : s.name;
+    // the least repair that makes it a closed, manifold, embedded surface: duplicate faces removed, holes
+    // closed, else alpha wrapping (which moves the whole surface out by the offset)
+    std::string why = opt.wrapAll ? std::string("every structure wrapped") : defects(s.soup);
+    std::string repaired;
+    if (!opt.wrapAll && !why.empty()) {
+      Soup fixed = s.soup;
+      const int dup = removeDuplicateFaces(fixed);
+      const int holes = defects(fixed).rfind("open", 0) == 0 ? closeHoles(fixed) : 0;
+      if (dup > 0 || holes > 0) {
+        const std::string still = defects(fixed);
+        if (still.empty()) {
+          repaired = (dup ? std::to_string(dup) + " duplicate faces removed" : std::string()) + (dup && holes > 0 ? ", " : "") +
+                     (holes > 0 ? std::to_string(holes) + " holes closed" : std::string());
+          s.soup = std::move(fixed);
+          why.clear();
+        }
+      }
+    }
+    if (!repaired.empty()) log.push_back(label + ": " + repaired + ", " + mm(volume(s.soup) / 1000, 2) + " cm3");
+    if (!why.empty()) {
+      const double v0 = volume(s.soup);
+      Soup w = wrapOf(s.cls.kind == Kind::Rib ? label : s.name, s.soup, opt);
+      const double v1 = volume(w);
+      log.push_back(label + ": " + why + ": wrapped, " + mm(v0 / 1000, 2) + " -> " + mm(v1 / 1000, 2) + " cm3 (" +
+                    (v1 >= v0 ? "+" : "") + mm(100 * (v1 - v0) / std::max(v0, 1e-9), 1) + " %)");
+      s.soup = std::move(w);
+      ++res.wrapped;
+    }
+    if (s.cls.kind == Kind::Rib) {
+      append(bone, s.soup);
+      bonePart.insert(bonePart.end(), s.soup.F.size(), ribPart(s.cls.side, s.cls.number));
+    } else if (s.cls.kind == Kind::Cartilage) {
+      append(cartilage, s.soup);
+    } else if (s.cls.kind == Kind::Sternum) {
+      append(sternum, s.soup);
+    }
+  }
+  // after the others, so that they are repaired in the same order as when the column is cut
+  for (const auto& s : kept)
+    if (s.cls.kind == Kind::Vertebra) repairColumn(s);
+}
+
+// The column kept as the support: closed (duplicate faces removed, holes closed: the ends the cut left), then
+// always wrapped, so that it overlaps the rib ends it holds (the offset, as the cartilages overlap; vertebra
+// layers that only touch the ribs are joined so too). Its shape matters little (all of it is held fixed),
+// so it is wrapped at a coarse detail, kColumnAlpha at least: the wrap bridges the disc gaps between the
+// vertebrae and the narrow gaps between the column and the ribs beside it, which would leave the joined
+// surface with walls closer than the decimation's edge length (a decimated surface folding through itself
+// there). Wrapping an open surface would give a thin hollow shell (the wrap enters through the holes): a
+// column whose holes do not close is wrapped at 4 mm, which bridges them. Pieces under the minimum volume
+// are dropped.
+void Preparation::repairColumn(const Structure& s) {
+  Soup c = s.soup;
+  const double v0 = volume(c);
+  const int dup = removeDuplicateFaces(c);
+  int holes = 0, border = 0;
+  // edges in one face, a degenerate face's collapsed edge included (as defects() counts them)
+  auto countBorder = [&] { return int(Topology(c).edgeUse().once); };
+  if (countBorder() > 0) holes = closeHoles(c);
+  border = countBorder();
+  constexpr double kColumnAlpha = 2.0, kOpenAlpha = 4.0;
+  const double alpha = std::max(opt.alpha, border > 0 ? kOpenAlpha : kColumnAlpha);
+  Soup w = alphaWrap(border > 0 ? s.soup : c, alpha, opt.offset);
+  Soup keep;
+  int small = 0;
+  for (auto& p : components(w)) {
+    if (volume(p) < opt.minVolume) {
+      ++small;
+      continue;
+    }
+    append(keep, p);
+  }
+  const std::string still = defects(keep);
+  if (keep.empty() || !still.empty())
+    throw TopologyError("Alpha wrapping cannot close the vertebral column from '" + s.name + "' at detail " + mm(alpha, 2) + " mm (" +
+                     (keep.empty() ? std::string("nothing is left") : "the result is " + still) +
+                     "): set 'Spine' to cut at the costovertebral joints, or check the layer.");
+  log.push_back("vertebral column ('" + s.name + "'), kept as the fixed support: " +
+                (dup ? std::to_string(dup) + " duplicate faces removed, " : std::string()) +
+                (holes > 0 ? std::to_string(holes) + " holes closed, " : std::string()) +
+                (border > 0 ? std::to_string(border) + " border edges stay open, " : std::string()) + "wrapped at detail " +
+                mm(alpha, 1) + " mm" +
+                ", " + mm(v0 / 1000, 2) + " -> " + mm(volume(keep) / 1000, 2) + " cm3, " + std::to_string(components(keep).size()) +
+                " pieces" + (small ? " (" + std::to_string(small) + " under the minimum volume dropped)" : std::string()));
+  append(column, keep);
+  ++res.wrapped;
+}
+
+void Preparation::join(CMeshO& cage) {
+  prog(60, "joining the tissues");
+  OwnedMesh boneM, cartM, sternM, columnM;
+  toMesh(bone, boneM);
+  writeFaceLabels(boneM, std::vector<int>(bone.F.size(), int(Tissue::Bone)), bonePart);
+  toMesh(cartilage, cartM);
+  toMesh(sternum, sternM);
+  std::vector<nuss::TissueLayer> layers{{"ribs", &boneM, Tissue::Bone}, {"costal cartilage", &cartM, Tissue::Cartilage},
+                                        {"sternum", &sternM, Tissue::Sternum}};
+  if (column.empty()) {
+    unite(layers, joined, true);
+    decimate(joined, cage);
+    return;
+  }
+  // the landmarks come from the cage as the cut mode joins it, so that they are the same either way: with the
+  // column, the rib ends (and so the costovertebral joints) lie inside it
+  unite(layers, joined, false);
+  prog(70, "joining the tissues and the vertebral column");
+  // the column: a layer of its own (it overlaps the ribs), its faces and tets part kVertebralColumn
+  toMesh(column, columnM);
+  writeFaceLabels(columnM, std::vector<int>(column.F.size(), int(Tissue::Bone)), std::vector<int>(column.F.size(), kVertebralColumn));
+  layers.push_back({"vertebral column", &columnM, Tissue::Bone});
+  OwnedMesh withColumn;
+  unite(layers, withColumn, true);
+  decimate(withColumn, cage);
+}
+
+void Preparation::unite(const std::vector<nuss::TissueLayer>& layers, OwnedMesh& out, bool logIt) {
+  nuss::JoinStats js;
+  nuss::joinTissueLayers(layers, {}, out, &js);
+  const int shells = dropTinyShells(out, std::max(opt.minVolume, 1.0));
+  if (logIt)
+    log.push_back("joined: " + std::to_string(js.components - shells) + " connected pieces" +
+                  (shells ? " (" + std::to_string(shells) + " tiny shells where two surfaces touch removed)" : std::string()) +
+                  ", " + mm(js.unionVolume / 1000, 1) + " cm3 (the structures add up to " + mm(js.sumVolume / 1000, 1) +
+                  " cm3), " + std::to_string(out.fn) + " faces");
+}
+
+void Preparation::decimate(OwnedMesh& joinedSurface, CMeshO& cage) {
+  prog(75, "decimating");
+  cage.Clear();
+  copyLabelledMesh(cage, joinedSurface);
+  if (!(opt.edgeLength > 0)) return;
+  double ar = 0;
+  for (const auto& f : cage.face) ar += double(vcg::DoubleArea(f)) / 2;
+  const int target = int(ar / (0.433 * opt.edgeLength * opt.edgeLength));
+  if (target >= cage.fn) return;
+  // in two stages: a retry (where a collapse made faces cross) starts again from its stage's input, so the first
+  // stage, from the union's hundreds of thousands of faces, goes to a fine edge where it rarely needs one
+  if (4 * target < cage.fn) {
+    ribcage::decimateEmbedded(cage, 4 * target, opt.edgeLength / 2);
+    vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
+  }
+  ribcage::decimateEmbedded(cage, target, opt.edgeLength);
+  vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
+  relabel(cage, joinedSurface);
+  log.push_back("decimated to edge length " + mm(opt.edgeLength, 2) + " mm: " + std::to_string(cage.fn) + " faces");
+}
+
+void Preparation::placeAndCentre(CMeshO& cage) {
+  prog(90, "landmarks");
+  // the full-detail union without the column (see join()): the landmarks depend neither on the edge length nor
+  // on the spine mode
+  Anatomy an = anatomyOf(joined);
+  an.spine = spine;
+  std::set<int> given;
+  for (const auto& u : opt.userLandmarks) given.insert(u.code);
+  auto lms = placeLandmarks(an, x0, yMid, given, log);
+  double ySpine = 0, zLow = 1e300;
+  std::map<int, double> zBySide[3];
+  {
+    bool spineAt = false;
+    for (const auto& l : lms)
+      if (l.code == kVertebraAtDeepest) ySpine = l.p.y(), spineAt = true;
+    double yc = 0;
+    int n = 0;
+    for (const auto& l : lms)
+      if (l.code > 100 && l.code < 213) yc += l.p.y(), ++n, zLow = std::min(zLow, l.p.z()), zBySide[l.code / 100][l.code % 100] = l.p.z();
+    if (!spineAt) ySpine = n ? yc / n : 0;
+  }
+  double spacing = 0;
+  int ns = 0;
+  for (int side = 1; side <= 2; ++side)
+    for (const auto& [rib, z] : zBySide[side])
+      if (auto it = zBySide[side].find(rib + 1); it != zBySide[side].end()) spacing += z - it->second, ++ns;
+  spacing = ns ? spacing / ns : 0;
+  const Vec3 shift(-x0, -ySpine, -(zLow - 0.5 * spacing));
+  for (auto& v : cage.vert) v.P() += toPoint(shift);
+  for (auto& l : lms) l.p += shift;
+  vcg::tri::UpdateBounding<CMeshO>::Box(cage);
+  res.inputToModel.setIdentity();
+  res.inputToModel.topLeftCorner<3, 3>() = scale * fr.R;
+  res.inputToModel.topRightCorner<3, 1>() = shift;
+  // user points override
+  for (const auto& u : opt.userLandmarks) {
+    const Vec3 p = (res.inputToModel * u.p.homogeneous()).head<3>();
+    auto it = std::find_if(lms.begin(), lms.end(), [&](const Landmark& l) { return l.code == u.code; });
+    log.push_back("landmark " + std::to_string(u.code) + ": the user's point " + at(p) +
+                  (it != lms.end() ? " replaces the automatic " + at(it->p) : std::string(" (no automatic one)")));
+    if (it != lms.end()) it->p = p;
+    else lms.push_back({u.code, p});
+  }
+  std::sort(lms.begin(), lms.end(), [](const Landmark& a, const Landmark& b) { return a.code < b.code; });
+  res.landmarks = lms;
+}
+
+}  // namespace
+
+NameClass classifyName(const std::string& name) {
+  const auto w = words(name);
+  auto has = [&](const char* prefix) {
+    return std::any_of(w.begin(), w.end(), [&](const std::string& x) { return x.rfind(prefix, 0) == 0; });
+  };
+  NameClass c;
+  for (const auto& x : w) {
+    if (x == "left" || x == "l" || x == "lt" || x == "sinister") c.side = 2;
+    if (x == "right" || x == "r" || x == "rt" || x == "dexter") c.side = 1;
+  }
+  for (const auto& x : w)
+    if (std::isdigit(static_cast<unsigned char>(x[0])) && x.size() <= 2) c.number = std::stoi(x);
+  static const char* notCage[] = {"scapul", "clavic", "humer", "femur", "hip", "skull", "lung", "heart", "liver",
+                                  "aorta", "trachea", "esophag", "kidney", "spleen", "stomach", "sacrum", "pelvi",
+                                  "skin", "body", "muscle", "fat", "vein", "arter", "atrial", "ventric", "thyroid"};
+  for (const char* n : notCage)
+    if (has(n)) return {Kind::NotCage, c.side, c.number};
+  if (has("cartilag") || has("chondr")) return {Kind::Cartilage, c.side, c.number};
+  if (has("stern") || has("manubr") || has("xiph")) return {Kind::Sternum, 0, 0};
+  if (has("vertebr") || has("spine") || has("spinal") || has("column")) return {Kind::Vertebra, 0, 0};
+  const bool rib = has("rib") || has("costa");
+  if (rib && c.number >= 1 && c.number <= 12) return {Kind::Rib, c.side, c.number};
+  if (rib || has("bone") || has("skelet") || has("thorax") || has("cage")) return {Kind::Bone, c.side, 0};
+  return {Kind::Unknown, c.side, c.number};
+}
+
+std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped) {
+  std::ifstream in(path);
+  if (!in) throw IOError("Cannot read the picked points file '" + path + "': check the path.");
+  std::stringstream ss;
+  ss << in.rdbuf();
+  const std::string text = ss.str();
+  std::vector<Landmark> out;
+  int skip = 0;
+  const std::regex point("<point\\b([^>]*)/?>");
+  auto attr = [](const std::string& tag, const std::string& key, std::string& val) {
+    const std::regex r("\\b" + key + "\\s*=\\s*\"([^\"]*)\"");
+    std::smatch m;
+    if (!std::regex_search(tag, m, r)) return false;
+    val = m[1];
+    return true;
+  };
+  for (auto it = std::sregex_iterator(text.begin(), text.end(), point); it != std::sregex_iterator(); ++it) {
+    const std::string tag = (*it)[1];
+    std::string x, y, z, name, active = "1";
+    attr(tag, "active", active);
+    if (!attr(tag, "x", x) || !attr(tag, "y", y) || !attr(tag, "z", z) || !attr(tag, "name", name) || active == "0") {
+      ++skip;
+      continue;
+    }
+    std::size_t k = 0;
+    while (k < name.size() && std::isspace(static_cast<unsigned char>(name[k]))) ++k;
+    std::size_t e = k;
+    while (e < name.size() && std::isdigit(static_cast<unsigned char>(name[e]))) ++e;
+    if (e == k) {
+      ++skip;
+      continue;
+    }
+    out.push_back({std::stoi(name.substr(k, e - k)), Vec3(std::stod(x), std::stod(y), std::stod(z))});
+  }
+  if (out.empty() && text.find("<PickedPoints") == std::string::npos)
+    throw IOError("'" + path + "' is not a PickPoints file (.pp): no <PickedPoints> element.");
+  if (skipped) *skipped = skip;
+  return out;
+}
+
+PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
+                                 const std::function<void(int, const char*)>& progress) {
+  using Clock = std::chrono::steady_clock;
+  const auto t0 = Clock::now();
+  auto t = t0;
+  std::string times;
+  const auto lap = [&](const char* step) {
+    const auto now = Clock::now();
+    times += (times.empty() ? "" : ", ") + std::string(step) + " " + mm(std::chrono::duration<double>(now - t).count()) + " s";
+    t = now;
+  };
+  Preparation p(opt, progress);
+  p.classify(layers);
+  p.toMillimetres();
+  p.orient();
+  lap("classify, units and frame");
+  p.separate();
+  lap("separate");
+  p.settleSuperiorAndLeft();
+  p.numberRibs();
+  p.repair();
+  lap("number and repair");
+  p.join(cage);
+  lap("join and decimate");
+  p.placeAndCentre(cage);
+  lap("landmarks");
+  p.res.log.push_back("time: " + times);
+  p.res.seconds = std::chrono::duration<double>(Clock::now() - t0).count();
+  if (progress) progress(100, "done");
+  return p.res;
+}
+
+}  // namespace pectus::patient

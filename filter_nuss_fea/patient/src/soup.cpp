@@ -1,0 +1,207 @@
+#include "pectus/patient/soup.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+#include <set>
+#include <tuple>
+
+#include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
+#include <CGAL/Surface_mesh.h>
+#include <CGAL/alpha_wrap_3.h>
+#include <vcg/complex/allocate.h>
+
+#include "pectus/self_intersections.h"
+
+namespace pectus::patient {
+
+namespace {
+using Vec3 = Eigen::Vector3d;
+
+// the faces of a CGAL surface mesh (polygons fanned into triangles)
+template <class Mesh>
+Soup soupOfSurfaceMesh(const Mesh& m) {
+  Soup out;
+  std::vector<int> id(m.number_of_vertices() + m.number_of_removed_vertices(), -1);
+  for (auto v : m.vertices()) {
+    id[v.idx()] = int(out.V.size());
+    const auto& p = m.point(v);
+    out.V.emplace_back(p.x(), p.y(), p.z());
+  }
+  for (auto f : m.faces()) {
+    std::vector<int> t;
+    for (auto v : m.vertices_around_face(m.halfedge(f))) t.push_back(id[v.idx()]);
+    for (std::size_t k = 1; k + 1 < t.size(); ++k) out.F.push_back({t[0], t[k], t[k + 1]});
+  }
+  return out;
+}
+}  // namespace
+
+void weld(Soup& s) {
+  std::map<std::tuple<double, double, double>, int> at;
+  std::vector<int> to(s.V.size());
+  std::vector<Vec3> V;
+  for (std::size_t i = 0; i < s.V.size(); ++i) {
+    const auto key = std::make_tuple(s.V[i].x(), s.V[i].y(), s.V[i].z());
+    const auto [it, fresh] = at.emplace(key, int(V.size()));
+    if (fresh) V.push_back(s.V[i]);
+    to[i] = it->second;
+  }
+  std::vector<std::array<int, 3>> F;
+  for (auto f : s.F) {
+    for (int& v : f) v = to[std::size_t(v)];
+    if (f[0] != f[1] && f[1] != f[2] && f[0] != f[2]) F.push_back(f);
+  }
+  // drop unused vertices
+  std::vector<int> used(V.size(), -1);
+  Soup out;
+  for (auto f : F) {
+    for (int& v : f) {
+      if (used[std::size_t(v)] < 0) used[std::size_t(v)] = int(out.V.size()), out.V.push_back(V[std::size_t(v)]);
+      v = used[std::size_t(v)];
+    }
+    out.F.push_back(f);
+  }
+  s = std::move(out);
+}
+
+void append(Soup& to, const Soup& s) {
+  const int o = int(to.V.size());
+  to.V.insert(to.V.end(), s.V.begin(), s.V.end());
+  for (auto f : s.F) to.F.push_back({f[0] + o, f[1] + o, f[2] + o});
+}
+
+std::vector<Soup> components(const Soup& s) {
+  std::vector<int> faceComponent;
+  std::vector<Soup> out(std::size_t(Topology(s).components(faceComponent)));
+  std::vector<std::map<int, int>> vmap(out.size());
+  for (std::size_t fi = 0; fi < s.F.size(); ++fi) {
+    const auto& f = s.F[fi];
+    Soup& c = out[std::size_t(faceComponent[fi])];
+    auto& vm = vmap[std::size_t(faceComponent[fi])];
+    std::array<int, 3> g{};
+    for (int k = 0; k < 3; ++k) {
+      const auto [jt, nv] = vm.emplace(f[std::size_t(k)], int(c.V.size()));
+      if (nv) c.V.push_back(s.V[std::size_t(f[std::size_t(k)])]);
+      g[std::size_t(k)] = jt->second;
+    }
+    c.F.push_back(g);
+  }
+  return out;
+}
+
+double area(const Soup& s) {
+  double a = 0;
+  for (const auto& f : s.F)
+    a += 0.5 * (s.V[std::size_t(f[1])] - s.V[std::size_t(f[0])]).cross(s.V[std::size_t(f[2])] - s.V[std::size_t(f[0])]).norm();
+  return a;
+}
+
+Vec3 centroid(const Soup& s) {
+  Vec3 c = Vec3::Zero();
+  double w = 0;
+  for (const auto& f : s.F) {
+    const Vec3 &a = s.V[std::size_t(f[0])], &b = s.V[std::size_t(f[1])], &d = s.V[std::size_t(f[2])];
+    const double ar = 0.5 * (b - a).cross(d - a).norm();
+    c += ar * (a + b + d) / 3.0, w += ar;
+  }
+  return w > 0 ? Vec3(c / w) : (s.V.empty() ? Vec3::Zero() : s.V.front());
+}
+
+double volume(const Soup& s) {
+  const Vec3 o = centroid(s);
+  double v = 0;
+  for (const auto& f : s.F)
+    v += (s.V[std::size_t(f[0])] - o).dot((s.V[std::size_t(f[1])] - o).cross(s.V[std::size_t(f[2])] - o)) / 6.0;
+  return std::abs(v);
+}
+
+void transform(Soup& s, const Eigen::Matrix3d& R, const Vec3& t) {
+  for (auto& p : s.V) p = R * p + t;
+  if (R.determinant() < 0)
+    for (auto& f : s.F) std::swap(f[1], f[2]);
+}
+
+int removeDuplicateFaces(Soup& s) {
+  std::set<std::array<int, 3>> seen;
+  std::vector<std::array<int, 3>> F;
+  for (const auto& f : s.F) {
+    auto k = f;
+    std::sort(k.begin(), k.end());
+    if (seen.insert(k).second) F.push_back(f);
+  }
+  const int removed = int(s.F.size() - F.size());
+  s.F = std::move(F);
+  return removed;
+}
+
+int closeHoles(Soup& s) {
+  namespace PMP = CGAL::Polygon_mesh_processing;
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Mesh = CGAL::Surface_mesh<K::Point_3>;
+  std::vector<K::Point_3> pts;
+  for (const auto& p : s.V) pts.emplace_back(p.x(), p.y(), p.z());
+  std::vector<std::vector<std::size_t>> polys;
+  for (const auto& f : s.F) polys.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  if (!PMP::orient_polygon_soup(pts, polys) || !PMP::is_polygon_soup_a_polygon_mesh(polys)) return -1;
+  Mesh m;
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
+  std::vector<Mesh::Halfedge_index> borders;
+  std::set<Mesh::Halfedge_index> visited;
+  for (auto h : m.halfedges()) {
+    if (!m.is_border(h) || visited.count(h)) continue;
+    borders.push_back(h);
+    for (auto g : CGAL::halfedges_around_face(h, m)) visited.insert(g);
+  }
+  for (auto h : borders) {
+    std::vector<Mesh::Face_index> added;
+    PMP::triangulate_hole(m, h, std::back_inserter(added));
+  }
+  s = soupOfSurfaceMesh(m);
+  return int(borders.size());
+}
+
+std::string defects(const Soup& s) {
+  if (s.F.empty()) return "no faces";
+  const Topology t(s);
+  if (t.badFace >= 0)
+    return "invalid (face " + std::to_string(t.badFace) + " uses vertex index " + std::to_string(t.badIndex) + ")";
+  std::set<std::array<int, 3>> seen;
+  std::size_t dup = 0;
+  for (const auto& f : s.F) {
+    auto k = f;
+    std::sort(k.begin(), k.end());
+    if (!seen.insert(k).second) ++dup;
+  }
+  if (dup) return std::to_string(dup) + " duplicate faces";
+  // edges as a table of every face's local edges counts them: a degenerate face's collapsed edge too
+  const Topology::EdgeUse use = t.edgeUse();
+  if (use.moreThanTwice) return std::to_string(use.moreThanTwice) + " non-manifold edges";
+  if (use.once) return "open (" + std::to_string(use.once) + " border edges)";
+  // a vertex whose faces form more than one fan (two sheets touching at a point)
+  if (const auto pinched = std::count_if(t.fans.begin(), t.fans.end(), [](int n) { return n > 1; }))
+    return std::to_string(pinched) + " non-manifold vertices";
+  if (const auto pairs = selfIntersections(s.V, s.F); !pairs.empty())
+    return "intersects itself (" + std::to_string(pairs.size()) + " face pairs)";
+  return "";
+}
+
+Soup alphaWrap(const Soup& s, double alpha, double offset) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Point = K::Point_3;
+  std::vector<Point> pts;
+  pts.reserve(s.V.size());
+  for (const auto& p : s.V) pts.emplace_back(p.x(), p.y(), p.z());
+  std::vector<std::array<std::size_t, 3>> tris;
+  tris.reserve(s.F.size());
+  for (const auto& f : s.F) tris.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  CGAL::Surface_mesh<Point> w;
+  CGAL::alpha_wrap_3(pts, tris, alpha, offset, w);
+  return soupOfSurfaceMesh(w);
+}
+
+}  // namespace pectus::patient
