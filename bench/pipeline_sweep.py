@@ -6,8 +6,9 @@ For every (age, pectus index, edge length) of a grid, one MeshLab script through
 
   'Create Pectus Excavatum Rib Cage' (the age, the pectus (Haller) index, the edge length; the rest its defaults)
   -> 'MGA Surface Mesh Smoothing' (its defaults)
-  -> 'Nuss Procedure FE Analysis' (its defaults: calibrated to the default target elevation, large displacement,
-     neo-Hookean, TET10, displacement control; --order changes the element only)
+  -> 'Nuss Procedure FE Analysis' (its defaults: calibrated to the target from the model, the rise that brings the
+     lower sternum end onto the chest line; large displacement, neo-Hookean, TET10, displacement control; --order
+     changes the element only)
   -> 'Thoracic Volume (Slice Method)', 'Thoracic Volume (Ferguson Envelope)', 'Pectus Index' (their defaults,
      before = the smoothed cage, after = the FE result).
 
@@ -52,6 +53,7 @@ ORDERS = {"default": {}, "tet10": dict(order=0), "tet4": dict(order=1)}
 # the checks that refuse a cell before any solve, by the parameter their message tells to change: the target
 # against the chest line (before TetGen), the load and support placement (after TetGen, before the first solve)
 REFUSALS = {"lies beyond what the model reaches": "targetElevation",
+            "no depression to correct": "targetElevation",
             "increase the joint radius": "jointRadius",
             "increase the sternum load radius": "sternumLoadRadius"}
 
@@ -88,7 +90,8 @@ def run_cell(age: float, index: float, edge: float, order: str, out: str, timeou
     slice_s = grab_all(log, r"Slice method, layer .* ([0-9.]+) s\)$")
     env_s = grab_all(log, r"Ferguson envelope, layer .* ([0-9.]+) s\)?$")
     row = dict(age=age, index=index, edge=edge, wall=wall, rc=res.rc, force=r["force"], elevation=r["elevation"],
-               target=grab(log, r"Target elevation ([0-9.]+) mm"), tets=r["tets"], element=r["element"],
+               target=grab(log, r"Target elevation ([0-9.]+) mm"),
+               target_from=grab(log, r"Target elevation [0-9.]+ mm, (from the model|as given)", str), tets=r["tets"], element=r["element"],
                slice=r["slice_change_cm3"], slice_pct=r["slice_change_pct"], envelope=r["envelope_change_cm3"],
                envelope_pct=r["envelope_change_pct"], haller=r["haller"],
                t_cage=grab(log, r"^Rib cage: .*; ([0-9.]+) s$"), t_mga=grab(log, r"^MGA smoothing .*time ([0-9.]+) s"),
@@ -115,7 +118,7 @@ def fmt(v, spec="{:.1f}") -> str:
 
 
 def table(rows: list[dict]) -> list[str]:
-    out = [f"| age | index | edge mm | result | Fe N | elevation mm | volume gain slice cm³ (%) | "
+    out = [f"| age | index | edge mm | result | Fe N | elevation / target mm | volume gain slice cm³ (%) | "
            f"volume gain envelope cm³ (%) | index before → after | cage s | MGA s | FE s | volumes s | total s |",
            "|---:|---:|---:|---|---:|---:|---:|---:|---|---:|---:|---:|---:|---:|"]
     for r in rows:
@@ -125,7 +128,8 @@ def table(rows: list[dict]) -> list[str]:
             f"| {r['age']:g} | {r['index']:g} | {r['edge']:g} | {r['status']}"
             f"{' (' + fmt(r.get('tets'), '{:,.0f}') + ' ' + r['element'] + ')' if ok else ''} | "
             f"{fmt(r.get('force') if ok else None, '{:.2f}')} | "
-            f"{fmt(r.get('elevation') if ok else None, '{:.2f}')} / {fmt(r.get('target'), '{:.1f}')} | "
+            f"{fmt(r.get('elevation') if ok else None, '{:.2f}')} / {fmt(r.get('target'), '{:.1f}')}"
+            f"{' (model)' if r.get('target_from') == 'from the model' else ''} | "
             f"{fmt(r.get('slice') if ok else None, '{:.2f}')} ({fmt(r.get('slice_pct') if ok else None, '{:.2f}')}) | "
             f"{fmt(r.get('envelope') if ok else None, '{:.2f}')} ({fmt(r.get('envelope_pct') if ok else None, '{:.2f}')}) | "
             f"{fmt(hb, '{:.2f}')} → {fmt(ha if ok else None, '{:.2f}')} | {fmt(r.get('t_cage'))} | {fmt(r.get('t_mga'))} | "

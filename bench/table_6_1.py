@@ -23,7 +23,9 @@ pectus_ct_phantom (the generator's cage of that age and index on a 1 mm CT grid,
 files with the defects of real exports), then imported and prepared by 'Import CT Segmentation' and
 'Prepare Patient Rib Cage' (their defaults: 4 mm edges) in the same script before the analysis.
 
-    bench/table_6_1.py [--edge 5] [--cases 1,2,3,4,5] [--methods default] [--input generated|exports]
+--funnel-z builds every cage with that funnel centre (the generator's funnelCenterZ; default its own, 1.1).
+
+    bench/table_6_1.py [--edge 5] [--cases 1,2,3,4,5] [--methods default] [--input generated|exports] [--funnel-z F]
                        [--cartilage-e 12.25[,24.5,...]] [--spine cut[,keep]] [--out /tmp/pectus-table61]
 
 Needs the plugins and meshlabserver of build/prefix (scripts/setup.sh).
@@ -56,20 +58,21 @@ CAGE, LANDMARKS = 0, 1
 PHANTOM = os.path.join(ROOT, "build", "filter_nuss_fea", "pectus_ct_phantom")
 
 
-def cage_filters(case, age, index, edge, source, out, spine="cut"):
+def cage_filters(case, age, index, edge, source, out, spine="cut", funnel_z=None):
     """the filters that make the patient's cage (current) and landmarks, and their layer numbers"""
+    funnel = {} if funnel_z is None else dict(funnelCenterZ=funnel_z)
     if source == "generated":
-        return [pf.create_ribcage(age=age, hallerIndex=index, edgeLength=edge)], CAGE, LANDMARKS
+        return [pf.create_ribcage(age=age, hallerIndex=index, edgeLength=edge, **funnel)], CAGE, LANDMARKS
     folder = os.path.join(out, f"{case}_export")
-    subprocess.run([PHANTOM, folder, "--age", str(age), "--haller", str(index), "--only", "messy"], check=True,
-                   capture_output=True)
+    subprocess.run([PHANTOM, folder, "--age", str(age), "--haller", str(index), "--only", "messy"]
+                   + ([] if funnel_z is None else ["--funnel-z", str(funnel_z)]), check=True, capture_output=True)
     imp = pf.import_ct_segmentation(path=os.path.join(folder, "stl_messy"))
     n = mlx.grab(mlx.run([], mlx.Script([imp])).log, r"Imported (\d+) structures", int)
     return [imp, pf.prepare_patient_rib_cage(spine=SPINE.index(spine))], n, n + 1  # the prepared cage and its landmarks follow the imports
 
 
-def run_case(case, sex, age, index, elevation, method, edge, out, source, cartilage_e, spine):
-    make, cage, landmarks = cage_filters(case, age, index, edge, source, out, spine)
+def run_case(case, sex, age, index, elevation, method, edge, out, source, cartilage_e, spine, funnel_z=None):
+    make, cage, landmarks = cage_filters(case, age, index, edge, source, out, spine, funnel_z)
     base = os.path.join(out, f"{case}_{source}_{method}_E{cartilage_e:g}_{spine}")
     fe = pf.nuss_fea(landmarkLayer=landmarks, targetElevation=elevation, resultBase=mlx.SaveFile(base + ".vtu", ".vtu"),
                      cartilageModulus=cartilage_e, **METHODS[method])
@@ -98,6 +101,8 @@ def main():
     ap.add_argument("--input", choices=("generated", "exports"), default="generated")
     ap.add_argument("--cartilage-e", default=f"{THESIS_CARTILAGE_E:g}", help="costal cartilage moduli, MPa")
     ap.add_argument("--spine", default="cut", help="with --input exports: cut, keep or cut,keep")
+    ap.add_argument("--funnel-z", type=float, default=None,
+                    help="the generator's funnelCenterZ for every cage (default: the generator's own)")
     ap.add_argument("--out", default="/tmp/pectus-table61")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -109,13 +114,14 @@ def main():
     if any(sp not in SPINE for sp in spines) or (a.input == "generated" and spines != ["cut"]):
         ap.error("--spine takes cut and keep, with --input exports (the generated cage has no vertebral column)")
     for (case, sex, age, index, elevation), method, e, spine in itertools.product(cases, methods, moduli, spines):
-        r = run_case(case, sex, age, index, elevation, method, a.edge, a.out, a.input, e, spine)
+        r = run_case(case, sex, age, index, elevation, method, a.edge, a.out, a.input, e, spine, a.funnel_z)
         m = method + ("" if e == THESIS_CARTILAGE_E else f", E {e:g}") + (", spine kept" if spine == "keep" else "")
         rows.append((case, sex, age, index, elevation, m, r))
         print(f"{case} {m}: rc {r['rc']}, Fe {r['force']} N, {r['newton']} Newton iterations, {r['wall']:.0f} s"
               + (f"; {r['error']}" if r["rc"] else ""), flush=True)
 
     what = f"generated cages ({a.edge:g} mm edges)" if a.input == "generated" else "their CT-like exports, prepared (4 mm edges)"
+    what += "" if a.funnel_z is None else f", funnel centre {a.funnel_z:g}"
     print(f"\nTable 6-1, {what}, TET10 as the FE filter meshes them by default; "
           f"{platform.node()}, {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}")
     print("| case | sex/age | index | target mm | method | tets | result | Fe N (thesis) | Newton it. | solves | wall s |"

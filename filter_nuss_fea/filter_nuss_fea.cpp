@@ -157,7 +157,9 @@ void FilterNussFeaPlugin::initCreateRibCage(RichParameterList& par) {
            "Lateral offset of the funnel centre (+ = patient's left), |x| <= " + num(rc::kFunnelCenterXShare) + " x funnel width.",
            kFunnelCenterXEnvelope);
   addFloat(par, "funnelCenterZ", d.funnelCenterZ, "Funnel centre, along sternum",
-           "0 = jugular notch, 1 = xiphisternal junction.", rc::kFunnelCenterZRange);
+           "0 = jugular notch, 1 = xiphisternal junction (the xiphoid's tip lies near 1.14). The default 1.1 puts "
+           "the deepest point around the lower end of the sternum, where pectus excavatum is deepest and the Nuss "
+           "FE analysis lifts the sternum.", rc::kFunnelCenterZRange);
   addFloat(par, "funnelWidth", d.funnelWidth, "Funnel width (mm)",
            "Transverse extent of the depression, up to the chest's inner width.", kFunnelWidthEnvelope);
   addFloat(par, "funnelHeight", d.funnelHeight, "Funnel height (mm)",
@@ -276,11 +278,12 @@ void addLandmarkParam(const MeshDocument& md, RichParameterList& par) {
                         "By default the layer whose label ends in 'landmarks'."));
 }
 void addCalibrationParams(RichParameterList& par) {
-  addFloat(par, "targetElevation", 44.7f, "Target elevation (mm)",
-           "Measured rise of the lower sternum end (CT before, X-ray after; thesis Table 6-1: 34.0-44.7 mm, "
-           "patient 1: 44.7 mm). 0: from the model, the rise that brings the lower sternum end onto the chest "
-           "line (the line between the most anterior rib or cartilage points right and left of it, at its "
-           "level). A target beyond twice that depth is refused before any solve, with the reachable range.",
+  addFloat(par, "targetElevation", 0.0f, "Target elevation (mm)",
+           "0 (default): from the model, the rise that brings the lower sternum end onto the chest line (the "
+           "line between the most anterior rib or cartilage points right and left of it, at its level); the Log "
+           "gives it. Otherwise the measured rise of the lower sternum end (CT before, X-ray after; thesis "
+           "Table 6-1: 34.0-44.7 mm, patient 1: 44.7 mm). A target beyond twice the chest line depth is refused "
+           "before any solve, with the reachable range.",
            pectus::nuss::kTargetElevationRange);
   addFloat(par, "maxForce", 1000.0f, "Maximum force (N)",
            "Calibration gives up (with a message) if this force does not reach the target.",

@@ -3,7 +3,8 @@
 
   Import CT Segmentation (a folder of STL/OBJ/PLY/OFF files, TotalSegmentator's NIfTI masks, or one label map)
   -> Prepare Patient Rib Cage (classify, repair, frame, number, join, landmark)
-  -> Nuss Procedure FE Analysis with the force calibrated to the measured elevation
+  -> Nuss Procedure FE Analysis with the force calibrated to the measured elevation, or by default to the
+     elevation that brings the lower sternum end onto the chest line (from the model)
   -> thoracic volume by the slice and the Ferguson envelope methods, before and after
   -> pectus index before and after.
 
@@ -12,7 +13,7 @@ second analyses them (so the layer numbers of the analysis never depend on how m
 Both scripts are written next to the results (prepare.mlx, analyse.mlx) and run unchanged in the GUI. Every
 filter's parameters come from its example script, with the values below overridden.
 
-    python3 python/patient.py SEGMENTATION OUTDIR [--elevation 44.7] [--order 2] [--analysis large|small]
+    python3 python/patient.py SEGMENTATION OUTDIR [--elevation MM] [--order 2] [--analysis large|small]
 """
 from __future__ import annotations
 
@@ -37,8 +38,8 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n\n")[0])
     ap.add_argument("segmentation", help="a folder of structure files, or one file")
     ap.add_argument("out", help="folder for the results")
-    ap.add_argument("--elevation", type=float, default=44.7,
-                    help="measured rise of the lower sternum end (mm); 0: to the chest line (from the model)")
+    ap.add_argument("--elevation", type=float, default=0.0,
+                    help="measured rise of the lower sternum end (mm); 0 (default): to the chest line (from the model)")
     ap.add_argument("--order", type=int, choices=(1, 2), default=2, help="1: TET4, 2: TET10 (default)")
     ap.add_argument("--analysis", choices=("large", "small"), default="large",
                     help="large displacement (default, with the FE filter's defaults: neo-Hookean, the elevation "

@@ -35,7 +35,7 @@ def create_ribcage(**kw) -> Filter:
     return _build("Create Pectus Excavatum Rib Cage", {
         "sizeMode": (Enum, 0, RIBCAGE_SIZE), "age": (Float, 7.0), "chestWidth": (Float, 181.0),
         "chestDepth": (Float, 74.0), "spineHeight": (Float, 172.0), "ribPairs": (Int, 12),
-        "hallerIndex": (Float, 4.0), "funnelCenterX": (Float, 0.0), "funnelCenterZ": (Float, 0.8),
+        "hallerIndex": (Float, 4.0), "funnelCenterX": (Float, 0.0), "funnelCenterZ": (Float, 1.1),
         "funnelWidth": (Float, 80.0), "funnelHeight": (Float, 70.0), "edgeLength": (Float, 2.0),
         "output": (Enum, 0, RIBCAGE_OUTPUT)}, dict(kw))
 
@@ -69,7 +69,7 @@ SIDES = ["Right", "Left"]
 
 
 # parameter groups the FE filter and the bar planner share (as in filter_nuss_fea.cpp)
-NUSS_CALIBRATION = {"targetElevation": (Float, 44.7), "maxForce": (Float, 1000.0), "tolerance": (Float, 0.1),
+NUSS_CALIBRATION = {"targetElevation": (Float, 0.0), "maxForce": (Float, 1000.0), "tolerance": (Float, 0.1),
                     "calibration": (Enum, 1, NUSS_CALIBRATION_METHOD)}
 NUSS_MODEL = {"analysis": (Enum, 0, NUSS_ANALYSIS), "material": (Enum, 1, NUSS_MATERIAL), "lineSearch": (Bool, True),
               "adaptiveSteps": (Bool, True), "order": (Enum, 0, NUSS_ORDER), "tetQuality": (Float, 2.0),

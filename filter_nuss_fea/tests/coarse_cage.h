@@ -14,6 +14,7 @@ namespace pectus::fixture {
 struct CoarseCage {
   OwnedMesh mesh;  // frees its face labels at exit (LeakSanitizer)
   std::vector<Landmark> lms;
+  ribcage::RibCageStats stats;
 };
 
 inline CoarseCage& coarseCage() {
@@ -22,7 +23,7 @@ inline CoarseCage& coarseCage() {
     ribcage::RibCageParams p;
     p.edgeLength = 6.0;
     p.ribPairs = 12;
-    c.lms = ribcage::generateRibCage(p, c.mesh);
+    c.lms = ribcage::generateRibCage(p, c.mesh, &c.stats);
   }
   return c;
 }

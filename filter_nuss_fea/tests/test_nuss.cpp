@@ -323,18 +323,14 @@ TEST(NussAnalysis, DisplacementControlCalibratesInOneSolve) {
   EXPECT_NE(errorOf([] { fe::parseMaterialModel("mooney"); }).find("neo-hookean"), std::string::npos);
 }
 
-// The chest line target: on a cage whose funnel centre lies at the lower sternum end, the depth is the
+// The chest line target: on the default cage (funnel centred around the lower sternum end) the depth is the
 // generator's funnel (the lower end lies behind the most anterior rib points at its level), the target
-// from the model is that depth, and a target past the reach is refused before TetGen; the default cage
-// (funnel centred on the sternal body, its lower end at the chest line) has no depression to correct there.
+// from the model is that depth, and a target past the reach is refused before TetGen; a cage whose funnel
+// is centred on the sternal body (its lower end at the chest line) has no depression to correct there.
 TEST(NussAnalysis, ChestLineTargetAndReach) {
-  ribcage::RibCageParams p;
-  p.edgeLength = 6.0;
-  p.funnelCenterZ = 1.1;
-  OwnedMesh m;
-  ribcage::RibCageStats st;
-  const auto lms = ribcage::generateRibCage(p, m, &st);
-  const auto surf = nuss::cageFromMesh(m);
+  const ribcage::RibCageStats& st = cage().stats;
+  const auto surf = nuss::cageFromMesh(cage().mesh);
+  const auto& lms = cage().lms;
   const nuss::ChestLine c = nuss::chestLine(surf, lms, nuss::Placement{});
   EXPECT_GT(c.depth, 0.6 * st.funnelDepth);
   EXPECT_LT(c.depth, 1.2 * st.funnelDepth);
@@ -359,10 +355,15 @@ TEST(NussAnalysis, ChestLineTargetAndReach) {
   far.targetElevation = c.reach() - 1.0;
   EXPECT_NO_THROW(nuss::resolveTarget(surf, lms, far));
 
-  // the default cage: the lower sternum end lies at the chest line, so the model gives no target
+  // the funnel on the sternal body: the lower sternum end lies at the chest line, so the model gives no target
+  ribcage::RibCageParams p;
+  p.edgeLength = 6.0;
+  p.funnelCenterZ = 0.8;
+  OwnedMesh body;
+  const auto bodyLms = ribcage::generateRibCage(p, body);
   auto fromModel = coarse();
   fromModel.targetFromChestLine = true;
-  const std::string flat = errorOf([&] { nuss::resolveTarget(nuss::cageFromMesh(cage().mesh), cage().lms, fromModel); });
+  const std::string flat = errorOf([&] { nuss::resolveTarget(nuss::cageFromMesh(body), bodyLms, fromModel); });
   EXPECT_NE(flat.find("no depression to correct"), std::string::npos) << flat;
 }
 

@@ -1,5 +1,5 @@
 // pectus_ct_phantom: a patient CT export made from the parametric rib cage, for tests and benchmarks.
-//   pectus_ct_phantom OUTDIR [--age 7] [--haller 4.0] [--spacing 1.0 | --spacing 0.8,0.8,1.5]
+//   pectus_ct_phantom OUTDIR [--age 7] [--haller 4.0] [--funnel-z 1.1] [--spacing 1.0 | --spacing 0.8,0.8,1.5]
 //                     [--axes RAS|LPS|native] [--metres] [--ascii] [--only nifti,masks,stl,messy] [--seed N]
 // Writes into OUTDIR:
 //   multilabel.nii.gz        one label map with TotalSegmentator's label table
@@ -110,9 +110,10 @@ struct Args {
 
 [[noreturn]] void usage(const std::string& why) {
   std::fprintf(stderr,
-               "%s\nusage: pectus_ct_phantom OUTDIR [--age 7] [--haller 4.0] [--spacing 1.0 | --spacing 0.8,0.8,1.5]\n"
+               "%s\nusage: pectus_ct_phantom OUTDIR [--age 7] [--haller 4.0] [--funnel-z 1.1] [--spacing 1.0 | --spacing 0.8,0.8,1.5]\n"
                "       [--axes RAS|LPS|native] [--metres] [--ascii] [--only nifti,masks,stl,messy] [--seed N]\n"
                "       [--edge 2.0] (centre-curve sampling of the cage model, as the generator's edge length)\n"
+               "--funnel-z: the funnel centre along the sternum (the generator's funnelCenterZ; default 1.1).\n"
                "--metres and --ascii apply to stl_messy; the sternum of stl_messy is always ASCII.\n",
                why.c_str());
   std::exit(2);
@@ -135,6 +136,7 @@ Args parse(int argc, char** argv) {
     };
     if (s == "--age") a.p.cage.age = num(val());
     else if (s == "--haller") a.p.cage.hallerIndex = num(val());
+    else if (s == "--funnel-z") a.p.cage.funnelCenterZ = num(val());  // the generator's funnelCenterZ
     else if (s == "--edge") a.p.cage.edgeLength = num(val());
     else if (s == "--seed") a.p.seed = std::uint32_t(num(val()));
     else if (s == "--metres" || s == "--meters") a.metres = true;

@@ -2,8 +2,9 @@
 written first as their docs page does (docs/filters/import_ct_segmentation.md, prepare_patient_rib_cage.md):
   - import_ct_segmentation.mlx imports every file of its folder (the phantom's messy STL export);
   - prepare_patient_rib_cage.mlx prepares that export into one cage of 12 ribs per side, with landmarks;
-  - patient_nuss_analysis.mlx takes the same export through the calibrated FE analysis (44.7 mm), both
-    volumes and the pectus index: the volume grows and the index falls."""
+  - patient_nuss_analysis.mlx takes the same export through the FE analysis calibrated to the target from the
+    model (the chest line: the phantom's lower sternum end lies behind it), both volumes and the pectus index:
+    the volume grows and the index falls."""
 import glob
 import os
 import shutil
@@ -43,7 +44,11 @@ check_range(r, "prepare_patient_rib_cage.mlx", r"Patient rib cage: [0-9]+ faces,
 check(os.path.getsize(cage) > 100000 and os.path.getsize(lms) > 300, "prepare_patient_rib_cage.mlx: cage and landmarks saved")
 
 r = run("patient_nuss_analysis.mlx")
-check_range(r, "patient_nuss_analysis.mlx", r"sternum end displacement ([0-9.]+) mm", 44.6, 44.8, "elevation (mm)")
+check_range(r, "patient_nuss_analysis.mlx", r"Target elevation ([0-9.]+) mm, from the model", 5, 80,
+            "target from the model, the chest line depth (mm)")
+target = number(r, r"calibrated to ([0-9.]+) mm")
+check_range(r, "patient_nuss_analysis.mlx", r"sternum end displacement ([0-9.]+) mm", (target or 0) - 0.1,
+            (target or 0) + 0.1, "elevation (mm), within the calibration tolerance of the target")
 check_range(r, "patient_nuss_analysis.mlx", r"Fe = ([0-9.]+) N \(Fs", 1, 500, "calibrated Fe (N)")
 check_range(r, "patient_nuss_analysis.mlx", r"Slice method intrathoracic volume change: \+?(-?[0-9.]+) cm3", 1, 500,
             "slice volume gain (cm3)")

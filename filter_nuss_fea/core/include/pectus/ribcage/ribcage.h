@@ -42,7 +42,11 @@ struct RibCageParams {
   int ribPairs = 12;        ///< [10, 12]; ribs 11 and 12 are floating (separate components)
   double hallerIndex = 4.0; ///< requested pectus index (inner transverse diameter / min sternum-vertebra distance)
   double funnelCenterX = 0;   ///< funnel centre, mm lateral (+ = patient's left)
-  double funnelCenterZ = 0.8; ///< funnel centre along the sternum: 0 jugular notch, 1 xiphisternal junction
+  /// funnel centre along the sternum: 0 jugular notch, 1 xiphisternal junction (the xiphoid's tip lies near
+  /// 1.14). 1.1: around the end of the sternum, where the thesis sees the depression (section 6.3) and
+  /// measures and lifts it (Table 6-1's elevation of the end of the sternum); the deepest point lay on the
+  /// lower sternum in 75 % of 300 patients (Kelly et al., Arch Bronconeumol 2013;49(5):196-200)
+  double funnelCenterZ = 1.1;
   double funnelWidth = 80;    ///< transverse extent of the depression (mm), <= chest width
   double funnelHeight = 70;   ///< vertical extent of the depression (mm)
   double edgeLength = 2.0;    ///< target edge length (mm), [0.4, 8]
