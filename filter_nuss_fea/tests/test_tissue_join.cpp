@@ -126,8 +126,8 @@ TEST(TissueJoin, BadLayersAreNamed) {
 // elevation within 20 %. Measured without quality refinement (for speed): +17.0 % on the default cage, whose
 // funnel lies around the lower sternum end (58.3 against 49.8 mm with 13.8k and 8.5k tets); +9.6 % on a cage
 // whose funnel is centred on the sternal body (funnelCenterZ 0.8: 78.3 against 71.4 mm), +8.4 % there with
-// TetGen quality 1.6 and 2.5 (85.0 against 78.4 mm with 75k and 41k tets). The gap lies in the junctions
-// near the lower sternum end, where Fe acts, not in the amount of tissue.
+// TetGen quality 1.6 and 2.5 (85.0 against 78.4 mm with 75k and 41k tets). The tissue volumes agree, so
+// the gap is not in the amount of tissue.
 TEST(TissueJoin, GeneratedLayersMatchTheOneSurfaceCageWithoutFillets) {
   ribcage::RibCageParams p;
   p.edgeLength = 6.0;
