@@ -193,13 +193,14 @@ void thoracicVolumeLeavesTheColumnOut() {
   std::printf("slice volume: cut %.1f cm3, keep %.1f cm3 (%.1f cm3 with the column's faces); envelope: cut %.1f, keep %.1f cm3\n",
               vCut / 1000, vKeep / 1000, vAll / 1000, eCut / 1000, eKeep / 1000);
   // The two cages are joined and decimated each on its own (the rib heads meet the vertebrae only where the
-  // column is kept), so their volumes differ by the preparation: 0.4-1.7 % across the hosts' vcglib and the
-  // scalar types (docs/hosts.md). The column's faces, left in, would take about 15 % away: the test tells the two
-  // apart by more than a factor of 5.
-  constexpr double kPreparation = 0.02;
+  // column is kept), and the preparation is not repeatable from run to run (docs/robustness.md), so their
+  // volumes differ by the preparation: slice method 0.8-1.6 %, envelope 0.2-3.7 % on the default phantom
+  // across runs and the hosts' vcglib (docs/hosts.md). The column's faces, left in, would take 11-14 % of the
+  // slice volume away: the test tells the two apart by more than a factor of 4.
+  constexpr double kPreparation = 0.02, kPreparationEnvelope = 0.05;
   EXPECT_NEAR(vKeep, vCut, kPreparation * vCut);
-  EXPECT_NEAR(eKeep, eCut, kPreparation * eCut);
-  EXPECT_GT(std::abs(vAll - vCut), 5 * kPreparation * vCut);
+  EXPECT_NEAR(eKeep, eCut, kPreparationEnvelope * eCut);
+  EXPECT_GT(std::abs(vAll - vCut), 4 * kPreparation * vCut);
 }
 
 }  // namespace
