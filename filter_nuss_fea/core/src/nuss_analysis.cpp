@@ -341,27 +341,29 @@ void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const
   if (pl.secondSpace == 0) return;
 
   // the second bar: parallel to the first, its sternal patch at the lower sternum end moved up or down
-  // by the height difference of the two bars' exits (centre of the sternum's section at that height)
+  // by the height difference of the two bars' exits: around the sternum surface node of that height nearest
+  // to the centre of the sternum's section there (a node, so that a coarse sternum, whose section centre
+  // may lie farther than the load radius from every node, still gets a patch)
   if (pl.secondSpace == pl.intercostalSpace)
     throw InputError("The second bar must go into another intercostal space than the first (both in " + std::to_string(pl.secondSpace) + ").");
   if (!kSecondShareRange.contains(pl.secondShare))
     throw InputError("The second bar's share of the force must lie in " + kSecondShareRange.text() + ".");
   const auto exits2 = barSupports(pl.secondSpace, " second");
   const double z2 = sp.z() + 0.5 * (exits2[0].z() + exits2[1].z() - exits1[0].z() - exits1[1].z());
-  Vector3d c2 = Vector3d::Zero();
-  int nBand = 0;
+  std::vector<int> band;
+  Vector3d centre = Vector3d::Zero();
   for (size_t f = 0; f < cage.surface.F.size(); ++f)
     if (sternumFace(f))
       for (int v : cage.surface.F[f])
-        if (std::abs(cage.surface.V[v].z() - z2) <= pl.sternumLoadRadius) c2 += cage.surface.V[v], ++nBand;
-  if (nBand == 0)
+        if (std::abs(cage.surface.V[v].z() - z2) <= pl.sternumLoadRadius) centre += cage.surface.V[v], band.push_back(v);
+  if (band.empty())
     throw InputError("The second bar (intercostal space " + std::to_string(pl.secondSpace) + ") crosses the midline at z = " + mm(z2) +
                      " mm, where the cage has no sternum: choose a space whose bar meets the sternum.");
-  c2 /= nBand;
-  s.secondSternumNodes = surfaceNodesNear(cage, c2, pl.sternumLoadRadius, sternumFace);
-  if (s.secondSternumNodes.empty())
-    throw InputError("No sternum surface node lies within " + mm(pl.sternumLoadRadius) + " mm of the second bar's sternal point " +
-                     pointText(c2) + ": increase the sternum load radius.");
+  centre /= double(band.size());
+  const int c2 = *std::min_element(band.begin(), band.end(), [&](int a, int b) {
+    return (cage.surface.V[a] - centre).squaredNorm() < (cage.surface.V[b] - centre).squaredNorm();
+  });
+  s.secondSternumNodes = surfaceNodesNear(cage, cage.surface.V[c2], pl.sternumLoadRadius, sternumFace);
   s.secondShare = pl.secondShare;
 }
 
