@@ -11,39 +11,59 @@
 
 namespace pectus {
 
-std::vector<FacePair> selfIntersections(const std::vector<Eigen::Vector3d>& points,
-                                        const std::vector<std::array<int, 3>>& triangles) {
-  namespace PMP = CGAL::Polygon_mesh_processing;
-  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-  using Mesh = CGAL::Surface_mesh<K::Point_3>;
-  std::vector<FacePair> out;
-  std::vector<K::Point_3> pts;
-  pts.reserve(points.size());
-  for (const auto& p : points) pts.emplace_back(p.x(), p.y(), p.z());
+namespace PMP = CGAL::Polygon_mesh_processing;
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+
+struct SelfIntersections::Mesh {
+  CGAL::Surface_mesh<K::Point_3> mesh;
+  std::vector<std::size_t> pointOf;  // mesh vertex -> point (a vertex split by the orientation is a copy)
+};
+
+SelfIntersections::SelfIntersections(std::size_t numPoints, const std::vector<std::array<int, 3>>& triangles)
+    : mesh_(std::make_unique<Mesh>()) {
   // soup: triangles repeating a vertex or pointing outside the points are degenerate and left out
   std::vector<std::vector<std::size_t>> polys;
-  std::vector<int> faceOf;
   polys.reserve(triangles.size());
-  const int n = static_cast<int>(points.size());
+  const auto n = static_cast<long long>(numPoints);
   for (std::size_t f = 0; f < triangles.size(); ++f) {
     const auto& t = triangles[f];
     const bool valid = t[0] >= 0 && t[1] >= 0 && t[2] >= 0 && t[0] < n && t[1] < n && t[2] < n;
     if (!valid || t[0] == t[1] || t[1] == t[2] || t[0] == t[2]) {
-      out.push_back({int(f), int(f)});
+      degenerate_.push_back({int(f), int(f)});
       continue;
     }
     polys.push_back({std::size_t(t[0]), std::size_t(t[1]), std::size_t(t[2])});
-    faceOf.push_back(int(f));
+    faceOf_.push_back(int(f));
   }
   // orientation only changes the order of a triangle's corners; touching sheets get their own copy of
-  // the vertex (the faces then meet at a point they do not share: reported as intersecting)
-  if (!PMP::is_polygon_soup_a_polygon_mesh(polys)) PMP::orient_polygon_soup(pts, polys);
-  Mesh mesh;
-  PMP::polygon_soup_to_polygon_mesh(pts, polys, mesh);  // face i of mesh is polys[i]
-  std::vector<std::pair<Mesh::Face_index, Mesh::Face_index>> pairs;
+  // the vertex (the faces then meet at a point they do not share: reported as intersecting). The soup's
+  // "points" are the point indices, so a copy carries the index of the point it copies.
+  std::vector<std::size_t> soupPoint(numPoints);
+  for (std::size_t i = 0; i < numPoints; ++i) soupPoint[i] = i;
+  if (!PMP::is_polygon_soup_a_polygon_mesh(polys)) PMP::orient_polygon_soup(soupPoint, polys);
+  // the mesh (face i is polys[i]) is built on placeholder points whose x is the soup point's index, which
+  // then gives each mesh vertex its point; each call sets the positions
+  std::vector<K::Point_3> placeholder(soupPoint.size());
+  for (std::size_t i = 0; i < soupPoint.size(); ++i) placeholder[i] = K::Point_3(double(i), 0, 0);
+  PMP::polygon_soup_to_polygon_mesh(placeholder, polys, mesh_->mesh);
+  for (const auto v : mesh_->mesh.vertices())
+    mesh_->pointOf.push_back(soupPoint[std::size_t(mesh_->mesh.point(v).x())]);
+}
+
+SelfIntersections::~SelfIntersections() = default;
+
+std::vector<FacePair> SelfIntersections::operator()(const std::vector<Eigen::Vector3d>& points) const {
+  auto& mesh = mesh_->mesh;
+  std::size_t i = 0;
+  for (const auto v : mesh.vertices()) {
+    const Eigen::Vector3d& p = points[mesh_->pointOf[i++]];
+    mesh.point(v) = K::Point_3(p.x(), p.y(), p.z());
+  }
+  std::vector<FacePair> out = degenerate_;
+  std::vector<std::pair<CGAL::SM_Face_index, CGAL::SM_Face_index>> pairs;
   PMP::self_intersections(mesh, std::back_inserter(pairs));
   for (const auto& [x, y] : pairs) {
-    const int a = faceOf[x.idx()], b = faceOf[y.idx()];
+    const int a = faceOf_[x.idx()], b = faceOf_[y.idx()];
     out.push_back({std::min(a, b), std::max(a, b)});
   }
   // degenerate faces first (a crossing next to one is often just its collapsed corner touching a neighbour)
@@ -52,6 +72,11 @@ std::vector<FacePair> selfIntersections(const std::vector<Eigen::Vector3d>& poin
     return dx != dy ? dx : (x.a != y.a ? x.a < y.a : x.b < y.b);
   });
   return out;
+}
+
+std::vector<FacePair> selfIntersections(const std::vector<Eigen::Vector3d>& points,
+                                        const std::vector<std::array<int, 3>>& triangles) {
+  return SelfIntersections(points.size(), triangles)(points);
 }
 
 std::vector<int> facesOf(const std::vector<FacePair>& pairs) {

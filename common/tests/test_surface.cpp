@@ -7,6 +7,7 @@
 #include <cmath>
 #include <limits>
 
+#include "pectus/self_intersections.h"
 #include "pectus/surface.h"
 #include "pectus/surface_cmesh.h"
 
@@ -216,4 +217,37 @@ TEST(SurfaceOf, SelfIntersectingFacesOfACMeshO) {
   pectus::OwnedMesh c;
   pectus::toMesh(crossing, c);
   EXPECT_FALSE(pectus::selfIntersectingFaces(c).empty());
+}
+
+// the reusable check gives the one-shot check's pairs at every position of the points: two separate
+// tetrahedra apart and then one piercing the other; and two touching at a corner, where the orientation
+// splits the vertex (the copies meet at a point they do not share, which counts as a crossing)
+TEST(SelfIntersections, OneMeshAtSeveralPositions) {
+  auto same = [](const std::vector<pectus::FacePair>& x, const std::vector<pectus::FacePair>& y) {
+    if (x.size() != y.size()) return false;
+    for (std::size_t i = 0; i < x.size(); ++i)
+      if (x[i].a != y[i].a || x[i].b != y[i].b) return false;
+    return true;
+  };
+  Surface apart = twoTetrahedra();
+  const pectus::SelfIntersections separate(apart.V.size(), apart.F);
+  EXPECT_TRUE(separate(apart.V).empty());
+  Surface through = apart;
+  for (std::size_t i = 4; i < 8; ++i) through.V[i] -= V3(4.8, -0.1, -0.1);  // the second pierces the first
+  EXPECT_FALSE(separate(through.V).empty());
+  EXPECT_TRUE(same(separate(through.V), pectus::selfIntersections(through.V, through.F)));
+  EXPECT_TRUE(separate(apart.V).empty());
+
+  Surface pinched = twoTetrahedra();
+  for (auto& f : pinched.F)
+    for (int& v : f)
+      if (v == 4) v = 1;  // the second tetrahedron's corner (5, 0, 0) becomes the first's (1, 0, 0)
+  pinched.V[4] = V3(-7, -7, -7);  // no face uses it any more
+  for (std::size_t i = 5; i < 8; ++i) pinched.V[i] -= V3(4, 0, 0);
+  const pectus::SelfIntersections touching(pinched.V.size(), pinched.F);
+  EXPECT_FALSE(touching(pinched.V).empty());
+  Surface lifted = pinched;
+  for (std::size_t i = 5; i < 8; ++i) lifted.V[i] += V3(0, 0.5, 0.5);
+  for (const Surface* p : {&pinched, &lifted})
+    EXPECT_TRUE(same(touching(p->V), pectus::selfIntersections(p->V, p->F)));
 }

@@ -2,10 +2,12 @@
 // (exact predicates) on a triangle surface given as points + triangles. Faces sharing a vertex or an
 // edge are tested too (a fold through a neighbour counts), and a degenerate face (three collinear
 // points) is reported as intersecting itself. Used by the rib cage generator (after every decimation),
-// the FE mesher (before TetGen, which crashes on self-intersecting input) and the tissue-layer join.
+// the FE mesher (before TetGen, which crashes on self-intersecting input), the tissue-layer join, the
+// patient import and the smoothers (no node move may make two faces cross).
 // Host-free: Eigen in, indices out (CGAL stays inside the .cpp).
 #pragma once
 #include <array>
+#include <memory>
 #include <utility>
 #include <vector>
 
@@ -24,6 +26,24 @@ struct FacePair {
 /// vertex is reported as degenerate (a == b).
 std::vector<FacePair> selfIntersections(const std::vector<Eigen::Vector3d>& points,
                                         const std::vector<std::array<int, 3>>& triangles);
+
+/// The same check for one set of triangles at several positions of its points (a smoother's input and its
+/// result): the orientation and the mesh are built once, each call only moves the points.
+class SelfIntersections {
+ public:
+  SelfIntersections(std::size_t numPoints, const std::vector<std::array<int, 3>>& triangles);
+  ~SelfIntersections();
+  SelfIntersections(const SelfIntersections&) = delete;
+  SelfIntersections& operator=(const SelfIntersections&) = delete;
+  /// the pairs at these positions (points.size() == numPoints), as selfIntersections gives them
+  std::vector<FacePair> operator()(const std::vector<Eigen::Vector3d>& points) const;
+
+ private:
+  struct Mesh;
+  std::unique_ptr<Mesh> mesh_;
+  std::vector<FacePair> degenerate_;  // triangles repeating a vertex or pointing outside the points
+  std::vector<int> faceOf_;           // mesh face -> triangle
+};
 
 /// The triangles (sorted, unique indices) taking part in any of the pairs.
 std::vector<int> facesOf(const std::vector<FacePair>& pairs);
