@@ -52,7 +52,7 @@ SelfIntersections::SelfIntersections(std::size_t numPoints, const std::vector<st
 
 SelfIntersections::~SelfIntersections() = default;
 
-std::vector<FacePair> SelfIntersections::operator()(const std::vector<Eigen::Vector3d>& points) const {
+std::vector<FacePair> SelfIntersections::operator()(const std::vector<Eigen::Vector3d>& points) {
   auto& mesh = mesh_->mesh;
   std::size_t i = 0;
   for (const auto v : mesh.vertices()) {

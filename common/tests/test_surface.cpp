@@ -230,7 +230,7 @@ TEST(SelfIntersections, OneMeshAtSeveralPositions) {
     return true;
   };
   Surface apart = twoTetrahedra();
-  const pectus::SelfIntersections separate(apart.V.size(), apart.F);
+  pectus::SelfIntersections separate(apart.V.size(), apart.F);
   EXPECT_TRUE(separate(apart.V).empty());
   Surface through = apart;
   for (std::size_t i = 4; i < 8; ++i) through.V[i] -= V3(4.8, -0.1, -0.1);  // the second pierces the first
@@ -244,7 +244,7 @@ TEST(SelfIntersections, OneMeshAtSeveralPositions) {
       if (v == 4) v = 1;  // the second tetrahedron's corner (5, 0, 0) becomes the first's (1, 0, 0)
   pinched.V[4] = V3(-7, -7, -7);  // no face uses it any more
   for (std::size_t i = 5; i < 8; ++i) pinched.V[i] -= V3(4, 0, 0);
-  const pectus::SelfIntersections touching(pinched.V.size(), pinched.F);
+  pectus::SelfIntersections touching(pinched.V.size(), pinched.F);
   EXPECT_FALSE(touching(pinched.V).empty());
   Surface lifted = pinched;
   for (std::size_t i = 5; i < 8; ++i) lifted.V[i] += V3(0, 0.5, 0.5);

@@ -35,8 +35,9 @@ class SelfIntersections {
   ~SelfIntersections();
   SelfIntersections(const SelfIntersections&) = delete;
   SelfIntersections& operator=(const SelfIntersections&) = delete;
-  /// the pairs at these positions (points.size() == numPoints), as selfIntersections gives them
-  std::vector<FacePair> operator()(const std::vector<Eigen::Vector3d>& points) const;
+  /// the pairs at these positions (points.size() == numPoints), as selfIntersections gives them (it moves
+  /// the mesh's points: one call at a time)
+  std::vector<FacePair> operator()(const std::vector<Eigen::Vector3d>& points);
 
  private:
   struct Mesh;

@@ -948,7 +948,7 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
     if (f.size() == 4) tris.push_back({f[0], f[2], f[3]});
   }
   // the input's own crossings are left as they are: only faces that cross after smoothing are undone
-  const SelfIntersections crossings(before.size(), tris);
+  SelfIntersections crossings(before.size(), tris);
   std::set<std::pair<int, int>> inInput;
   for (const FacePair& p : crossings(before)) inInput.insert(std::minmax(p.a, p.b));
   std::vector<int> back;
