@@ -24,9 +24,12 @@ files with the defects of real exports), then imported and prepared by 'Import C
 'Prepare Patient Rib Cage' (their defaults: 4 mm edges) in the same script before the analysis.
 
 --funnel-z builds every cage with that funnel centre (the generator's funnelCenterZ; default its own, 1.1).
+--cartilage-section runs each at each costal cartilage section of a list: rib (the generator's default, the
+rib's own section) and ct (circular, twice the rib's area; "default, CT cartilage").
 
     bench/table_6_1.py [--edge 5] [--cases 1,2,3,4,5] [--methods default] [--input generated|exports] [--funnel-z F]
-                       [--cartilage-e 12.25[,24.5,...]] [--spine cut[,keep]] [--out /tmp/pectus-table61]
+                       [--cartilage-e 12.25[,24.5,...]] [--cartilage-section rib[,ct]] [--spine cut[,keep]]
+                       [--out /tmp/pectus-table61]
 
 Needs the plugins and meshlabserver of build/prefix (scripts/setup.sh).
 """
@@ -53,27 +56,30 @@ METHODS = {"default": {},
            "search": dict(calibration=0),
            "svk": dict(material=0, calibration=0, lineSearch=False, adaptiveSteps=False)}
 THESIS_CARTILAGE_E = pf.NUSS_MODEL["cartilageModulus"][1]  # MPa
+SECTIONS = ("rib", "ct")  # the generator's cartilageSection
 SPINE = ("cut", "keep")  # 'Prepare Patient Rib Cage': the vertebral column cut at the joints or kept, fixed
 CAGE, LANDMARKS = 0, 1
 PHANTOM = os.path.join(ROOT, "build", "filter_nuss_fea", "pectus_ct_phantom")
 
 
-def cage_filters(case, age, index, edge, source, out, spine="cut", funnel_z=None):
-    """the filters that make the patient's cage (current) and landmarks, and their layer numbers"""
-    funnel = {} if funnel_z is None else dict(funnelCenterZ=funnel_z)
+def cage_filters(case, age, index, edge, source, out, spine, generator):
+    """the filters that make the patient's cage (current) and landmarks, and their layer numbers; generator:
+    the generator's parameters beyond age, index and edge (funnelCenterZ, cartilageSection)"""
     if source == "generated":
-        return [pf.create_ribcage(age=age, hallerIndex=index, edgeLength=edge, **funnel)], CAGE, LANDMARKS
+        return [pf.create_ribcage(age=age, hallerIndex=index, edgeLength=edge, **generator)], CAGE, LANDMARKS
     folder = os.path.join(out, f"{case}_export")
+    flags = {"funnelCenterZ": lambda v: ["--funnel-z", str(v)], "cartilageSection": lambda v: ["--cartilage", SECTIONS[v]]}
     subprocess.run([PHANTOM, folder, "--age", str(age), "--haller", str(index), "--only", "messy"]
-                   + ([] if funnel_z is None else ["--funnel-z", str(funnel_z)]), check=True, capture_output=True)
+                   + [x for k, v in generator.items() for x in flags[k](v)], check=True, capture_output=True)
     imp = pf.import_ct_segmentation(path=os.path.join(folder, "stl_messy"))
     n = mlx.grab(mlx.run([], mlx.Script([imp])).log, r"Imported (\d+) structures", int)
     return [imp, pf.prepare_patient_rib_cage(spine=SPINE.index(spine))], n, n + 1  # the prepared cage and its landmarks follow the imports
 
 
-def run_case(case, sex, age, index, elevation, method, edge, out, source, cartilage_e, spine, funnel_z=None):
-    make, cage, landmarks = cage_filters(case, age, index, edge, source, out, spine, funnel_z)
-    base = os.path.join(out, f"{case}_{source}_{method}_E{cartilage_e:g}_{spine}")
+def run_case(case, sex, age, index, elevation, method, edge, out, source, cartilage_e, spine, generator):
+    make, cage, landmarks = cage_filters(case, age, index, edge, source, out, spine, generator)
+    section = SECTIONS[generator.get("cartilageSection", 0)]
+    base = os.path.join(out, f"{case}_{source}_{method}_E{cartilage_e:g}_{spine}_{section}")
     fe = pf.nuss_fea(landmarkLayer=landmarks, targetElevation=elevation, resultBase=mlx.SaveFile(base + ".vtu", ".vtu"),
                      cartilageModulus=cartilage_e, **METHODS[method])
     volumes = pipeline.measure_filters(cage, landmarks)
@@ -100,6 +106,7 @@ def main():
     ap.add_argument("--methods", default="default")
     ap.add_argument("--input", choices=("generated", "exports"), default="generated")
     ap.add_argument("--cartilage-e", default=f"{THESIS_CARTILAGE_E:g}", help="costal cartilage moduli, MPa")
+    ap.add_argument("--cartilage-section", default="rib", help="costal cartilage sections: rib, ct or rib,ct")
     ap.add_argument("--spine", default="cut", help="with --input exports: cut, keep or cut,keep")
     ap.add_argument("--funnel-z", type=float, default=None,
                     help="the generator's funnelCenterZ for every cage (default: the generator's own)")
@@ -113,9 +120,16 @@ def main():
     spines = a.spine.split(",")
     if any(sp not in SPINE for sp in spines) or (a.input == "generated" and spines != ["cut"]):
         ap.error("--spine takes cut and keep, with --input exports (the generated cage has no vertebral column)")
-    for (case, sex, age, index, elevation), method, e, spine in itertools.product(cases, methods, moduli, spines):
-        r = run_case(case, sex, age, index, elevation, method, a.edge, a.out, a.input, e, spine, a.funnel_z)
-        m = method + ("" if e == THESIS_CARTILAGE_E else f", E {e:g}") + (", spine kept" if spine == "keep" else "")
+    sections = a.cartilage_section.split(",")
+    if any(sec not in SECTIONS for sec in sections):
+        ap.error("--cartilage-section takes rib and ct")
+    for (case, sex, age, index, elevation), method, e, spine, sec in itertools.product(cases, methods, moduli, spines, sections):
+        generator = {} if a.funnel_z is None else dict(funnelCenterZ=a.funnel_z)
+        if sec != "rib":
+            generator["cartilageSection"] = SECTIONS.index(sec)
+        r = run_case(case, sex, age, index, elevation, method, a.edge, a.out, a.input, e, spine, generator)
+        m = (method + ("" if e == THESIS_CARTILAGE_E else f", E {e:g}") + (", spine kept" if spine == "keep" else "")
+             + (", CT cartilage" if sec == "ct" else ""))
         rows.append((case, sex, age, index, elevation, m, r))
         print(f"{case} {m}: rc {r['rc']}, Fe {r['force']} N, {r['newton']} Newton iterations, {r['wall']:.0f} s"
               + (f"; {r['error']}" if r["rc"] else ""), flush=True)

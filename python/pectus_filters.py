@@ -28,6 +28,7 @@ def _build(name: str, spec: dict, overrides: dict) -> Filter:
 
 
 RIBCAGE_SIZE = ["From age", "Explicit dimensions"]
+RIBCAGE_CARTILAGE = ["The rib's", "Circular, twice the rib's area (CT)"]
 RIBCAGE_OUTPUT = ["One labelled surface", "One layer per tissue (as CT segmentation)"]
 
 
@@ -37,7 +38,7 @@ def create_ribcage(**kw) -> Filter:
         "chestDepth": (Float, 74.0), "spineHeight": (Float, 172.0), "ribPairs": (Int, 12),
         "hallerIndex": (Float, 4.0), "funnelCenterX": (Float, 0.0), "funnelCenterZ": (Float, 1.1),
         "funnelWidth": (Float, 80.0), "funnelHeight": (Float, 70.0), "edgeLength": (Float, 2.0),
-        "output": (Enum, 0, RIBCAGE_OUTPUT)}, dict(kw))
+        "cartilageSection": (Enum, 0, RIBCAGE_CARTILAGE), "output": (Enum, 0, RIBCAGE_OUTPUT)}, dict(kw))
 
 
 def import_ct_segmentation(**kw) -> Filter:

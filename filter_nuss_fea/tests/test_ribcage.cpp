@@ -272,6 +272,29 @@ TEST(RibCage, BadInputNamesParameterAndRange) {
 // guard would blow the mesh up to 349k faces): no self-intersection by the exact check, and the face count of
 // a decimation to the edge length (the redo with the embedding guard keeps the same target).
 // bench/ribcage_sweep.py sweeps the whole range.
+TEST(RibCage, CtCartilageSectionHasTwiceTheRibsArea) {
+  // the same cage with each cartilage section, as tissue layers: the CT section (a circle of twice the rib's
+  // section area) against the rib's own (an ellipse of 0.85 x 1.05 times its axes, 0.89 of its area) makes
+  // the cartilages 2 / 0.89 = 2.24 times as voluminous along the same centre lines, and leaves the bone
+  RibCageParams p;
+  p.edgeLength = 6;
+  std::array<pectus::OwnedMesh, 3> rib, ct;
+  generateTissueLayers(p, rib);
+  p.cartilageSection = CartilageSection::Ct;
+  generateTissueLayers(p, ct);
+  auto volume = [](CMeshO& m) { return topology(m).volume; };
+  const double vRib[3] = {volume(rib[0]), volume(rib[1]), volume(rib[2])};
+  const double vCt[3] = {volume(ct[0]), volume(ct[1]), volume(ct[2])};
+  std::printf("[cartilage section] volumes rib's / CT: bone %.1f / %.1f, cartilage %.1f / %.1f, sternum %.1f / %.1f cm3\n",
+              vRib[0] / 1e3, vCt[0] / 1e3, vRib[1] / 1e3, vCt[1] / 1e3, vRib[2] / 1e3, vCt[2] / 1e3);
+  EXPECT_NEAR(vCt[1] / vRib[1], 2 / (0.85 * 1.05), 0.25);
+  EXPECT_NEAR(vCt[0] / vRib[0], 1, 0.05);
+  EXPECT_NEAR(vCt[2] / vRib[2], 1, 0.02);
+  for (auto& m : ct) EXPECT_EQ(topology(m).boundary, 0);
+  const auto d = cartilageDiameters(validate(p), CartilageSection::Ct);
+  EXPECT_NEAR(d[0] * d[0], 2 * validate(p).ribHeight * validate(p).ribThickness, 1e-9);
+}
+
 TEST(RibCage, SweepAtCoarseEdgesHasNoSelfIntersection) {
   struct Case { double age, haller, edge; };
   for (const Case& c : std::vector<Case>{{11, 4.0, 6.0}}) {  // the other ages, indices and 8 mm: the bench (slow)

@@ -1,5 +1,5 @@
 // pectus_ct_phantom: a patient CT export made from the parametric rib cage, for tests and benchmarks.
-//   pectus_ct_phantom OUTDIR [--age 7] [--haller 4.0] [--funnel-z 1.1] [--spacing 1.0 | --spacing 0.8,0.8,1.5]
+//   pectus_ct_phantom OUTDIR [--age 7] [--haller 4.0] [--funnel-z 1.1] [--cartilage rib|ct] [--spacing 1.0 | --spacing 0.8,0.8,1.5]
 //                     [--axes RAS|LPS|native] [--metres] [--ascii] [--only nifti,masks,stl,messy] [--seed N]
 // Writes into OUTDIR:
 //   multilabel.nii.gz        one label map with TotalSegmentator's label table
@@ -110,10 +110,12 @@ struct Args {
 
 [[noreturn]] void usage(const std::string& why) {
   std::fprintf(stderr,
-               "%s\nusage: pectus_ct_phantom OUTDIR [--age 7] [--haller 4.0] [--funnel-z 1.1] [--spacing 1.0 | --spacing 0.8,0.8,1.5]\n"
+               "%s\nusage: pectus_ct_phantom OUTDIR [--age 7] [--haller 4.0] [--funnel-z 1.1] [--cartilage rib|ct]\n"
+               "       [--spacing 1.0 | --spacing 0.8,0.8,1.5]\n"
                "       [--axes RAS|LPS|native] [--metres] [--ascii] [--only nifti,masks,stl,messy] [--seed N]\n"
                "       [--edge 2.0] (centre-curve sampling of the cage model, as the generator's edge length)\n"
                "--funnel-z: the funnel centre along the sternum (the generator's funnelCenterZ; default 1.1).\n"
+               "--cartilage: the costal cartilages' section, the rib's (default) or circular with twice its area (ct).\n"
                "--metres and --ascii apply to stl_messy; the sternum of stl_messy is always ASCII.\n",
                why.c_str());
   std::exit(2);
@@ -137,7 +139,11 @@ Args parse(int argc, char** argv) {
     if (s == "--age") a.p.cage.age = num(val());
     else if (s == "--haller") a.p.cage.hallerIndex = num(val());
     else if (s == "--funnel-z") a.p.cage.funnelCenterZ = num(val());  // the generator's funnelCenterZ
-    else if (s == "--edge") a.p.cage.edgeLength = num(val());
+    else if (s == "--cartilage") {
+      const std::string t = val();
+      if (t != "rib" && t != "ct") usage("--cartilage takes rib or ct");
+      a.p.cage.cartilageSection = t == "ct" ? pectus::ribcage::CartilageSection::Ct : pectus::ribcage::CartilageSection::Rib;
+    } else if (s == "--edge") a.p.cage.edgeLength = num(val());
     else if (s == "--seed") a.p.seed = std::uint32_t(num(val()));
     else if (s == "--metres" || s == "--meters") a.metres = true;
     else if (s == "--ascii") a.ascii = true;
@@ -311,6 +317,7 @@ void writeTruth(const Phantom& ph, const Args& a, const fs::path& path) {
   o << "{\n  \"generator\": {\"age\": " << fmt(c.age) << ", \"hallerIndex\": " << fmt(c.hallerIndex) << ", \"ribPairs\": " << c.ribPairs
     << ", \"funnelCenterX\": " << fmt(c.funnelCenterX) << ", \"funnelCenterZ\": " << fmt(c.funnelCenterZ)
     << ", \"funnelWidth\": " << fmt(c.funnelWidth) << ", \"funnelHeight\": " << fmt(c.funnelHeight) << ", \"edgeLength\": " << fmt(c.edgeLength)
+    << ", \"cartilageSection\": \"" << (c.cartilageSection == pectus::ribcage::CartilageSection::Ct ? "ct" : "rib") << "\""
     << ", \"seed\": " << a.p.seed << "},\n";
   o << "  \"model\": {\"hallerModel\": " << fmt(st.hallerModel) << ", \"hallerRest\": " << fmt(st.hallerRest) << ", \"funnelDepth\": "
     << fmt(st.funnelDepth) << ", \"transverseInner\": " << fmt(st.transverseInner) << ", \"apMin\": " << fmt(st.apMin)

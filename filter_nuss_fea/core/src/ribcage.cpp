@@ -32,6 +32,17 @@ std::string num(double v) {
   throw InputError("parameter '" + name + "' must be " + range + ", got " + num(got) + (why.empty() ? "" : " (" + why + ")"));
 }
 
+// The dimensions by age, and what they are checked against (`pectus_ribcage_cli --anatomy` prints the
+// model beside these figures; docs/validation.md, "Anatomy", shows the table):
+// - the pectus index of the chest without funnel (depth = width / 2.45): 2.34 +- 0.26 at 3-6 years,
+//   2.58 +- 0.24 at 7-11 and 2.63 +- 0.33 at 12-16 on CT (Wan et al., 75 normal children);
+// - the sternum length, notch to xiphoid tip (7.4 vertebral levels, modelLevels): boys 5.616 x age + 60.4 mm,
+//   girls -0.134 age^2 + 6.543 age + 56.8 mm (Li et al., Exp Ther Med 2022, 1,080 CTs, PMID 35978914);
+// - the costal cartilage's share of the anterior rib, lateral point to sternum (ribCurve's uCartilage):
+//   45-60 % at every level (Sandoz et al., Med Biol Eng Comput 2013;51(9):971-9, 48 children);
+// - the 5th costal cartilage at age 8: 54 mm (the thesis' patient 1, Fig. 6-18).
+// Chest width, spine height and the rib and sternum sections are the project's assumptions: no paediatric
+// figure by age was found for them (the costal cartilage's section relative to the rib's: CartilageSection).
 Dimensions fromAge(double age) {
   Dimensions d{};
   const double a = age - 5;

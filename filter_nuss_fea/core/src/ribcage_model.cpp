@@ -97,6 +97,14 @@ double CageModel::funnel(double x, double y, double z) const {
   return bump((x - fx) / (0.5 * fw)) * bump((z - fzAbs) / (0.5 * fh)) * aw;
 }
 
+std::array<double, 2> cartilageDiameters(const Dimensions& d, CartilageSection s) {
+  if (s == CartilageSection::Ct) {
+    const double diameter = std::sqrt(2 * d.ribHeight * d.ribThickness);  // pi (D/2)^2 = 2 pi (h/2) (t/2)
+    return {diameter, diameter};
+  }
+  return {0.85 * d.ribHeight, 1.05 * d.ribThickness};
+}
+
 double autoBlend(const Dimensions& d) { return std::clamp(0.45 * d.ribThickness, 1.2, 3.0); }
 
 namespace {
@@ -116,6 +124,7 @@ CageModel modelLevels(const Dimensions& d, const RibCageParams& p, double funnel
   m.fh = p.funnelHeight;
   m.spacing = spacing;
   m.blend = p.blend < 0 ? autoBlend(d) : p.blend;
+  m.cartilageSection = p.cartilageSection;
   const double L = d.spineHeight;
   const double dl = L / 12.0;
   m.delta = dl;
@@ -230,6 +239,7 @@ void funnelDisplacement(RibRest& r, const CageModel& m, const SternumProfile& st
 // then cartilage), frames
 Curve ribCurve(const CageModel& m, const RibRest& r, int k, int side, double uLat) {
   const double hr = m.d.ribHeight, tr = m.d.ribThickness;
+  const std::array<double, 2> cartilage = cartilageDiameters(m.d, m.cartilageSection);
   Curve cv;
   cv.side = side;
   cv.rib = k;
@@ -240,7 +250,7 @@ Curve ribCurve(const CageModel& m, const RibRest& r, int k, int side, double uLa
     const double ui = r.u[i];
     const double bone = std::clamp(ui / std::max(uLat, 1e-3), 0.0, 1.0);
     const double raB = 0.5 * hr * (0.78 + 0.22 * smoothstep(bone)), rbB = 0.5 * tr;
-    const double raC = 0.5 * 0.85 * hr, rbC = 0.5 * 1.05 * tr;
+    const double raC = 0.5 * cartilage[0], rbC = 0.5 * cartilage[1];
     const double w = smoothstep((ui - (r.ucc - 0.03)) / 0.06);
     cv.ra.push_back((1 - w) * raB + w * raC);
     cv.rb.push_back((1 - w) * rbB + w * rbC);

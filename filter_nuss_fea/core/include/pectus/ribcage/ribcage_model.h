@@ -28,6 +28,7 @@ struct CageModel {
   double zNotch = 0, zMS = 0, zXJ = 0, zTip = 0;  ///< sternum: jugular notch, manubriosternal, xiphisternal, tip
   double funnelDepth = 0, fx = 0, fz = 0, fw = 0, fh = 0;
   double blend = 2;                     ///< smooth-union radius (mm), 0: plain union
+  CartilageSection cartilageSection = CartilageSection::Rib;
   double spacing = 1.5;                 ///< polyline sampling
   std::vector<Curve> curves;            ///< ribs (both sides) then the sternum (last)
   /// funnel displacement weight at rest position (x, y, z)
