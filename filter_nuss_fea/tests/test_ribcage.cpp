@@ -12,6 +12,7 @@
 #include "pectus/labels.h"
 #include "pectus/mesh_checks.h"
 #include "pectus/ribcage/ribcage.h"
+#include "pectus/ribcage/ribcage_model.h"
 #include "pectus/surface_cmesh.h"
 
 using namespace pectus;
@@ -291,8 +292,31 @@ TEST(RibCage, CtCartilageSectionHasTwiceTheRibsArea) {
   EXPECT_NEAR(vCt[0] / vRib[0], 1, 0.05);
   EXPECT_NEAR(vCt[2] / vRib[2], 1, 0.02);
   for (auto& m : ct) EXPECT_EQ(topology(m).boundary, 0);
+  pectus::OwnedMesh cage;  // the labelled cage of thicker cartilages: still one closed, embedded surface
+  generateRibCage(p, cage);
+  const Topo t = topology(cage);
+  EXPECT_EQ(t.boundary, 0);
+  EXPECT_EQ(t.selfIntersections, 0);
+  EXPECT_EQ(t.nonManifoldEdges, 0);
   const auto d = cartilageDiameters(validate(p), CartilageSection::Ct);
   EXPECT_NEAR(d[0] * d[0], 2 * validate(p).ribHeight * validate(p).ribThickness, 1e-9);
+}
+
+TEST(RibCage, AnatomyAgreesWithPublishedFigures) {
+  // the sources are cited in ribcage.cpp (fromAge) and docs/validation.md
+  struct Wan { double age, mean, sd; };  // pectus index of normal children's chests on CT, by age group
+  for (const Wan& w : {Wan{5, 2.34, 0.26}, Wan{8, 2.58, 0.24}, Wan{11, 2.58, 0.24}, Wan{14, 2.63, 0.33}}) {
+    RibCageParams p;
+    p.age = w.age;
+    const Anatomy a = measureAnatomy(p);
+    EXPECT_NEAR(a.restIndex, w.mean, w.sd) << "age " << w.age;
+    EXPECT_NEAR(a.sternumLength / (5.616 * w.age + 60.408), 1, 0.12) << "age " << w.age;  // Li et al., boys
+    for (std::size_t k = 0; k < a.ribs.size(); ++k) {  // Sandoz et al.: 45-60 %
+      EXPECT_GT(a.ribs[k].anteriorShare, 0.40) << "rib " << k + 1 << ", age " << w.age;
+      EXPECT_LT(a.ribs[k].anteriorShare, 0.60) << "rib " << k + 1 << ", age " << w.age;
+    }
+    if (w.age == 8) EXPECT_NEAR(a.fifthJunction, 63.5, 2.0);  // the thesis' patient 1 (Fig. 6-18)
+  }
 }
 
 TEST(RibCage, SweepAtCoarseEdgesHasNoSelfIntersection) {

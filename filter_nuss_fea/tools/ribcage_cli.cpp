@@ -24,18 +24,17 @@ using namespace pectus;
 using namespace pectus::ribcage;
 
 namespace {
-// arc length of a curve's centre line from parameter u0 to u1, over the samples with |x| >= xMin
-double arcLength(const Curve& c, double u0, double u1, double xMin) {
-  double len = 0;
-  for (std::size_t i = 1; i < c.c.size(); ++i)
-    if (c.u[i - 1] >= u0 && c.u[i] <= u1 && std::abs(c.c[i].x()) >= xMin && std::abs(c.c[i - 1].x()) >= xMin)
-      len += (c.c[i] - c.c[i - 1]).norm();
-  return len;
+std::string list(const std::array<Anatomy::Rib, 7>& ribs, double Anatomy::Rib::*field, double scale) {
+  std::string out;
+  for (const auto& r : ribs) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%s%.0f", out.empty() ? "" : ", ", scale * (r.*field));
+    out += b;
+  }
+  return out;
 }
 
-// the rest cage (no funnel) of each age: chest, sternum, sections, and per rib level the length of the rib
-// from its costovertebral joint to the sternum's edge, its cartilage's, and the cartilage's share of the
-// anterior rib (from the rib's lateral point to the sternum's edge)
+// the rest cage of each age beside the published figures it is compared with
 int anatomy(const std::string& ages) {
   std::printf("| age | chest width mm | depth mm | index without funnel | sternum length mm (Li et al. boys / girls) |"
               " rib section mm | cartilage section mm, rib's / CT | ribs 1-7: rib length mm | cartilage length mm |"
@@ -47,40 +46,14 @@ int anatomy(const std::string& ages) {
     RibCageParams p;
     p.age = std::atof(ages.substr(pos, next - pos).c_str());
     pos = next + 1;
-    RibCageStats st;
-    p.hallerIndex = kHallerIndexRange.hi;  // any valid index: the rest index is measured first
-    try {
-      buildCalibratedModel(p, &st);
-    } catch (const std::exception&) {
-    }
-    const Dimensions d = validate(p);
-    const CageModel m = buildModel(d, p, 0.0, 1.0);
+    const Anatomy a = measureAnatomy(p);
     const double boys = 5.616 * p.age + 60.408, girls = -0.134 * p.age * p.age + 6.543 * p.age + 56.805;
-    const auto rib = cartilageDiameters(d, CartilageSection::Rib), ct = cartilageDiameters(d, CartilageSection::Ct);
-    std::string lens, carts, index;
-    double fifth = 0;  // the 5th costochondral junction's distance from the midline
-    for (const Curve& c : m.curves) {
-      if (c.side != 1 || c.rib < 1 || c.rib > 7) continue;
-      const double edge = 0.5 * d.sternumWidth;  // the sternum's edge, at the body's width
-      std::size_t iLat = 0;  // the lateral point: where the anterior rib begins
-      for (std::size_t i = 0; i < c.c.size(); ++i)
-        if (std::abs(c.c[i].x()) > std::abs(c.c[iLat].x())) iLat = i;
-      const double total = arcLength(c, 0, 1, edge), cart = arcLength(c, c.uCartilage, 1, edge);
-      const double anterior = arcLength(c, c.u[iLat], 1, edge);
-      if (c.rib == 5)  // the thesis' Fig. 6-18 measures along the 5th's lateral distance from the sternum's centre
-        for (std::size_t i = 1; i < c.c.size(); ++i)
-          if (c.u[i - 1] < c.uCartilage && c.u[i] >= c.uCartilage) fifth = std::abs(c.c[i].x());
-      char b[64];
-      std::snprintf(b, sizeof b, "%s%.0f", lens.empty() ? "" : ", ", total);
-      lens += b;
-      std::snprintf(b, sizeof b, "%s%.0f", carts.empty() ? "" : ", ", cart);
-      carts += b;
-      std::snprintf(b, sizeof b, "%s%.0f", index.empty() ? "" : ", ", 100 * cart / anterior);
-      index += b;
-    }
+    const auto ct = cartilageDiameters(a.dims, CartilageSection::Ct);
     std::printf("| %.0f | %.0f | %.0f | %.2f | %.0f (%.0f / %.0f) | %.1f x %.1f | %.1f x %.1f / %.1f | %s | %s | %s | %.1f-%.1f |\n", p.age,
-                d.chestWidth, d.chestDepth, st.hallerRest, m.zNotch - m.zTip, boys, girls, d.ribHeight, d.ribThickness, rib[0], rib[1],
-                ct[0], lens.c_str(), carts.c_str(), index.c_str(), 0.5 * d.sternumWidth, fifth);
+                a.dims.chestWidth, a.dims.chestDepth, a.restIndex, a.sternumLength, boys, girls, a.dims.ribHeight,
+                a.dims.ribThickness, a.cartilage[0], a.cartilage[1], ct[0], list(a.ribs, &Anatomy::Rib::length, 1).c_str(),
+                list(a.ribs, &Anatomy::Rib::cartilage, 1).c_str(), list(a.ribs, &Anatomy::Rib::anteriorShare, 100).c_str(),
+                a.sternumHalfWidth, a.fifthJunction);
   }
   return 0;
 }

@@ -33,7 +33,7 @@ std::string num(double v) {
 }
 
 // The dimensions by age, and what they are checked against (`pectus_ribcage_cli --anatomy` prints the
-// model beside these figures; docs/validation.md, "Anatomy", shows the table):
+// model beside these figures; docs/validation.md, "Anatomy of the generated cage", shows the table):
 // - the pectus index of the chest without funnel (depth = width / 2.45): 2.34 +- 0.26 at 3-6 years,
 //   2.58 +- 0.24 at 7-11 and 2.63 +- 0.33 at 12-16 on CT (Wan et al., 75 normal children);
 // - the sternum length, notch to xiphoid tip (7.4 vertebral levels, modelLevels): boys 5.616 x age + 60.4 mm,
@@ -393,6 +393,42 @@ CageModel buildCalibratedModel(const RibCageParams& p, RibCageStats* stats, std:
   }
   if (stats) *stats = st;
   return model;
+}
+
+namespace {
+// arc length of a curve's centre line between parameters u0 and u1, over the samples with |x| >= xMin
+double arcLength(const Curve& c, double u0, double u1, double xMin) {
+  double len = 0;
+  for (std::size_t i = 1; i < c.c.size(); ++i)
+    if (c.u[i - 1] >= u0 && c.u[i] <= u1 && std::abs(c.c[i].x()) >= xMin && std::abs(c.c[i - 1].x()) >= xMin)
+      len += (c.c[i] - c.c[i - 1]).norm();
+  return len;
+}
+}  // namespace
+
+Anatomy measureAnatomy(const RibCageParams& p) {
+  Anatomy a;
+  a.dims = validate(p);
+  const CageModel rest = buildModel(a.dims, p, 0.0, 1.0);
+  const CageField field(rest);
+  a.restIndex = transverse(rest, field) / apDistance(rest, field, 1.0).ap;
+  a.sternumLength = rest.zNotch - rest.zTip;
+  a.cartilage = cartilageDiameters(a.dims, p.cartilageSection);
+  a.sternumHalfWidth = 0.5 * a.dims.sternumWidth;
+  for (const Curve& c : rest.curves) {
+    if (c.side != 1 || c.rib < 1 || c.rib > 7) continue;
+    std::size_t lateral = 0;  // where the anterior rib begins
+    for (std::size_t i = 0; i < c.c.size(); ++i)
+      if (std::abs(c.c[i].x()) > std::abs(c.c[lateral].x())) lateral = i;
+    Anatomy::Rib& r = a.ribs[std::size_t(c.rib - 1)];
+    r.length = arcLength(c, 0, 1, a.sternumHalfWidth);
+    r.cartilage = arcLength(c, c.uCartilage, 1, a.sternumHalfWidth);
+    r.anteriorShare = r.cartilage / arcLength(c, c.u[lateral], 1, a.sternumHalfWidth);
+    if (c.rib == 5)
+      for (std::size_t i = 1; i < c.c.size(); ++i)
+        if (c.u[i - 1] < c.uCartilage && c.u[i] >= c.uCartilage) a.fifthJunction = std::abs(c.c[i].x());
+  }
+  return a;
 }
 
 }  // namespace pectus::ribcage

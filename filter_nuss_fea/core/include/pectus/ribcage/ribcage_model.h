@@ -45,6 +45,25 @@ CageModel buildModel(const Dimensions& d, const RibCageParams& p, double funnelD
 /// receives the calibration figures (no surface figures), `landmarks` what generateRibCage returns.
 CageModel buildCalibratedModel(const RibCageParams& p, RibCageStats* stats = nullptr, std::vector<Landmark>* landmarks = nullptr);
 
+/// The rest cage's (no funnel) anatomy, measured on the model to compare it with published figures
+/// (docs/validation.md, "Anatomy of the generated cage"). Lengths run along the centre lines (mm).
+struct Anatomy {
+  Dimensions dims{};
+  double restIndex = 0;       ///< pectus index of the chest without funnel
+  double sternumLength = 0;   ///< jugular notch to xiphoid tip
+  std::array<double, 2> cartilage{};  ///< costal cartilage section diameters (cartilageDiameters)
+  struct Rib {
+    double length = 0;        ///< costovertebral joint to the sternum's edge
+    double cartilage = 0;     ///< costochondral junction to the sternum's edge
+    double anteriorShare = 0; ///< the cartilage's share of the anterior rib (lateral point to the sternum's edge)
+  };
+  std::array<Rib, 7> ribs{};  ///< the right ribs 1-7
+  double sternumHalfWidth = 0;  ///< where the ribs' lengths end: half the sternum body's width
+  double fifthJunction = 0;   ///< the right 5th costochondral junction's lateral distance from the midline
+};
+/// Validates p (InputError as validate); the index and funnel parameters are not used.
+Anatomy measureAnatomy(const RibCageParams& p);
+
 /// Spatial hash of the curves' segments and the smooth-union field (negative inside).
 class CageField {
  public:
