@@ -123,6 +123,33 @@ if os.path.exists(lms):
     need = {100 * s + k for s in (1, 2) for k in range(1, 13)} | {500, 501, 502, 503, 614, 615, 624, 625, 700, 701}
     check(need <= codes, "landmark codes present", str(sorted(need - codes)))
 
+# the CT-based costal cartilage section: a circle of twice the rib's section area, named in the Log; the
+# cartilages' surface grows with their perimeter (circle against the rib's ellipse: about 1.45 times)
+def cartilage_area(path):
+    m = read_ply(path)
+    V, F = m["V"], np.array(m["F"])
+    fc = m["face"]
+    cart = (fc["red"] == 90) & (fc["green"] == 160) & (fc["blue"] == 235)
+    A, B, C = V[F[cart, 0]], V[F[cart, 1]], V[F[cart, 2]]
+    counts, _ = edges_ok(F)
+    return 0.5 * np.linalg.norm(np.cross(B - A, C - A), axis=1).sum(), bool(np.all(counts == 2))
+
+
+out_ct = os.path.join(d, "cage_ct.ply")
+r3 = run([], mlx.Script([create_ribcage(hallerIndex=4.0, edgeLength=5.0, cartilageSection=1)]), [(out_ct, "fc fq", 0)])
+check(r3.rc == 0 and os.path.exists(out_ct), "the CT cartilage section runs", r3.stdout[-1500:])
+if r3.rc == 0 and os.path.exists(out_ct) and os.path.exists(out):
+    line = next(l for l in r3.log if l.startswith("Rib cage:"))
+    rib = [float(v) for v in line.split("rib section ")[1].split(" mm")[0].split(" x ")]
+    cart = [float(v) for v in line.split("costal cartilage section ")[1].split(" mm")[0].split(" x ")]
+    print(f"rib section {rib}, cartilage section {cart}")
+    check(abs(cart[0] - cart[1]) < 1e-3 and abs(cart[0] ** 2 - 2 * rib[0] * rib[1]) < 1e-2,
+          "the Log names a circle of twice the rib's section area", line)
+    (a_rib, _), (a_ct, closed) = cartilage_area(out), cartilage_area(out_ct)
+    print(f"cartilage surface {a_rib:.0f} mm2 (the rib's section) against {a_ct:.0f} mm2 (CT)")
+    check(closed, "the cage with CT cartilages is closed and edge-manifold")
+    check(1.25 < a_ct / a_rib < 1.7, "the cartilages' surface grows with their perimeter", f"{a_ct / a_rib:.3f}")
+
 # determinism: same parameters, same bytes
 out2 = os.path.join(d, "cage2.ply")
 r2 = run([], script(), [(out2, "fc fq vq", 0)])
