@@ -268,11 +268,6 @@ TEST(RibCage, BadInputNamesParameterAndRange) {
   expectError(p, "blend");
 }
 
-// The generator at coarse edges where an unguarded decimation can fold the surface (age 11, index 4.0 at 6 mm:
-// three faces of the left 6th rib through each other; retrying with frozen vertices instead of the embedding
-// guard would blow the mesh up to 349k faces): no self-intersection by the exact check, and the face count of
-// a decimation to the edge length (the redo with the embedding guard keeps the same target).
-// bench/ribcage_sweep.py sweeps the whole range.
 TEST(RibCage, CtCartilageSectionHasTwiceTheRibsArea) {
   // the same cage with each cartilage section, as tissue layers: the CT section (a circle of twice the rib's
   // section area) against the rib's own (an ellipse of 0.85 x 1.05 times its axes, 0.89 of its area) makes
@@ -298,8 +293,9 @@ TEST(RibCage, CtCartilageSectionHasTwiceTheRibsArea) {
   EXPECT_EQ(t.boundary, 0);
   EXPECT_EQ(t.selfIntersections, 0);
   EXPECT_EQ(t.nonManifoldEdges, 0);
-  const auto d = cartilageDiameters(validate(p), CartilageSection::Ct);
-  EXPECT_NEAR(d[0] * d[0], 2 * validate(p).ribHeight * validate(p).ribThickness, 1e-9);
+  const Dimensions dims = validate(p);
+  const auto d = cartilageDiameters(dims, CartilageSection::Ct);
+  EXPECT_NEAR(d[0] * d[0], 2 * dims.ribHeight * dims.ribThickness, 1e-9);
 }
 
 TEST(RibCage, AnatomyAgreesWithPublishedFigures) {
@@ -319,6 +315,11 @@ TEST(RibCage, AnatomyAgreesWithPublishedFigures) {
   }
 }
 
+// The generator at coarse edges where an unguarded decimation can fold the surface (age 11, index 4.0 at 6 mm:
+// three faces of the left 6th rib through each other; retrying with frozen vertices instead of the embedding
+// guard would blow the mesh up to 349k faces): no self-intersection by the exact check, and the face count of
+// a decimation to the edge length (the redo with the embedding guard keeps the same target).
+// bench/ribcage_sweep.py sweeps the whole range.
 TEST(RibCage, SweepAtCoarseEdgesHasNoSelfIntersection) {
   struct Case { double age, haller, edge; };
   for (const Case& c : std::vector<Case>{{11, 4.0, 6.0}}) {  // the other ages, indices and 8 mm: the bench (slow)
