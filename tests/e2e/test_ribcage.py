@@ -130,7 +130,7 @@ def cartilage_area(path):
     V, F = m["V"], np.array(m["F"])
     fc = m["face"]
     cols = np.stack([fc["red"], fc["green"], fc["blue"]], axis=1).astype(int)
-    cart = np.array([PALETTE.get(tuple(c)) == 2 for c in cols])  # tissue 2: costal cartilage
+    cart = np.array([PALETTE.get(tuple(c)) == 2 for c in cols])  # the costal cartilage's tissue code
     A, B, C = V[F[cart, 0]], V[F[cart, 1]], V[F[cart, 2]]
     counts, _ = edges_ok(F)
     return 0.5 * np.linalg.norm(np.cross(B - A, C - A), axis=1).sum(), bool(np.all(counts == 2))
