@@ -533,6 +533,8 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
           "; sternum end displacement " + fmt(a.elevation, 2) + " mm; linear compliance " + fmt(a.linearCompliance, 4) + " mm/N");
   ctx.log("Max von Mises stress " + fmt(a.maxStress, 2) + " MPa at the " + a.maxStressAt.describe() +
           " (away from the joints and load patches; " + fmt(a.maxStressAll, 2) + " MPa including them)");
+  ctx.log("Max von Mises stress away from the tissue junctions " + fmt(a.maxStressBody, 2) + " MPa at the " +
+          a.maxStressBodyAt.describe() + " (where a rib or the sternum meets its cartilage the stress is singular and grows as the mesh is refined)");
   ctx.log("Max equivalent strain " + fmt(a.maxStrain, 4) + " at the " + a.maxStrainAt.describe() + "; max in cartilage " +
           fmt(a.maxStrainCartilage, 4) + ", in bone " + fmt(a.maxStrainBone, 5));
   std::string curve;
@@ -566,7 +568,7 @@ void FilterNussFeaPlugin::initBarPlanner(const MeshDocument& md, RichParameterLi
   addPatchParams(par);
   par.addParam(RichEnum("best", 0, bestBy(), "Best option",
                         "The option whose deformed cage is added as a layer (and marked in the table): the lowest calibrated "
-                        "force or the lowest max von Mises stress."));
+                        "force or the lowest max von Mises stress (away from the joints, load patches and tissue junctions)."));
   par.addParam(RichSaveFile("csvFile", "", ".csv", "Table (CSV file)",
                             "If set, the table is written there (one row per option). Empty: Log only."));
 }

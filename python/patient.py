@@ -85,6 +85,7 @@ def main() -> int:
     rows = [("calibrated elevating force Fe (N)", grab(log, r"Fe = ([0-9.]+) N")),
             ("elevation of the lower sternum end (mm)", grab(log, r"sternum end displacement ([0-9.]+) mm")),
             ("max von Mises stress (MPa)", grab(log, r"Max von Mises stress ([0-9.]+) MPa")),
+            ("  away from the tissue junctions (MPa)", grab(log, r"Max von Mises stress away from the tissue junctions ([0-9.]+) MPa")),
             ("max equivalent strain", grab(log, r"Max equivalent strain ([0-9.]+)")),
             ("pectus (Haller) index before", grab(log, r"Pectus index change: Haller ([0-9.]+) ->")),
             ("pectus (Haller) index after", grab(log, r"Pectus index change: Haller [0-9.]+ -> ([0-9.]+)")),

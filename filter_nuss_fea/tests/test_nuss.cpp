@@ -69,6 +69,19 @@ TEST(NussAnalysis, LinearModelLoadsSupportsCalibrationAndBadInput) {
   EXPECT_EQ(a.maxStrainAt.tissue, int(Tissue::Cartilage));
   EXPECT_GT(a.maxStress, 0.0);
   EXPECT_LE(a.maxStress, a.maxStressAll);
+  // away from the tissue junctions too: no node of the peak's tet is shared with a tet of another tissue
+  EXPECT_GT(a.maxStressBody, 0.0);
+  EXPECT_LE(a.maxStressBody, a.maxStress);
+  ASSERT_GE(a.maxStressBodyAt.tet, 0);
+  std::vector<std::vector<int>> tissuesOf(a.mesh.nodes.size());
+  for (int t = 0; t < a.mesh.numTets(); ++t)
+    for (int k = 0; k < a.mesh.nodesPerTet(); ++k) tissuesOf[a.mesh.tets[t][k]].push_back(a.mesh.tissue[t]);
+  for (int k = 0; k < a.mesh.nodesPerTet(); ++k) {
+    const auto& ts = tissuesOf[a.mesh.tets[a.maxStressBodyAt.tet][k]];
+    EXPECT_TRUE(std::all_of(ts.begin(), ts.end(), [&](int x) { return x == ts.front(); }));
+  }
+  std::printf("max stress %.2f MPa at %s; away from the junctions %.2f MPa at %s\n", a.maxStress,
+              a.maxStressAt.describe().c_str(), a.maxStressBody, a.maxStressBodyAt.describe().c_str());
   // the strain path along the right 5th rib starts at the sternum and reaches bone
   const auto path = nuss::strainAlongRib(a, 1, 5);
   ASSERT_GE(path.size(), 10u);

@@ -3,7 +3,7 @@
 //                   [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--threads n] [--vtu out.vtu] [--layers]
 //                   [--inp deck.inp] [--blend mm] [--funnel-z f] [--material svk|neo-hookean|neo-hookean-ccx]
 //                   [--calibration force|displacement] [--line-search] [--adaptive-steps] [--plain-newton]
-//                   [--bone-e MPa] [--cartilage-e MPa] [--help]
+//                   [--bone-e MPa] [--cartilage-e MPa] [--cartilage rib|ct] [--rib-stress] [--help]
 // Builds the default rib cage (--layers: as one layer per tissue, joined as the filter's 'One layer per
 // tissue' input does), runs the analysis and prints one line of key=value figures, the mean displacement
 // of the sternal load patch's nodes and the tets' volume per tissue. --vtu and --inp write the model and its
@@ -15,7 +15,11 @@
 // analysis; --plain-newton turns both off. --bone-e, --cartilage-e: the tissues' Young's moduli (default
 // the thesis': 11500 and 12.25 MPa). --target chest
 // calibrates to the chest line depth (the FE filter's target 0); --chest-line prints the chest line and
-// the target the analysis would take, and stops before TetGen.
+// the target the analysis would take, and stops before TetGen. --cartilage: the costal cartilages' section
+// (the generator's cartilageSection: the rib's, or circular with twice its area). --rib-stress prints, for
+// each rib, its bone's von Mises stress in the posterior, middle and anterior third of its length (by
+// straight distance from its costovertebral joint, tets touching a fixed or loaded node left out), and
+// where its largest stress lies: how far from the joint, and from the nearest tet of its costal cartilage.
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -32,12 +36,74 @@
 
 using namespace pectus;
 
+namespace {
+// --rib-stress: each rib's bone stress by thirds of its length, and where its peak lies
+void printRibStress(const nuss::Analysis& a, const std::vector<Landmark>& lms) {
+  std::vector<char> special(a.mesh.nodes.size(), 0);  // as the analysis' maxima: supports and load patches out
+  for (int n : a.fixedNodes) special[n] = 1;
+  for (int n : a.sternumNodes) special[n] = 1;
+  for (int n : a.secondSternumNodes) special[n] = 1;
+  for (const auto& v : a.supportNodes)
+    for (int n : v) special[n] = 1;
+  auto isSpecial = [&](int t) {
+    for (int k = 0; k < a.mesh.nodesPerTet(); ++k)
+      if (special[a.mesh.tets[t][k]]) return true;
+    return false;
+  };
+  auto percentile = [](std::vector<double> v, double q) {
+    if (v.empty()) return 0.0;
+    const auto k = static_cast<std::size_t>(q * double(v.size() - 1));
+    std::nth_element(v.begin(), v.begin() + std::ptrdiff_t(k), v.end());
+    return v[k];
+  };
+  std::printf("rib stress (von Mises MPa of the bone's tets; p99 / max per third of the rib's length from its joint)\n");
+  for (int side = 1; side <= 2; ++side)
+    for (int rib = 1; rib <= 12; ++rib) {
+      const int part = ribPart(side, rib);
+      const auto joint = findLandmark(lms, part);
+      if (!joint) continue;
+      std::vector<int> bone, cart;
+      double reach = 0;
+      for (int t = 0; t < a.mesh.numTets(); ++t) {
+        if (a.tetPart[t] != part) continue;
+        if (a.mesh.tissue[t] == int(Tissue::Cartilage)) cart.push_back(t);
+        if (a.mesh.tissue[t] != int(Tissue::Bone)) continue;
+        bone.push_back(t);
+        reach = std::max(reach, (a.mesh.centroid(t) - *joint).norm());
+      }
+      if (bone.empty()) continue;
+      std::array<std::vector<double>, 3> third;
+      int peak = -1;
+      for (int t : bone) {
+        if (isSpecial(t)) continue;
+        const double d = (a.mesh.centroid(t) - *joint).norm();
+        third[std::min(2, static_cast<int>(3 * d / reach))].push_back(a.result.vonMises[t]);
+        if (peak < 0 || a.result.vonMises[t] > a.result.vonMises[peak]) peak = t;
+      }
+      if (peak < 0) continue;
+      double toCart = -1;
+      for (int t : cart) {
+        const double d = (a.mesh.centroid(t) - a.mesh.centroid(peak)).norm();
+        if (toCart < 0 || d < toCart) toCart = d;
+      }
+      std::printf("%s rib %d: length %.0f mm;", side == 1 ? "right" : "left", rib, reach);
+      const char* names[3] = {"posterior", "middle", "anterior"};
+      for (int k = 0; k < 3; ++k)
+        std::printf(" %s %.1f / %.1f;", names[k], percentile(third[k], 0.99),
+                    third[k].empty() ? 0.0 : *std::max_element(third[k].begin(), third[k].end()));
+      std::printf(" peak %.1f at %.0f mm from the joint, %.1f mm from its cartilage\n", a.result.vonMises[peak],
+                  (a.mesh.centroid(peak) - *joint).norm(), toCart);
+    }
+}
+}  // namespace
+
 int main(int argc, char** argv) {
   ribcage::RibCageParams rp;
   rp.edgeLength = 4.0;
   nuss::Options o;
   o.targetElevation = 0;
   std::string vtu, inp;
+  bool ribStress = false;
   bool layers = false, chestOnly = false;
   for (int i = 1; i < argc; ++i) {
     auto next = [&]() -> const char* {
@@ -80,12 +146,19 @@ int main(int argc, char** argv) {
     else if (a == "--plain-newton") o.newton.lineSearch = o.newton.adaptiveSteps = false;
     else if (a == "--bone-e") o.eBone = std::atof(next());
     else if (a == "--cartilage-e") o.eCartilage = std::atof(next());
+    else if (a == "--cartilage") {
+      const std::string v = next();
+      if (v != "rib" && v != "ct") { std::fprintf(stderr, "--cartilage takes rib or ct\n"); return 2; }
+      rp.cartilageSection = v == "ct" ? ribcage::CartilageSection::Ct : ribcage::CartilageSection::Rib;
+    }
+    else if (a == "--rib-stress") ribStress = true;
     else if (a == "--help" || a == "-h") {
       std::printf(
           "pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]\n"
           "                [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--vtu out.vtu] [--layers] [--inp deck.inp]\n"
           "                [--blend mm] [--funnel-z f] [--material svk|neo-hookean|neo-hookean-ccx] [--calibration force|displacement]\n"
           "                [--line-search] [--adaptive-steps] [--plain-newton] [--bone-e MPa] [--cartilage-e MPa]\n"
+          "                [--cartilage rib|ct] [--rib-stress]\n"
           "Builds the generator's rib cage, runs the Nuss FE analysis and prints key=value figures.\n"
           "Defaults: the analysis' (the FE filter's): neo-Hookean, displacement control, Newton with a line search\n"
           "and adaptive load steps; --plain-newton turns both off.\n");
@@ -126,7 +199,9 @@ int main(int argc, char** argv) {
                 a.newtonIterations, a.factorizations, tCage, a.secondsMesh, a.secondsSolve, fe::materialModelName(o.material),
                 nuss::calibrationMethodName(o.calibration), o.eBone, o.eCartilage);
     std::printf("target %s\n", a.target.describe().c_str());
-    std::printf("max stress at %s\nmax strain at %s\n", a.maxStressAt.describe().c_str(), a.maxStrainAt.describe().c_str());
+    std::printf("max stress at %s\nmax stress away from the tissue junctions %.3f at %s\nmax strain at %s\n",
+                a.maxStressAt.describe().c_str(), a.maxStressBody, a.maxStressBodyAt.describe().c_str(),
+                a.maxStrainAt.describe().c_str());
     std::printf("fixed %zu, sternum %zu, supports", a.fixedNodes.size(), a.sternumNodes.size());
     for (size_t k = 0; k < a.supportNodes.size(); ++k) std::printf(" %s:%zu", a.supportNames[k].c_str(), a.supportNodes[k].size());
     if (a.calibration) {
@@ -145,6 +220,7 @@ int main(int argc, char** argv) {
     if (!a.sternumNodes.empty()) um /= double(a.sternumNodes.size());
     std::printf("sternal patch mean displacement mm: %.6e %.6e %.6e (%zu nodes)\n", um.x(), um.y(), um.z(),
                 a.sternumNodes.size());
+    if (ribStress) printRibStress(a, lms);
     nuss::OutputFiles files;  // the FE filter's writer: the same .vtu and .inp as its BASE files
     files.vtu = vtu;
     files.inp = inp;

@@ -40,6 +40,10 @@ force = grab(r.log, r"Fe = ([0-9.]+) N \(Fs")
 elev = grab(r.log, r"sternum end displacement ([0-9.]+) mm")
 check(len(elev) == 1 and abs(elev[0] - 20.0) <= 0.1, f"calibrated elevation {elev} within 0.1 mm of 20")
 check(len(force) == 1 and force[0] > 0, f"calibrated force {force} N")
+peak = grab(r.log, r"Max von Mises stress ([0-9.]+) MPa at")
+inner = grab(r.log, r"Max von Mises stress away from the tissue junctions ([0-9.]+) MPa at the .*(?:bone|sternum|cartilage)")
+check(len(peak) == 1 and len(inner) == 1 and 0 < inner[0] <= peak[0],
+      f"the Log's largest stress away from the tissue junctions {inner} MPa, at most the largest {peak}")
 C = h.read_ply(cage)
 R = h.read_ply(os.path.join(W, "result.ply")) if os.path.exists(os.path.join(W, "result.ply")) else None
 L = h.read_ply(lms)

@@ -173,9 +173,9 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
     r.force = a.force;
     r.elevation = a.elevation;
     r.solves = a.calibration ? a.calibration->evaluations : 1;
-    r.maxStress = a.maxStress;
+    r.maxStress = a.maxStressBody;  // the singular peaks at the tissue junctions would rank the mesh, not the bar
     r.maxStrain = a.maxStrain;
-    r.maxStressAt = a.maxStressAt.describe();
+    r.maxStressAt = a.maxStressBodyAt.describe();
     r.maxStrainAt = a.maxStrainAt.describe();
 
     progress(p0 + (p1 - p0) * 4 / 5, r.option + ": volumes and pectus index after");

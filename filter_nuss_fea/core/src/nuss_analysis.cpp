@@ -765,7 +765,18 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
   for (int n : a.secondSternumNodes) special[n] = 1;
   for (const auto& v : a.supportNodes)
     for (int n : v) special[n] = 1;
-  int iS = -1, iE = -1;
+  // nodes where two tissues meet (rib and cartilage, cartilage and sternum): the stiffness changes about
+  // 1000-fold across them, and at the corner such a junction makes with the free surface the stress of a
+  // linear model is singular, so the stress of the tets touching them grows as the mesh is refined
+  std::vector<int> nodeTissue(a.mesh.nodes.size(), -1);
+  std::vector<char> junction(a.mesh.nodes.size(), 0);
+  for (int t = 0; t < a.mesh.numTets(); ++t)
+    for (int k = 0; k < a.mesh.nodesPerTet(); ++k) {
+      int& nt = nodeTissue[a.mesh.tets[t][k]];
+      if (nt >= 0 && nt != a.mesh.tissue[t]) junction[a.mesh.tets[t][k]] = 1;
+      nt = a.mesh.tissue[t];
+    }
+  int iS = -1, iE = -1, iB = -1;
   for (int t = 0; t < a.mesh.numTets(); ++t) {
     a.maxStressAll = std::max(a.maxStressAll, a.result.vonMises[t]);
     a.maxStrainAll = std::max(a.maxStrainAll, a.result.eqStrain[t]);
@@ -776,6 +787,9 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
     if (sp) continue;
     if (iS < 0 || a.result.vonMises[t] > a.result.vonMises[iS]) iS = t;
     if (iE < 0 || a.result.eqStrain[t] > a.result.eqStrain[iE]) iE = t;
+    bool atJunction = false;
+    for (int k = 0; k < a.mesh.nodesPerTet() && !atJunction; ++k) atJunction = junction[a.mesh.tets[t][k]];
+    if (!atJunction && (iB < 0 || a.result.vonMises[t] > a.result.vonMises[iB])) iB = t;
   }
   auto locate = [&](int t) {
     Location L;
@@ -789,6 +803,7 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
   };
   if (iS >= 0) a.maxStress = a.result.vonMises[iS], a.maxStressAt = locate(iS);
   if (iE >= 0) a.maxStrain = a.result.eqStrain[iE], a.maxStrainAt = locate(iE);
+  if (iB >= 0) a.maxStressBody = a.result.vonMises[iB], a.maxStressBodyAt = locate(iB);
   progress(100, "Done");
   return a;
 }

@@ -47,7 +47,9 @@ struct PlanRow {
   int bars = 1, level = 0, secondLevel = 0;
   double force = 0;           ///< calibrated total Fe (N)
   double elevation = 0;       ///< mm reached at the lower sternum end
-  double maxStress = 0, maxStrain = 0;  ///< away from the joints and load patches (as the FE filter)
+  /// the stress away from the joints, load patches and tissue junctions (Analysis::maxStressBody), the strain
+  /// away from the joints and load patches (Analysis::maxStrain), as the FE filter's Log
+  double maxStress = 0, maxStrain = 0;
   std::string maxStressAt, maxStrainAt;  ///< Location::describe()
   double sliceGain = 0, slicePercent = 0;        ///< mm^3, %
   double envelopeGain = 0, envelopePercent = 0;  ///< mm^3, %

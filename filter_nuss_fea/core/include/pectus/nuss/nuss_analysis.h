@@ -213,6 +213,11 @@ struct Analysis {
   double maxStress = 0, maxStrain = 0;           ///< away from the joints and load patches
   Location maxStressAt, maxStrainAt;
   double maxStressAll = 0, maxStrainAll = 0;     ///< including the joints and load patches
+  /// away from the tissue junctions too (tets touching a node where bone or sternum meets cartilage): the
+  /// largest stress inside the tissues, where the stress at a junction's corner is singular and grows with
+  /// the mesh's refinement
+  double maxStressBody = 0;
+  Location maxStressBodyAt;
   double maxStrainCartilage = 0, maxStrainBone = 0;
   std::vector<int> fixedNodes, sternumNodes;
   int fixedAtJoints = 0;   ///< of fixedNodes: within the joint radius of a costovertebral joint
