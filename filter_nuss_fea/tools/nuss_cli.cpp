@@ -19,7 +19,8 @@
 // (the generator's cartilageSection: the rib's, or circular with twice its area). --rib-stress prints, for
 // each rib, its bone's von Mises stress in the posterior, middle and anterior third of its length (by
 // straight distance from its costovertebral joint, tets touching a fixed or loaded node left out), and
-// where its largest stress lies: how far from the joint, and from the nearest tet of its costal cartilage.
+// where its largest stress lies: how far from the joint, from the nearest tet of its costal cartilage and
+// from the nearest node carrying a rib support force.
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -91,8 +92,14 @@ void printRibStress(const nuss::Analysis& a, const std::vector<Landmark>& lms) {
       for (int k = 0; k < 3; ++k)
         std::printf(" %s %.1f / %.1f;", names[k], percentile(third[k], 0.99),
                     third[k].empty() ? 0.0 : *std::max_element(third[k].begin(), third[k].end()));
-      std::printf(" peak %.1f at %.0f mm from the joint, %.1f mm from its cartilage\n", a.result.vonMises[peak],
-                  (a.mesh.centroid(peak) - *joint).norm(), toCart);
+      double toSupport = -1;  // the nearest node carrying an Fsr
+      for (const auto& v : a.supportNodes)
+        for (int n : v) {
+          const double d = (a.mesh.nodes[n] - a.mesh.centroid(peak)).norm();
+          if (toSupport < 0 || d < toSupport) toSupport = d;
+        }
+      std::printf(" peak %.1f at %.0f mm from the joint, %.1f mm from its cartilage, %.1f mm from a bar support\n",
+                  a.result.vonMises[peak], (a.mesh.centroid(peak) - *joint).norm(), toCart, toSupport);
     }
 }
 }  // namespace
