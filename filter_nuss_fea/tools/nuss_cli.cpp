@@ -40,17 +40,7 @@ using namespace pectus;
 namespace {
 // --rib-stress: each rib's bone stress by thirds of its length, and where its peak lies
 void printRibStress(const nuss::Analysis& a, const std::vector<Landmark>& lms) {
-  std::vector<char> special(a.mesh.nodes.size(), 0);  // as the analysis' maxima: supports and load patches out
-  for (int n : a.fixedNodes) special[n] = 1;
-  for (int n : a.sternumNodes) special[n] = 1;
-  for (int n : a.secondSternumNodes) special[n] = 1;
-  for (const auto& v : a.supportNodes)
-    for (int n : v) special[n] = 1;
-  auto isSpecial = [&](int t) {
-    for (int k = 0; k < a.mesh.nodesPerTet(); ++k)
-      if (special[a.mesh.tets[t][k]]) return true;
-    return false;
-  };
+  const std::vector<char> special = nuss::supportAndLoadNodes(a);  // as the analysis' maxima
   auto percentile = [](std::vector<double> v, double q) {
     if (v.empty()) return 0.0;
     const auto k = static_cast<std::size_t>(q * double(v.size() - 1));
@@ -76,7 +66,7 @@ void printRibStress(const nuss::Analysis& a, const std::vector<Landmark>& lms) {
       std::array<std::vector<double>, 3> third;
       int peak = -1;
       for (int t : bone) {
-        if (isSpecial(t)) continue;
+        if (nuss::touches(a.mesh, t, special)) continue;
         const double d = (a.mesh.centroid(t) - *joint).norm();
         third[std::min(2, static_cast<int>(3 * d / reach))].push_back(a.result.vonMises[t]);
         if (peak < 0 || a.result.vonMises[t] > a.result.vonMises[peak]) peak = t;

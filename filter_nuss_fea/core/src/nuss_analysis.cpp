@@ -759,12 +759,7 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
   a.nodalStress = fe::averageToNodes(a.mesh, a.result.vonMises);
   a.nodalStrain = fe::averageToNodes(a.mesh, a.result.eqStrain);
   // maxima away from the supports and load patches, where nodal forces make the stress singular
-  std::vector<char> special(a.mesh.nodes.size(), 0);
-  for (int n : a.fixedNodes) special[n] = 1;
-  for (int n : a.sternumNodes) special[n] = 1;
-  for (int n : a.secondSternumNodes) special[n] = 1;
-  for (const auto& v : a.supportNodes)
-    for (int n : v) special[n] = 1;
+  const std::vector<char> special = supportAndLoadNodes(a);
   // nodes where two tissues meet (rib and cartilage, cartilage and sternum): the stiffness changes about
   // 1000-fold across them, and at the corner such a junction makes with the free surface the stress of a
   // linear model is singular, so the stress of the tets touching them grows as the mesh is refined
@@ -782,14 +777,10 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
     a.maxStrainAll = std::max(a.maxStrainAll, a.result.eqStrain[t]);
     if (a.mesh.tissue[t] == int(Tissue::Cartilage)) a.maxStrainCartilage = std::max(a.maxStrainCartilage, a.result.eqStrain[t]);
     else a.maxStrainBone = std::max(a.maxStrainBone, a.result.eqStrain[t]);
-    bool sp = false;
-    for (int k = 0; k < a.mesh.nodesPerTet() && !sp; ++k) sp = special[a.mesh.tets[t][k]];
-    if (sp) continue;
+    if (touches(a.mesh, t, special)) continue;
     if (iS < 0 || a.result.vonMises[t] > a.result.vonMises[iS]) iS = t;
     if (iE < 0 || a.result.eqStrain[t] > a.result.eqStrain[iE]) iE = t;
-    bool atJunction = false;
-    for (int k = 0; k < a.mesh.nodesPerTet() && !atJunction; ++k) atJunction = junction[a.mesh.tets[t][k]];
-    if (!atJunction && (iB < 0 || a.result.vonMises[t] > a.result.vonMises[iB])) iB = t;
+    if (!touches(a.mesh, t, junction) && (iB < 0 || a.result.vonMises[t] > a.result.vonMises[iB])) iB = t;
   }
   auto locate = [&](int t) {
     Location L;
@@ -808,6 +799,22 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
   return a;
 }
 }  // namespace
+
+std::vector<char> supportAndLoadNodes(const Analysis& a) {
+  std::vector<char> flag(a.mesh.nodes.size(), 0);
+  for (int n : a.fixedNodes) flag[n] = 1;
+  for (int n : a.sternumNodes) flag[n] = 1;
+  for (int n : a.secondSternumNodes) flag[n] = 1;
+  for (const auto& v : a.supportNodes)
+    for (int n : v) flag[n] = 1;
+  return flag;
+}
+
+bool touches(const fe::TetMesh& m, int t, const std::vector<char>& nodes) {
+  for (int k = 0; k < m.nodesPerTet(); ++k)
+    if (nodes[m.tets[t][k]]) return true;
+  return false;
+}
 
 std::vector<PathSample> strainAlongRib(const Analysis& a, int side, int rib, double binWidth) {
   if (!(binWidth > 0)) throw InputError("The rib path bin width must be positive (mm).");

@@ -250,6 +250,12 @@ fe::Problem problemAt(const Analysis& a, const Options& opt, double force);
 struct PathSample { double distance, meanStrain, maxStrain, meanStress; int tissue; int tets; };
 std::vector<PathSample> strainAlongRib(const Analysis& a, int side, int rib, double binWidth = 2.0);
 
+/// The nodes the stress and strain maxima leave out (1: fixed, or carrying Fe or an Fsr), where the nodal
+/// forces and the clamp make the stress singular
+std::vector<char> supportAndLoadNodes(const Analysis& a);
+/// Whether tet t of m has a node flagged in `nodes`
+bool touches(const fe::TetMesh& m, int t, const std::vector<char>& nodes);
+
 /// `v` with `precision` decimals in the classic locale ("47.83"), whatever the host's C locale: the
 /// figures of the messages and of the files' headings.
 std::string fixedText(double v, int precision);
