@@ -41,6 +41,7 @@ class SelfIntersections {
 
  private:
   struct Mesh;
+  bool buildAsGiven(std::size_t numPoints, const std::vector<std::vector<std::size_t>>& polys);
   std::unique_ptr<Mesh> mesh_;
   std::vector<FacePair> degenerate_;  // triangles repeating a vertex or pointing outside the points
   std::vector<int> faceOf_;           // mesh face -> triangle

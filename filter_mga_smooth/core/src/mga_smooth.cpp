@@ -948,13 +948,16 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
     if (f.size() == 4) tris.push_back({f[0], f[2], f[3]});
   }
   // the input's own crossings are left as they are: only faces that cross after smoothing are undone
+  // (the input is checked only when the result crosses somewhere)
   SelfIntersections crossings(before.size(), tris);
+  std::vector<FacePair> now = crossings(after);
+  if (now.empty()) return {};
   std::set<std::pair<int, int>> inInput;
   for (const FacePair& p : crossings(before)) inInput.insert(std::minmax(p.a, p.b));
   std::vector<int> back;
-  for (;;) {  // each round puts back at least one node, so this ends (at the latest with the input)
+  for (;; now = crossings(after)) {  // each round puts back at least one node, so this ends (at the latest with the input)
     bool any = false;
-    for (const FacePair& p : crossings(after)) {
+    for (const FacePair& p : now) {
       if (inInput.count(std::minmax(p.a, p.b))) continue;
       for (int t : {p.a, p.b})
         for (int v : tris[std::size_t(t)])
