@@ -251,3 +251,21 @@ TEST(SelfIntersections, OneMeshAtSeveralPositions) {
   for (const Surface* p : {&pinched, &lifted})
     EXPECT_TRUE(same(touching(p->V), pectus::selfIntersections(p->V, p->F)));
 }
+
+// a face turned against its neighbours (the mesh is then built through the soup's orientation) gives the
+// same pairs as the consistently oriented surface (built face by face as given)
+TEST(SelfIntersections, FaceTurnedOverGivesTheSamePairs) {
+  Surface through = twoTetrahedra();
+  for (std::size_t i = 4; i < 8; ++i) through.V[i] -= V3(4.8, -0.1, -0.1);  // the second pierces the first
+  Surface turned = through;
+  std::swap(turned.F[0][1], turned.F[0][2]);
+  std::swap(turned.F[5][1], turned.F[5][2]);
+  const auto oriented = pectus::selfIntersections(through.V, through.F);
+  const auto mended = pectus::selfIntersections(turned.V, turned.F);
+  ASSERT_FALSE(oriented.empty());
+  ASSERT_EQ(oriented.size(), mended.size());
+  for (std::size_t i = 0; i < oriented.size(); ++i) {
+    EXPECT_EQ(oriented[i].a, mended[i].a);
+    EXPECT_EQ(oriented[i].b, mended[i].b);
+  }
+}
