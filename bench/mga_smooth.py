@@ -194,15 +194,13 @@ def crease_change(V, W, F, creases):
     return change, moved
 
 
-def run_row(b, how, out, label, folded_input):
-    """one run of a row: its time in seconds; the folded counts of our rows go into folded_input"""
+def run_row(b, how, out):
+    """one run of a row: its time in seconds, and for our rows the elements folded in the input and in the
+    result (from the Log; else None)"""
     if how[0] == "ml":
         secs, log = b.meshlab(how[1], out, how[2])
         m = re.search(r"folded against a node's surface normal (\d+) -> (\d+)", "\n".join(log))
-        if m:
-            folded_input[label] = m.group(1)
-            folded_input[(label, out)] = m.group(2)
-        return secs
+        return secs, (m.group(1), m.group(2)) if m else None
     if how[0] == "om":
         t0 = time.perf_counter()
         p = subprocess.run(["OpenMesh-Smoothing", "-t", "10", how[1], out], stdout=subprocess.PIPE,
@@ -210,8 +208,8 @@ def run_row(b, how, out, label, folded_input):
         secs = time.perf_counter() - t0
         if p.returncode != 0 or not os.path.exists(out):
             raise RuntimeError(p.stdout[-300:])
-        return secs
-    return float(re.search(r"seconds (\S+)", b.tool_out(how[2], how[1], out, "10")).group(1))
+        return secs, None
+    return float(re.search(r"seconds (\S+)", b.tool_out(how[2], how[1], out, "10")).group(1)), None
 
 
 def main():
@@ -252,7 +250,7 @@ def main():
         V, F = read_off(os.path.join(work, "data", "meshes", f"{name}.off"))
         inputs.append((name + (" (CAD)" if cad else ""), V, F, False))
 
-    rows, folded_input = [], {}  # folded_input: per mesh the input's folded elements, per (mesh, output) the result's (our Log)
+    rows, folded_input = [], {}  # folded_input: the input's folded elements, from our rows' Log
     load0 = os.getloadavg()
     for label, V, F, is_saddle in inputs:
         base = os.path.join(work, re.sub(r"\W+", "_", label))
@@ -299,8 +297,10 @@ def main():
                 if how is None:
                     out = elems
                 else:
-                    secs = min(run_row(b, how, out, label, folded_input) for _ in range(args.repeat))
-                    folded = folded_input.get((label, out), "-")
+                    runs_of_row = [run_row(b, how, out) for _ in range(args.repeat)]
+                    secs = min(t for t, _ in runs_of_row)
+                    if runs_of_row[-1][1]:
+                        folded_input[label], folded = runs_of_row[-1][1]
                 W = read_off(out)[0]
                 if W.shape != V.shape:
                     raise RuntimeError(f"vertex count changed {V.shape} -> {W.shape}")
