@@ -53,7 +53,7 @@ SelfIntersections::SelfIntersections(std::size_t numPoints, const std::vector<st
 }
 
 // The common case, a consistently oriented 2-manifold (every smoother input, every closed tissue surface):
-// the mesh is built face by face as given, a tenth of the time the soup's orientation takes on 75k
+// the mesh is built face by face as given, in a fifth of the time the soup's orientation takes on 75k
 // triangles. Surface_mesh::add_face refuses a face across an edge used twice in one direction or at a
 // vertex closed on every side; a vertex that still joins two sheets is found after. Either leaves the
 // mesh empty and returns false, for the soup's orientation to mend.
