@@ -12,7 +12,13 @@
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Bounded_normal_change_filter.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Edge_length_cost.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Edge_length_stop_predicate.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Midpoint_placement.h>
+#include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 #include <CGAL/alpha_wrap_3.h>
+#include <CGAL/boost/graph/helpers.h>
 #include <vcg/complex/allocate.h>
 
 #include "pectus/self_intersections.h"
@@ -163,6 +169,31 @@ int closeHoles(Soup& s) {
   }
   s = soupOfSurfaceMesh(m);
   return int(borders.size());
+}
+
+int collapseShortEdges(Soup& s, double minLength) {
+  namespace PMP = CGAL::Polygon_mesh_processing;
+  namespace SMS = CGAL::Surface_mesh_simplification;
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Mesh = CGAL::Surface_mesh<K::Point_3>;
+  std::vector<K::Point_3> pts;
+  for (const auto& p : s.V) pts.emplace_back(p.x(), p.y(), p.z());
+  std::vector<std::vector<std::size_t>> polys;
+  for (const auto& f : s.F) polys.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  if (!PMP::is_polygon_soup_a_polygon_mesh(polys)) return 0;
+  Mesh m;
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
+  if (!CGAL::is_closed(m)) return 0;
+  const SMS::Edge_length_stop_predicate<double> stop(minLength);
+  const int collapsed = SMS::edge_collapse(m, stop, CGAL::parameters::get_cost(SMS::Edge_length_cost<Mesh>())
+                                                        .get_placement(SMS::Midpoint_placement<Mesh>())
+                                                        .filter(SMS::Bounded_normal_change_filter<>()));
+  if (collapsed == 0) return 0;
+  m.collect_garbage();
+  Soup out = soupOfSurfaceMesh(m);
+  if (!selfIntersections(out.V, out.F).empty()) return -1;
+  s = std::move(out);
+  return collapsed;
 }
 
 std::string defects(const Soup& s) {

@@ -381,3 +381,40 @@ TEST(PatientPrepare, OptionsOutsideTheirRangesAreRefused) {
   refused([](PrepareOptions& o) { o.edgeLength = kMinEdgeLength / 2; },
           "target edge length must be 0 or lie in [0.5, 10] mm");
 }
+
+TEST(PatientSoup, ShortEdgesCollapsedKeepingTheSolid) {
+  // a sphere of radius 10 (edges about 2.6 mm) with every 7th vertex moved most of the way to a neighbour
+  OwnedMesh sphere;
+  vcg::tri::Sphere(sphere, 3);
+  for (auto& v : sphere.vert) v.P() *= 10;
+  Soup s = surfaceOf(sphere, kFiniteFaces);
+  std::vector<char> moved(s.V.size(), 0);
+  for (const auto& f : s.F)
+    if (f[0] % 7 == 0 && !moved[std::size_t(f[0])] && !moved[std::size_t(f[1])]) {
+      s.V[std::size_t(f[0])] += 0.8 * (s.V[std::size_t(f[1])] - s.V[std::size_t(f[0])]);
+      moved[std::size_t(f[0])] = 1;
+    }
+  auto edges = [](const Soup& x, double below) {
+    int n = 0;
+    for (const auto& f : x.F)
+      for (int k = 0; k < 3; ++k) n += (x.V[std::size_t(f[k])] - x.V[std::size_t(f[(k + 1) % 3])]).norm() < below;
+    return n / 2;
+  };
+  ASSERT_EQ(defects(s), "");
+  const double v0 = volume(s), minLength = 1.2;
+  const int shortBefore = edges(s, minLength);
+  ASSERT_GT(shortBefore, 50);
+  const int collapsed = collapseShortEdges(s, minLength);
+  std::printf("  %d edges under %.1f mm, %d collapsed, %d left; volume %.1f -> %.1f mm3\n", shortBefore, minLength, collapsed,
+              edges(s, minLength), v0, volume(s));
+  EXPECT_GE(collapsed, shortBefore * 9 / 10);
+  EXPECT_LE(edges(s, minLength), shortBefore / 20);
+  EXPECT_EQ(defects(s), "");
+  EXPECT_NEAR(volume(s), v0, 0.02 * v0);
+  // an open soup is left as it was
+  Soup open = s;
+  open.F.pop_back();
+  const Soup before = open;
+  EXPECT_EQ(collapseShortEdges(open, 100.0), 0);
+  EXPECT_EQ(open.F.size(), before.F.size());
+}

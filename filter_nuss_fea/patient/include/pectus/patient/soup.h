@@ -36,6 +36,12 @@ int removeDuplicateFaces(Soup& s);
 /// triangulate_hole); returns the number of holes closed, -1 if the soup is not a 2-manifold mesh
 int closeHoles(Soup& s);
 
+/// Collapses the edges shorter than minLength, the shortest first, each to its midpoint (CGAL's edge
+/// collapse: Edge_length_cost, Midpoint_placement, Bounded_normal_change_filter), keeping the topology. A closed
+/// 2-manifold soup only; returns how many edges were collapsed: 0 and s unchanged when the soup is not one,
+/// and -1 and s unchanged when the result would intersect itself.
+int collapseShortEdges(Soup& s, double minLength);
+
 /// Why the soup is not a closed, 2-manifold, self-intersection-free surface ("" when it is)
 std::string defects(const Soup& s);
 /// CGAL's alpha wrap (detail alpha, offset; mm): a closed, 2-manifold, outward-oriented surface
