@@ -8,8 +8,11 @@
 #include <tuple>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
+#include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
+#include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Bounded_normal_change_filter.h>
@@ -18,6 +21,7 @@
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Midpoint_placement.h>
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
 #include <CGAL/alpha_wrap_3.h>
+#include <CGAL/boost/graph/generators.h>
 #include <CGAL/boost/graph/helpers.h>
 #include <vcg/complex/allocate.h>
 
@@ -194,6 +198,29 @@ int collapseShortEdges(Soup& s, double minLength) {
   if (!selfIntersections(out.V, out.F).empty()) return -1;
   s = std::move(out);
   return collapsed;
+}
+
+bool cutAwayBox(Soup& s, const Vec3& lo, const Vec3& hi) {
+  namespace PMP = CGAL::Polygon_mesh_processing;
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Mesh = CGAL::Surface_mesh<K::Point_3>;
+  if (!defects(s).empty()) return false;
+  std::vector<K::Point_3> pts;
+  for (const auto& p : s.V) pts.emplace_back(p.x(), p.y(), p.z());
+  std::vector<std::vector<std::size_t>> polys;
+  for (const auto& f : s.F) polys.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  Mesh m, box;
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
+  CGAL::make_hexahedron(K::Point_3(lo.x(), lo.y(), lo.z()), K::Point_3(hi.x(), lo.y(), lo.z()), K::Point_3(hi.x(), hi.y(), lo.z()),
+                        K::Point_3(lo.x(), hi.y(), lo.z()), K::Point_3(lo.x(), hi.y(), hi.z()), K::Point_3(lo.x(), lo.y(), hi.z()),
+                        K::Point_3(hi.x(), lo.y(), hi.z()), K::Point_3(hi.x(), hi.y(), hi.z()), box);
+  PMP::triangulate_faces(box);
+  if (!PMP::is_outward_oriented(m)) PMP::reverse_face_orientations(m);
+  if (!PMP::is_outward_oriented(box)) PMP::reverse_face_orientations(box);
+  Mesh out;
+  if (!PMP::corefine_and_compute_difference(m, box, out) || out.is_empty()) return false;
+  s = soupOfSurfaceMesh(out);
+  return true;
 }
 
 std::string defects(const Soup& s) {

@@ -42,6 +42,11 @@ int closeHoles(Soup& s);
 /// and -1 and s unchanged when the result would intersect itself.
 int collapseShortEdges(Soup& s, double minLength);
 
+/// Removes what lies inside the axis-aligned box lo..hi from the solid the soup bounds (CGAL's corefinement
+/// difference): the cut faces become planar caps on the box's sides. A closed, 2-manifold soup without
+/// self-intersections only; returns false and leaves s unchanged when it is not one or the difference fails.
+bool cutAwayBox(Soup& s, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi);
+
 /// Why the soup is not a closed, 2-manifold, self-intersection-free surface ("" when it is)
 std::string defects(const Soup& s);
 /// CGAL's alpha wrap (detail alpha, offset; mm): a closed, 2-manifold, outward-oriented surface
