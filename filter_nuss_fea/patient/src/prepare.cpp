@@ -203,7 +203,8 @@ Frame findFrame(const std::vector<Structure>& all, const PrepareOptions& opt, do
 
 // ---------------------------------------------------------------------------------------------------
 // 4. the vertebral column inside a bone layer. Kept as the support (SpineMode::Keep), it reaches this far (mm)
-// along each rib beyond the cut, into the rib's end, so that column and rib overlap
+// along each rib beyond the cut, into the rib's end (cut square kCutTrim beyond the cut), so that column
+// and rib overlap
 constexpr double kColumnOverlap = 3.0;
 
 // The column: the posterior midline bone that runs the whole height.
@@ -826,10 +827,11 @@ void Preparation::numberRibs() {
 }
 
 // The column is cut out of a fused bone layer face by face, and the hole each rib's end is left with is
-// closed afterwards. Where a rib runs along the cut (the 1st rib beside its vertebra), the faces kept on
-// either side of it leave a sheet of bone half a millimetre thick in the cut's plane, which the tet mesh fills
-// with tets a fifth the size of the rest, and whose edge at the fixed joint raises the stress there fivefold.
-// Each rib's end is therefore cut again, square, by the solid difference with the band kCutTrim mm wider.
+// closed afterwards. Where a rib runs along the cut (the 1st rib beside its vertebra), that leaves a sheet
+// of bone about 0.6 mm thick in the cut's plane: the tet mesh fills it with sub-millimetre tets, and the
+// edge of the fixed joint on it carries a stress several times the posterior ribs'. Each rib's end is
+// therefore cut again, square, by the solid difference with the band widened by kCutTrim on each side
+// (beyond the sheet and the voxel steps of a 1 mm CT surface).
 constexpr double kCutTrim = 1.5;
 
 int Preparation::squareOffCutEnd(Soup& rib) const {
@@ -879,7 +881,7 @@ void Preparation::repair() {
       s.soup = std::move(w);
       ++res.wrapped;
     }
-    if (s.cls.kind == Kind::Rib && opt.spine == SpineMode::Cut && cutHalfWidth > 0) squared += squareOffCutEnd(s.soup);
+    if (s.cls.kind == Kind::Rib && cutHalfWidth > 0) squared += squareOffCutEnd(s.soup);  // either spine mode: the same landmarks
     if (s.cls.kind == Kind::Rib) {
       append(bone, s.soup);
       bonePart.insert(bonePart.end(), s.soup.F.size(), ribPart(s.cls.side, s.cls.number));
@@ -1001,10 +1003,10 @@ void Preparation::decimate(OwnedMesh& joinedSurface, CMeshO& cage) {
   }
   ribcage::decimateEmbedded(cage, target, opt.edgeLength);
   vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
-  // Quadric decimation keeps short edges where the surface turns sharply: the flat ends where the ribs were
-  // cut at the costovertebral joints, the tissue junctions. TetGen grades its tets down to them, and at a fixed
-  // joint's edge, where the stress is singular, tets a third the size of the rest raise the peak four- to
-  // fivefold. Those edges are collapsed, the shortest first, up to half the edge length.
+  // Quadric decimation keeps short edges where the surface turns sharply: the cut ends of the ribs at the
+  // costovertebral joints, the tissue junctions. TetGen grades its tets down to them, which adds tets and,
+  // where the stress is singular (a fixed joint's edge, a junction), raises the peak. Those edges are
+  // collapsed, the shortest first, up to half the edge length.
   Soup s = surfaceOf(cage, kFiniteFaces);
   const int collapsed = collapseShortEdges(s, kShortEdge * opt.edgeLength);
   if (collapsed > 0) toMesh(s, cage);

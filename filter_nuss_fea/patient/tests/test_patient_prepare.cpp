@@ -418,3 +418,27 @@ TEST(PatientSoup, ShortEdgesCollapsedKeepingTheSolid) {
   EXPECT_EQ(collapseShortEdges(open, 100.0), 0);
   EXPECT_EQ(open.F.size(), before.F.size());
 }
+
+TEST(PatientSoup, BoxCutAwayLeavesAPlanarCap) {
+  // a sphere of radius 10 less the box x < 2: a cap 8 mm high, closed by a disc in the plane x = 2
+  OwnedMesh sphere;
+  vcg::tri::Sphere(sphere, 3);
+  for (auto& v : sphere.vert) v.P() *= 10;
+  Soup s = surfaceOf(sphere, kFiniteFaces);
+  const double ball = volume(s), exactBall = 4.0 / 3.0 * M_PI * 1000, exactCap = M_PI * 64 * (30 - 8) / 3;
+  ASSERT_TRUE(cutAwayBox(s, Eigen::Vector3d(-20, -20, -20), Eigen::Vector3d(2, 20, 20)));
+  EXPECT_EQ(defects(s), "");
+  double xMin = 1e300;
+  int onCap = 0;
+  for (const auto& p : s.V) xMin = std::min(xMin, p.x()), onCap += std::abs(p.x() - 2) < 1e-9;
+  EXPECT_NEAR(xMin, 2.0, 1e-9);
+  EXPECT_GT(onCap, 20);
+  // the polyhedral sphere holds 0.9 % less than the exact one; its cap about as much less
+  std::printf("  ball %.1f mm3 (exact %.1f), cap %.1f mm3 (exact %.1f)\n", ball, exactBall, volume(s), exactCap);
+  EXPECT_NEAR(volume(s) / exactCap, ball / exactBall, 0.01);
+  // an open soup is refused and left as it was
+  Soup open = s;
+  open.F.pop_back();
+  EXPECT_FALSE(cutAwayBox(open, Eigen::Vector3d(-20, -20, -20), Eigen::Vector3d(5, 20, 20)));
+  EXPECT_EQ(open.F.size(), s.F.size() - 1);
+}
