@@ -32,6 +32,17 @@ namespace pectus::patient {
 namespace {
 using Vec3 = Eigen::Vector3d;
 
+using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using Mesh = CGAL::Surface_mesh<K::Point_3>;
+
+// the soup as CGAL's polygon soup functions take it: points and index triples
+std::pair<std::vector<K::Point_3>, std::vector<std::vector<std::size_t>>> polygonSoupOf(const Soup& s) {
+  std::pair<std::vector<K::Point_3>, std::vector<std::vector<std::size_t>>> out;
+  for (const auto& p : s.V) out.first.emplace_back(p.x(), p.y(), p.z());
+  for (const auto& f : s.F) out.second.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  return out;
+}
+
 // the faces of a CGAL surface mesh (polygons fanned into triangles)
 template <class Mesh>
 Soup soupOfSurfaceMesh(const Mesh& m) {
@@ -151,12 +162,7 @@ int removeDuplicateFaces(Soup& s) {
 
 int closeHoles(Soup& s) {
   namespace PMP = CGAL::Polygon_mesh_processing;
-  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-  using Mesh = CGAL::Surface_mesh<K::Point_3>;
-  std::vector<K::Point_3> pts;
-  for (const auto& p : s.V) pts.emplace_back(p.x(), p.y(), p.z());
-  std::vector<std::vector<std::size_t>> polys;
-  for (const auto& f : s.F) polys.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  auto [pts, polys] = polygonSoupOf(s);
   if (!PMP::orient_polygon_soup(pts, polys) || !PMP::is_polygon_soup_a_polygon_mesh(polys)) return -1;
   Mesh m;
   PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
@@ -178,12 +184,7 @@ int closeHoles(Soup& s) {
 int collapseShortEdges(Soup& s, double minLength) {
   namespace PMP = CGAL::Polygon_mesh_processing;
   namespace SMS = CGAL::Surface_mesh_simplification;
-  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-  using Mesh = CGAL::Surface_mesh<K::Point_3>;
-  std::vector<K::Point_3> pts;
-  for (const auto& p : s.V) pts.emplace_back(p.x(), p.y(), p.z());
-  std::vector<std::vector<std::size_t>> polys;
-  for (const auto& f : s.F) polys.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  auto [pts, polys] = polygonSoupOf(s);
   if (!PMP::is_polygon_soup_a_polygon_mesh(polys)) return 0;
   Mesh m;
   PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
@@ -202,13 +203,8 @@ int collapseShortEdges(Soup& s, double minLength) {
 
 bool cutAwayBox(Soup& s, const Vec3& lo, const Vec3& hi) {
   namespace PMP = CGAL::Polygon_mesh_processing;
-  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-  using Mesh = CGAL::Surface_mesh<K::Point_3>;
   if (!defects(s).empty()) return false;
-  std::vector<K::Point_3> pts;
-  for (const auto& p : s.V) pts.emplace_back(p.x(), p.y(), p.z());
-  std::vector<std::vector<std::size_t>> polys;
-  for (const auto& f : s.F) polys.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
+  auto [pts, polys] = polygonSoupOf(s);
   Mesh m, box;
   PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
   CGAL::make_hexahedron(K::Point_3(lo.x(), lo.y(), lo.z()), K::Point_3(hi.x(), lo.y(), lo.z()), K::Point_3(hi.x(), hi.y(), lo.z()),
