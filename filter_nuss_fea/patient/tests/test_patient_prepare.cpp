@@ -382,12 +382,19 @@ TEST(PatientPrepare, OptionsOutsideTheirRangesAreRefused) {
           "target edge length must be 0 or lie in [0.5, 10] mm");
 }
 
-TEST(PatientSoup, ShortEdgesCollapsedKeepingTheSolid) {
-  // a sphere of radius 10 (edges about 2.6 mm) with every 7th vertex moved most of the way to a neighbour
+namespace {
+// a sphere of radius 10 mm, an icosahedron subdivided three times (edges about 2.6 mm)
+Soup ballOfRadius10() {
   OwnedMesh sphere;
   vcg::tri::Sphere(sphere, 3);
   for (auto& v : sphere.vert) v.P() *= 10;
-  Soup s = surfaceOf(sphere, kFiniteFaces);
+  return surfaceOf(sphere, kFiniteFaces);
+}
+}  // namespace
+
+TEST(PatientSoup, ShortEdgesCollapsedKeepingTheSolid) {
+  // the ball with every 7th vertex moved most of the way to a neighbour
+  Soup s = ballOfRadius10();
   std::vector<char> moved(s.V.size(), 0);
   for (const auto& f : s.F)
     if (f[0] % 7 == 0 && !moved[std::size_t(f[0])] && !moved[std::size_t(f[1])]) {
@@ -414,17 +421,13 @@ TEST(PatientSoup, ShortEdgesCollapsedKeepingTheSolid) {
   // an open soup is left as it was
   Soup open = s;
   open.F.pop_back();
-  const Soup before = open;
   EXPECT_EQ(collapseShortEdges(open, 100.0), 0);
-  EXPECT_EQ(open.F.size(), before.F.size());
+  EXPECT_EQ(open.F.size(), s.F.size() - 1);
 }
 
 TEST(PatientSoup, BoxCutAwayLeavesAPlanarCap) {
   // a sphere of radius 10 less the box x < 2: a cap 8 mm high, closed by a disc in the plane x = 2
-  OwnedMesh sphere;
-  vcg::tri::Sphere(sphere, 3);
-  for (auto& v : sphere.vert) v.P() *= 10;
-  Soup s = surfaceOf(sphere, kFiniteFaces);
+  Soup s = ballOfRadius10();
   const double ball = volume(s), exactBall = 4.0 / 3.0 * M_PI * 1000, exactCap = M_PI * 64 * (30 - 8) / 3;
   ASSERT_TRUE(cutAwayBox(s, Eigen::Vector3d(-20, -20, -20), Eigen::Vector3d(2, 20, 20)));
   EXPECT_EQ(defects(s), "");
