@@ -1008,12 +1008,17 @@ void Preparation::decimate(OwnedMesh& joinedSurface, CMeshO& cage) {
   // where the stress is singular (a fixed joint's edge, a junction), raises the peak. Those edges are
   // collapsed, the shortest first, up to half the edge length.
   Soup s = surfaceOf(cage, kFiniteFaces);
-  const int collapsed = collapseShortEdges(s, kShortEdge * opt.edgeLength);
+  int keptNearCrossings = 0;
+  const int collapsed = collapseShortEdges(s, kShortEdge * opt.edgeLength, &keptNearCrossings);
   if (collapsed > 0) toMesh(s, cage);
   relabel(cage, joinedSurface);
+  const std::string shortEdges = "edges under " + mm(kShortEdge * opt.edgeLength, 1) + " mm";
   log.push_back("decimated to edge length " + mm(opt.edgeLength, 2) + " mm: " + std::to_string(cage.fn) + " faces" +
-                (collapsed > 0  ? ", " + std::to_string(collapsed) + " edges under " + mm(kShortEdge * opt.edgeLength, 1) + " mm collapsed"
-                 : collapsed < 0 ? ", edges under " + mm(kShortEdge * opt.edgeLength, 1) + " mm kept (collapsing them made the surface cross itself)"
+                (collapsed > 0  ? ", " + std::to_string(collapsed) + " " + shortEdges + " collapsed" +
+                                     (keptNearCrossings > 0 ? " (" + std::to_string(keptNearCrossings) +
+                                                                  " edges kept where collapsing made the surface cross itself)"
+                                                            : std::string())
+                 : collapsed < 0 ? ", " + shortEdges + " kept (collapsing them made the surface cross itself)"
                                  : std::string()));
 }
 

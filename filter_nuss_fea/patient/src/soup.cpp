@@ -16,6 +16,7 @@
 #include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Bounded_normal_change_filter.h>
+#include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Constrained_placement.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Edge_length_cost.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Edge_length_stop_predicate.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Midpoint_placement.h>
@@ -181,24 +182,58 @@ int closeHoles(Soup& s) {
   return int(borders.size());
 }
 
-int collapseShortEdges(Soup& s, double minLength) {
+// A collapse that makes the surface cross itself is undone by collapsing again from the input with the edges
+// near the crossing kept: every edge with a vertex within kKeepMargin edge lengths of a crossing face's box
+// (grown by that much again on each attempt), so that the rest of the surface still loses its short edges.
+constexpr int kCollapseAttempts = 4;
+constexpr double kKeepMargin = 2.0;
+
+int collapseShortEdges(Soup& s, double minLength, int* keptEdges) {
   namespace PMP = CGAL::Polygon_mesh_processing;
   namespace SMS = CGAL::Surface_mesh_simplification;
+  if (keptEdges) *keptEdges = 0;
   auto [pts, polys] = polygonSoupOf(s);
   if (!PMP::is_polygon_soup_a_polygon_mesh(polys)) return 0;
-  Mesh m;
-  PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
-  if (!CGAL::is_closed(m)) return 0;
+  Mesh input;
+  PMP::polygon_soup_to_polygon_mesh(pts, polys, input);
+  if (!CGAL::is_closed(input)) return 0;
   const SMS::Edge_length_stop_predicate<double> stop(minLength);
-  const int collapsed = SMS::edge_collapse(m, stop, CGAL::parameters::get_cost(SMS::Edge_length_cost<Mesh>())
-                                                        .get_placement(SMS::Midpoint_placement<Mesh>())
-                                                        .filter(SMS::Bounded_normal_change_filter<>()));
-  if (collapsed == 0) return 0;
-  m.collect_garbage();
-  Soup out = soupOfSurfaceMesh(m);
-  if (!selfIntersections(out.V, out.F).empty()) return -1;
-  s = std::move(out);
-  return collapsed;
+  std::vector<Eigen::AlignedBox3d> keep;  // where collapsing made the surface cross itself
+  const auto inKept = [&](const K::Point_3& p) {
+    const Vec3 q(p.x(), p.y(), p.z());
+    return std::any_of(keep.begin(), keep.end(), [&](const Eigen::AlignedBox3d& b) { return b.contains(q); });
+  };
+  for (int attempt = 0; attempt < kCollapseAttempts; ++attempt) {
+    Mesh m = input;
+    auto constrained = m.add_property_map<Mesh::Edge_index, bool>("e:kept", false).first;
+    int kept = 0;
+    for (auto e : m.edges())
+      if (inKept(m.point(m.vertex(e, 0))) || inKept(m.point(m.vertex(e, 1)))) put(constrained, e, true), ++kept;
+    // a vertex on a kept edge stays where it is
+    const SMS::Constrained_placement<SMS::Midpoint_placement<Mesh>, decltype(constrained)> placement(constrained);
+    SMS::edge_collapse(m, stop, CGAL::parameters::edge_is_constrained_map(constrained)
+                                    .get_cost(SMS::Edge_length_cost<Mesh>())
+                                    .get_placement(placement)
+                                    .filter(SMS::Bounded_normal_change_filter<>()));
+    m.collect_garbage();
+    const int collapsed = int(input.number_of_faces() - m.number_of_faces()) / 2;  // each collapse removes two faces
+    if (collapsed == 0) return 0;
+    Soup out = soupOfSurfaceMesh(m);
+    const auto crossing = selfIntersections(out.V, out.F);
+    if (crossing.empty()) {
+      s = std::move(out);
+      if (keptEdges) *keptEdges = kept;
+      return collapsed;
+    }
+    const double margin = kKeepMargin * minLength * (attempt + 1);
+    for (const auto& [a, b] : crossing)
+      for (const std::size_t f : {std::size_t(a), std::size_t(b)}) {
+        Eigen::AlignedBox3d box;
+        for (int k = 0; k < 3; ++k) box.extend(out.V[std::size_t(out.F[f][std::size_t(k)])]);
+        keep.emplace_back(box.min() - Vec3::Constant(margin), box.max() + Vec3::Constant(margin));
+      }
+  }
+  return -1;
 }
 
 bool cutAwayBox(Soup& s, const Vec3& lo, const Vec3& hi) {

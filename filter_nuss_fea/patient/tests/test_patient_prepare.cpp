@@ -383,17 +383,32 @@ TEST(PatientPrepare, OptionsOutsideTheirRangesAreRefused) {
 }
 
 namespace {
-// a sphere of radius 10 mm, an icosahedron subdivided three times (edges about 2.6 mm)
-Soup ballOfRadius10() {
+// a sphere of the given radius, an icosahedron subdivided `levels` times (edges about 2.6 mm at radius 10, 3 levels)
+Soup ball(double radius, int levels) {
   OwnedMesh sphere;
-  vcg::tri::Sphere(sphere, 3);
-  for (auto& v : sphere.vert) v.P() *= 10;
+  vcg::tri::Sphere(sphere, levels);
+  for (auto& v : sphere.vert) v.P() *= radius;
   return surfaceOf(sphere, kFiniteFaces);
+}
+Soup ballOfRadius10() { return ball(10, 3); }
+
+// where the ray from the origin along the unit vector u leaves the star-shaped surface s (its distance)
+double radiusAlong(const Soup& s, const Eigen::Vector3d& u) {
+  double r = 0;
+  for (const auto& f : s.F) {
+    const Eigen::Vector3d a = s.V[std::size_t(f[0])], e1 = s.V[std::size_t(f[1])] - a, e2 = s.V[std::size_t(f[2])] - a;
+    const Eigen::Vector3d p = u.cross(e2);
+    const double det = e1.dot(p);
+    if (std::abs(det) < 1e-15) continue;
+    const double bu = -a.dot(p) / det, bv = u.dot((-a).cross(e1)) / det;
+    if (bu >= 0 && bv >= 0 && bu + bv <= 1) r = std::max(r, e2.dot((-a).cross(e1)) / det);
+  }
+  return r;
 }
 }  // namespace
 
-TEST(PatientSoup, ShortEdgesCollapsedKeepingTheSolid) {
-  // the ball with every 7th vertex moved most of the way to a neighbour
+// the ball with every 7th vertex moved most of the way to a neighbour: about 60 edges under 1.2 mm
+Soup ballWithShortEdges() {
   Soup s = ballOfRadius10();
   std::vector<char> moved(s.V.size(), 0);
   for (const auto& f : s.F)
@@ -401,6 +416,11 @@ TEST(PatientSoup, ShortEdgesCollapsedKeepingTheSolid) {
       s.V[std::size_t(f[0])] += 0.8 * (s.V[std::size_t(f[1])] - s.V[std::size_t(f[0])]);
       moved[std::size_t(f[0])] = 1;
     }
+  return s;
+}
+
+TEST(PatientSoup, ShortEdgesCollapsedKeepingTheSolid) {
+  Soup s = ballWithShortEdges();
   auto edges = [](const Soup& x, double below) {
     int n = 0;
     for (const auto& f : x.F)
@@ -444,4 +464,41 @@ TEST(PatientSoup, BoxCutAwayLeavesAPlanarCap) {
   open.F.pop_back();
   EXPECT_FALSE(cutAwayBox(open, Eigen::Vector3d(-20, -20, -20), Eigen::Vector3d(5, 20, 20)));
   EXPECT_EQ(open.F.size(), s.F.size() - 1);
+}
+
+TEST(PatientSoup, CollapseKeepsTheEdgesWhereItWouldCrossAnotherSurface) {
+  // Collapsing the ball's short edges sinks its surface slightly where they were (chords of a sphere lie
+  // inside it). A small icosahedral cavity whose top vertex lies halfway into that sinking is inside the ball
+  // before the collapse and crosses its surface after it: the collapse is done again keeping the edges there.
+  const Soup alone = ballWithShortEdges();
+  Soup collapsedAlone = alone;
+  ASSERT_GT(collapseShortEdges(collapsedAlone, 1.2), 0);
+  Eigen::Vector3d deepest(0, 0, 1);
+  double sink = 0, rBefore = 0;
+  for (const auto& f : alone.F) {  // through the faces' centroids: rays through a vertex or an edge may slip between faces
+    const Eigen::Vector3d u = (alone.V[std::size_t(f[0])] + alone.V[std::size_t(f[1])] + alone.V[std::size_t(f[2])]).normalized();
+    const double r0 = radiusAlong(alone, u), r1 = radiusAlong(collapsedAlone, u);
+    if (r1 > 0 && r0 - r1 > sink) sink = r0 - r1, deepest = u, rBefore = r0;
+  }
+  ASSERT_GT(sink, 1e-3);
+  // the cavity: an icosahedron of circumradius 1.5 mm (edges 1.6 mm, none to collapse), a vertex towards the
+  // surface, outward-facing triangles reversed so that it bounds a void
+  Soup cavity = ball(1.5, 0);
+  Eigen::Vector3d top = cavity.V[0].normalized();
+  const Eigen::Quaterniond turn = Eigen::Quaterniond::FromTwoVectors(top, deepest);
+  const Eigen::Vector3d centre = (rBefore - 0.5 * sink - 1.5) * deepest;
+  Soup s = alone;
+  const int n = int(s.V.size());
+  for (const auto& p : cavity.V) s.V.push_back(centre + turn * p);
+  for (const auto& f : cavity.F) s.F.push_back({f[0] + n, f[2] + n, f[1] + n});
+  ASSERT_EQ(defects(s), "");
+  Soup unkept = s;
+  std::printf("  the collapse sinks the ball by up to %.4f mm\n", sink);
+  int kept = 0;
+  const int collapsed = collapseShortEdges(s, 1.2, &kept);
+  std::printf("  %d edges collapsed, %d kept near the cavity\n", collapsed, kept);
+  EXPECT_GT(kept, 0);
+  EXPECT_GT(collapsed, 0);
+  EXPECT_EQ(defects(s), "");
+  EXPECT_LT(s.F.size(), unkept.F.size());  // the rest of the ball lost its short edges
 }

@@ -38,9 +38,10 @@ int closeHoles(Soup& s);
 
 /// Collapses the edges shorter than minLength, the shortest first, each to its midpoint (CGAL's edge
 /// collapse: Edge_length_cost, Midpoint_placement, Bounded_normal_change_filter), keeping the topology. A closed
-/// 2-manifold soup only; returns how many edges were collapsed: 0 and s unchanged when the soup is not one,
-/// and -1 and s unchanged when the result would intersect itself.
-int collapseShortEdges(Soup& s, double minLength);
+/// 2-manifold soup only; returns how many edges were collapsed: 0 and s unchanged when the soup is not one.
+/// Where the result would intersect itself, the collapse is done again from s with the edges near the
+/// crossing kept (their number in keptEdges); -1 and s unchanged when a few such attempts still cross.
+int collapseShortEdges(Soup& s, double minLength, int* keptEdges = nullptr);
 
 /// Removes what lies inside the axis-aligned box lo..hi from the solid the soup bounds (CGAL's corefinement
 /// difference): the cut faces become planar caps on the box's sides. A closed, 2-manifold soup without
