@@ -6,6 +6,10 @@ force, the sternum-end displacement per mesh and its change from the previous me
 analysis' memory budget: 3 GB for a ~300k-tet model).
 
     python3 bench/nuss_convergence.py [--tool build/filter_nuss_fea/pectus_nuss_cli] [--order 2] [--force 10] [--nonlinear]
+                                      [--maxvol none,default,40,15,6,2.5]
+
+--maxvol lists the meshes: "none" is TetGen without refinement (the main job's setting, tet quality 0), "default"
+the FE filter's default (tet quality 2.0, no volume bound), a number that volume bound in mm^3 with quality 2.0.
 """
 import argparse
 import os
@@ -18,7 +22,7 @@ ap.add_argument("--tool", default="build/filter_nuss_fea/pectus_nuss_cli")
 ap.add_argument("--order", type=int, default=2)
 ap.add_argument("--force", type=float, default=10.0)
 ap.add_argument("--nonlinear", action="store_true")
-ap.add_argument("--maxvol", default="0,40,15,6,2.5")
+ap.add_argument("--maxvol", default="none,default,40,15,6,2.5")
 a = ap.parse_args()
 
 
@@ -36,8 +40,9 @@ print(f"Nuss FE mesh convergence, TET{4 if a.order == 1 else 10}, {'large displa
 print(f"{'max tet vol mm3':>15} {'tets':>8} {'nodes':>8} {'dofs':>8} {'elevation mm':>13} {'change %':>9} {'solve s':>8} {'peak MB':>8}")
 prev = None
 for mv in a.maxvol.split(","):
-    cmd = [a.tool, "--edge", "5", "--haller", "5.3", "--age", "8", "--quality", "0" if float(mv) == 0 else "2.0",
-           "--maxvol", mv, "--order", str(a.order), "--force", str(a.force)] + ([] if a.nonlinear else ["--linear"])
+    quality, bound = {"none": ("0", "0"), "default": ("2.0", "0")}.get(mv, ("2.0", mv))
+    cmd = [a.tool, "--edge", "5", "--haller", "5.3", "--age", "8", "--quality", quality,
+           "--maxvol", bound, "--order", str(a.order), "--force", str(a.force)] + ([] if a.nonlinear else ["--linear"])
     t0 = time.time()
     p, peak_kb = run_measured(cmd)
     peak_mb = f"{peak_kb / 1024:8.0f}"

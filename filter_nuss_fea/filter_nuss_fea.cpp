@@ -326,7 +326,8 @@ void addModelParams(RichParameterList& par) {
                         "TET10: quadratic tetrahedra (accurate on thin ribs). TET4: linear, as the thesis' SOLID185; "
                         "stiffer (locking) on a coarse mesh, so the calibrated force is higher."));
   addFloat(par, "tetQuality", 2.0f, "Tet quality (radius-edge ratio)",
-           "TetGen -q bound: 0 (no refinement) or at least " + num(pectus::fe::kMinRadiusEdgeRatio) + " (smaller: better tets, more of them).",
+           "TetGen -q bound: 0 (no refinement) or at least " + num(pectus::fe::kMinRadiusEdgeRatio) + " (smaller: better tets, more of them). "
+           "The default 2.0 gives a model about 2 % stiffer than a converged mesh, 0 about 12 %.",
            {0, 100});
   addFloat(par, "maxTetVolume", 0.0f, "Max tet volume (mm^3)",
            "TetGen -a bound; 0 = no limit.", {0, 1e9});
