@@ -8,7 +8,7 @@ analysis' memory budget: 3 GB for a ~300k-tet model).
     python3 bench/nuss_convergence.py [--tool build/filter_nuss_fea/pectus_nuss_cli] [--order 2] [--force 10] [--nonlinear]
                                       [--maxvol none,default,40,15,6,2.5]
 
---maxvol lists the meshes: "none" is TetGen without refinement (the main job's setting, tet quality 0), "default"
+--maxvol lists the meshes: "none" is TetGen without refinement (tet quality 0, the quick main job's), "default"
 the FE filter's default (tet quality 2.0, no volume bound), a number that volume bound in mm^3 with quality 2.0.
 """
 import argparse
