@@ -26,10 +26,13 @@ files with the defects of real exports), then imported and prepared by 'Import C
 --funnel-z builds every cage with that funnel centre (the generator's funnelCenterZ; default its own, 1.1).
 --cartilage-section runs each at each costal cartilage section of a list: rib (the generator's default, the
 rib's own section) and ct (circular, twice the rib's area; "default, CT cartilage").
+--slice-from sternum measures the slice method a second time over the envelope's range, from the lower end of
+the sternum up instead of from the dome of the diaphragm (its lowerLimit), in the same script, and adds that
+gain as a column: how much of the slice method's gain its range decides.
 
     bench/table_6_1.py [--edge 5] [--cases 1,2,3,4,5] [--methods default] [--input generated|exports] [--funnel-z F]
                        [--cartilage-e 12.25[,24.5,...]] [--cartilage-section rib[,ct]] [--spine cut[,keep]]
-                       [--out /tmp/pectus-table61]
+                       [--slice-from dome|sternum] [--out /tmp/pectus-table61]
 
 Needs the plugins and meshlabserver of build/prefix (scripts/setup.sh).
 """
@@ -47,6 +50,7 @@ sys.path.insert(0, os.path.join(ROOT, "python"))
 import pectus_filters as pf  # noqa: E402
 import pectus_mlx as mlx  # noqa: E402
 import pipeline  # noqa: E402
+from pectus_mlx import grab_all  # noqa: E402
 from cohort import THESIS  # noqa: E402  (case, sex, age, index, elevation mm)
 
 # Table 6-1's simulation rows: force N, max stress MPa, max strain, volume gain %
@@ -57,6 +61,7 @@ METHODS = {"default": {},
            "svk": dict(material=0, calibration=0, lineSearch=False, adaptiveSteps=False)}
 THESIS_CARTILAGE_E = pf.NUSS_MODEL["cartilageModulus"][1]  # MPa
 SECTIONS = ("rib", "ct")  # the generator's cartilageSection
+SLICE_FROM = ("dome", "sternum")  # the slice method's lowerLimit: 700 the dome of the diaphragm, 500 the lower sternum end
 SPINE = ("cut", "keep")  # 'Prepare Patient Rib Cage': the vertebral column cut at the joints or kept, fixed
 CAGE, LANDMARKS = 0, 1
 PHANTOM = os.path.join(ROOT, "build", "filter_nuss_fea", "pectus_ct_phantom")
@@ -76,19 +81,24 @@ def cage_filters(case, age, index, edge, source, out, spine, generator):
     return [imp, pf.prepare_patient_rib_cage(spine=SPINE.index(spine))], n, n + 1  # the prepared cage and its landmarks follow the imports
 
 
-def run_case(case, sex, age, index, elevation, method, edge, out, source, cartilage_e, spine, generator):
+def run_case(case, sex, age, index, elevation, method, edge, out, source, cartilage_e, spine, generator, slice_from):
     make, cage, landmarks = cage_filters(case, age, index, edge, source, out, spine, generator)
     section = SECTIONS[generator.get("cartilageSection", 0)]
     base = os.path.join(out, f"{case}_{source}_{method}_E{cartilage_e:g}_{spine}_{section}")
     fe = pf.nuss_fea(landmarkLayer=landmarks, targetElevation=elevation, resultBase=mlx.SaveFile(base + ".vtu", ".vtu"),
                      cartilageModulus=cartilage_e, **METHODS[method])
     volumes = pipeline.measure_filters(cage, landmarks)
+    if slice_from == "sternum":  # the slice method once more, over the envelope's range; its Log line comes second
+        volumes.append(pipeline.example("slice", "Thoracic Volume (Slice Method)").set(
+            compare=True, beforeLayer=cage, landmarkLayer=landmarks, lowerLimit=SLICE_FROM.index("sternum")))
     t0 = time.time()
     res = mlx.run([], mlx.Script(make + [fe] + volumes), timeout=4 * 3600)
     wall = time.time() - t0
     with open(base + ".log", "w") as fh:
         fh.write(res.stdout)
     r = pipeline.parse(res.log)
+    sternum = grab_all(res.log, r"Slice method intrathoracic volume change: .*?\(\+?(-?[0-9.]+) ?%")[1:]
+    r["slice_sternum_pct"] = sternum[0] if sternum else None
     r["newton"] = mlx.grab(res.log, r"([0-9]+) Newton iterations", int)
     r["rc"], r["wall"] = res.rc, wall
     r["error"] = next((l for l in res.log if "failed" in l.lower() or "no converged" in l.lower()), "")
@@ -110,6 +120,8 @@ def main():
     ap.add_argument("--spine", default="cut", help="with --input exports: cut, keep or cut,keep")
     ap.add_argument("--funnel-z", type=float, default=None,
                     help="the generator's funnelCenterZ for every cage (default: the generator's own)")
+    ap.add_argument("--slice-from", choices=SLICE_FROM, default="dome",
+                    help="sternum: also the slice method's gain from the lower sternum end up")
     ap.add_argument("--out", default="/tmp/pectus-table61")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
@@ -127,7 +139,7 @@ def main():
         generator = {} if a.funnel_z is None else dict(funnelCenterZ=a.funnel_z)
         if sec != "rib":
             generator["cartilageSection"] = SECTIONS.index(sec)
-        r = run_case(case, sex, age, index, elevation, method, a.edge, a.out, a.input, e, spine, generator)
+        r = run_case(case, sex, age, index, elevation, method, a.edge, a.out, a.input, e, spine, generator, a.slice_from)
         m = (method + ("" if e == THESIS_CARTILAGE_E else f", E {e:g}") + (", spine kept" if spine == "keep" else "")
              + (", CT cartilage" if sec == "ct" else ""))
         rows.append((case, sex, age, index, elevation, m, r))
@@ -138,10 +150,11 @@ def main():
     what += "" if a.funnel_z is None else f", funnel centre {a.funnel_z:g}"
     print(f"\nTable 6-1, {what}, TET10 as the FE filter meshes them by default; "
           f"{platform.node()}, {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}")
+    sternum = a.slice_from == "sternum"
     print("| case | sex/age | index | target mm | method | tets | result | Fe N (thesis) | Newton it. | solves | wall s |"
           " max stress MPa (thesis), where | away from the tissue junctions MPa, where | max strain (thesis), where | volume gain % slice / envelope (thesis) |"
-          " index after |")
-    print("|---|---|---:|---:|---|---:|---|---:|---:|---:|---:|---|---|---|---|---:|")
+          + (" slice from the sternum end % |" if sternum else "") + " index after |")
+    print("|---|---|---:|---:|---|---:|---|---:|---:|---:|---:|---|---|---|---|" + ("---:|" if sternum else "") + "---:|")
     for case, sex, age, index, elevation, m, r in rows:
         tf, ts, te, tv = THESIS_RESULTS[case]
         ok = r["rc"] == 0
@@ -153,6 +166,7 @@ def main():
               f"{f(r['max_stress_body'] if ok else None)}, {r['max_stress_body_where'] or '—'} | "
               f"{f(r['max_strain'] if ok else None, '{:.3f}')} ({te}), {r['max_strain_where'] or '—'} | "
               f"{f(r['slice_change_pct'] if ok else None, '{:.2f}')} / {f(r['envelope_change_pct'] if ok else None, '{:.2f}')} ({tv}) | "
+              + (f"{f(r['slice_sternum_pct'] if ok else None, '{:.2f}')} | " if sternum else "") +
               f"{f(ha if ok else None, '{:.2f}')} |")
     print("Published forces: 68 N (Fonkalsrud, 4 children under 11) to 250 N (instrumented bar); "
           "Weber et al.: 181 ± 48 N, boys aged 5-17; the thesis: 70-190 N.")

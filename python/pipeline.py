@@ -96,10 +96,6 @@ def build_script(outdir: str, age: float, haller: float, elevation: float, quick
     return mlx.Script([gen, quality, mga, quality_after] + analysis_filters(outdir, elevation, quick, CAGE, LANDMARKS) + extra)
 
 
-
-
-
-
 def parse(log: list[str]) -> dict:
     q = [l for l in log if l.startswith("Element quality (")]
     hist = [[int(x) for x in l.split(":", 1)[1].split()] for l in log if l.startswith("Element quality histogram")]
