@@ -199,6 +199,44 @@ TEST(NussAnalysis, JointWithoutNodesWithinTheRadiusIsFixedAtItsNearestNodes) {
   EXPECT_NE(e.find("does not belong to this cage"), std::string::npos) << e;
 }
 
+// The sternoclavicular support holds the anterior translation of the sternum's nodes near the jugular notch
+// and nothing else: those nodes keep their other translations, the lifted sternum no longer turns about its
+// middle (the notch's nodes moved back without it), and the same force lifts the lower end less. Without the
+// notch landmark, or with no sternum node within the radius, the analysis is refused with what to change.
+TEST(NussAnalysis, SternoclavicularSupportHoldsTheManubriumForwardOnly) {
+  const auto surf = nuss::cageFromMesh(cage().mesh);
+  const auto& lms = cage().lms;
+  const nuss::Model model = nuss::buildModel(surf, coarse().mesh);
+  const nuss::Analysis free = nuss::analyze(surf, model, lms, coarse());
+  auto held = coarse();
+  held.place.sternoclavicularRadius = 12;
+  const nuss::Analysis a = nuss::analyze(surf, model, lms, held);
+  ASSERT_FALSE(a.sternoclavicularNodes.empty());
+  double yFree = 0, other = 0;
+  for (int n : a.sternoclavicularNodes) {
+    EXPECT_EQ(a.result.displacement(n).y(), 0.0);
+    yFree += free.result.displacement(n).y() / double(a.sternoclavicularNodes.size());
+    other = std::max(other, std::abs(a.result.displacement(n).z()));
+  }
+  std::printf("sternoclavicular nodes %zu; their mean anterior displacement without the support %.4f mm, largest vertical "
+              "with it %.4f mm; elevation at 10 N %.4f mm free, %.4f mm held\n",
+              a.sternoclavicularNodes.size(), yFree, other, free.elevation, a.elevation);
+  EXPECT_LT(yFree, 0.0);               // free, the upper sternum moves back as the lower end rises
+  EXPECT_GT(other, 0.0);               // held only along the force: the other translations stay free
+  EXPECT_LT(a.elevation, 0.8 * free.elevation);
+  EXPECT_EQ(a.fixedNodes.size(), free.fixedNodes.size());
+  auto noNotch = lms;
+  noNotch.erase(std::remove_if(noNotch.begin(), noNotch.end(), [](const Landmark& l) { return l.code == kSternumUpperEnd; }),
+                noNotch.end());
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, model, noNotch, held); }).find("jugular notch (landmark 502)"), std::string::npos);
+  auto tiny = held;
+  tiny.place.sternoclavicularRadius = 1e-3;
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, model, lms, tiny); }).find("increase the sternoclavicular radius"), std::string::npos);
+  auto bad = held;
+  bad.place.sternoclavicularRadius = -1;
+  EXPECT_NE(errorOf([&] { nuss::analyze(surf, model, lms, bad); }).find("sternoclavicular support radius"), std::string::npos);
+}
+
 // validate() checks the options against the ranges the filters declare (nuss_analysis.h)
 TEST(NussAnalysis, ValidateChecksTheDeclaredRanges) {
   const nuss::Options ok;

@@ -1,6 +1,7 @@
 // Command-line driver of the Nuss FE analysis core (bench/nuss_convergence.py, quick studies):
 //   pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]
-//                   [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--threads n] [--vtu out.vtu] [--layers]
+//                   [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--sc-radius mm] [--threads n]
+//                   [--vtu out.vtu] [--layers]
 //                   [--inp deck.inp] [--blend mm] [--funnel-z f] [--material svk|neo-hookean|neo-hookean-ccx]
 //                   [--calibration force|displacement] [--line-search] [--adaptive-steps] [--plain-newton]
 //                   [--bone-e MPa] [--cartilage-e MPa] [--cartilage rib|ct] [--rib-stress] [--help]
@@ -20,7 +21,9 @@
 // each rib, its bone's von Mises stress in the posterior, middle and anterior third of its length (by
 // straight distance from its costovertebral joint, tets touching a fixed or loaded node left out), and
 // where its largest stress lies: how far from the joint, from the nearest tet of its costal cartilage and
-// from the nearest node carrying a rib support force.
+// from the nearest node carrying a rib support force. --sc-radius holds the anterior translation of the
+// sternum's surface nodes within that radius of the jugular notch (Placement::sternoclavicularRadius: the
+// clavicles' hold on the manubrium; 0, the default, leaves it to the ribs as the thesis and the FE filter do).
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -123,6 +126,7 @@ int main(int argc, char** argv) {
     else if (a == "--force") o.force = std::atof(next());
     else if (a == "--linear") o.nonlinear = false;
     else if (a == "--space") o.place.intercostalSpace = std::atoi(next());
+    else if (a == "--sc-radius") o.place.sternoclavicularRadius = std::atof(next());
     else if (a == "--vtu") vtu = next();
     else if (a == "--layers") layers = true;
     else if (a == "--inp") inp = next();
@@ -152,7 +156,7 @@ int main(int argc, char** argv) {
     else if (a == "--help" || a == "-h") {
       std::printf(
           "pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]\n"
-          "                [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--vtu out.vtu] [--layers] [--inp deck.inp]\n"
+          "                [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--sc-radius mm] [--vtu out.vtu] [--layers] [--inp deck.inp]\n"
           "                [--blend mm] [--funnel-z f] [--material svk|neo-hookean|neo-hookean-ccx] [--calibration force|displacement]\n"
           "                [--line-search] [--adaptive-steps] [--plain-newton] [--bone-e MPa] [--cartilage-e MPa]\n"
           "                [--cartilage rib|ct] [--rib-stress]\n"
@@ -199,7 +203,8 @@ int main(int argc, char** argv) {
     std::printf("max stress at %s\nmax stress away from the tissue junctions %.3f at %s\nmax strain at %s\n",
                 a.maxStressAt.describe().c_str(), a.maxStressBody, a.maxStressBodyAt.describe().c_str(),
                 a.maxStrainAt.describe().c_str());
-    std::printf("fixed %zu, sternum %zu, supports", a.fixedNodes.size(), a.sternumNodes.size());
+    std::printf("fixed %zu, sternoclavicular %zu, sternum %zu, supports", a.fixedNodes.size(), a.sternoclavicularNodes.size(),
+                a.sternumNodes.size());
     for (size_t k = 0; k < a.supportNodes.size(); ++k) std::printf(" %s:%zu", a.supportNames[k].c_str(), a.supportNodes[k].size());
     if (a.calibration) {
       std::printf("\ncalibration");

@@ -234,6 +234,8 @@ void checkRadii(const Placement& pl) {
   if (!kPatchRadiusRange.contains(pl.jointRadius) || !kPatchRadiusRange.contains(pl.sternumLoadRadius) ||
       !kPatchRadiusRange.contains(pl.ribSupportRadius))
     throw InputError("The joint, sternum load and rib support radii must lie in " + kPatchRadiusRange.text() + " mm.");
+  if (!(pl.sternoclavicularRadius == 0 || kPatchRadiusRange.contains(pl.sternoclavicularRadius)))
+    throw InputError("The sternoclavicular support radius must be 0 (no support) or lie in " + kPatchRadiusRange.text() + " mm.");
   if (pl.direction.norm() < 1e-12 || !pl.direction.allFinite()) throw InputError("The force direction must be a non-zero vector.");
 }
 
@@ -298,6 +300,19 @@ void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Plac
   for (int i = 0; i < mesh.numNodes(); ++i) {
     if (fixed[i]) s.fixedNodes.push_back(i);
     if (fixed[i] == 2) ++s.fixedOnColumn;
+  }
+  if (pl.sternoclavicularRadius > 0) {
+    const Landmark* notch = nullptr;
+    for (const auto& l : lms)
+      if (l.code == kSternumUpperEnd) notch = &l;
+    if (!notch)
+      throw InputError("The sternoclavicular support needs the jugular notch (landmark 502) in the landmark layer: add it, or set the "
+                       "sternoclavicular radius to 0.");
+    s.sternoclavicularNodes = surfaceNodesNear(cage, notch->p, pl.sternoclavicularRadius,
+                                               [&](size_t f) { return cage.surface.faceTissue[f] == int(Tissue::Sternum); });
+    if (s.sternoclavicularNodes.empty())
+      throw InputError("No sternum surface node lies within " + mm(pl.sternoclavicularRadius) + " mm of the jugular notch " + pointText(notch->p) +
+                       ": increase the sternoclavicular radius.");
   }
   placeLoads(cage, lms, pl, s);
 }
@@ -481,6 +496,9 @@ fe::Problem problemAt(const Analysis& a, const Options& opt, double force) {
   p.mesh = &a.mesh;
   p.materials = fe::thesisMaterials(opt.nuBone, opt.nuCartilage, opt.material, opt.eBone, opt.eCartilage);
   for (int n : a.fixedNodes) p.fixNode(n);
+  int axis = 0;
+  opt.place.direction.cwiseAbs().maxCoeff(&axis);
+  for (int n : a.sternoclavicularNodes) p.fixed.push_back({n, axis, 0.0});
   addLoads(p, a, opt.place.direction.normalized(), force);
   return p;
 }
@@ -805,6 +823,7 @@ std::vector<char> supportAndLoadNodes(const Analysis& a) {
   for (int n : a.fixedNodes) flag[n] = 1;
   for (int n : a.sternumNodes) flag[n] = 1;
   for (int n : a.secondSternumNodes) flag[n] = 1;
+  for (int n : a.sternoclavicularNodes) flag[n] = 1;
   for (const auto& v : a.supportNodes)
     for (int n : v) flag[n] = 1;
   return flag;

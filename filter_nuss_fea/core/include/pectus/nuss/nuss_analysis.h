@@ -77,6 +77,11 @@ struct Placement {
   /// The elevation (calibration target) stays that of the lower sternum end (the first bar's patch).
   int secondSpace = 0;
   double secondShare = 0.5;
+  /// Sternoclavicular support (Sci Rep 2020;10:7357, doi 10.1038/s41598-020-64482-7): the anterior translation (along
+  /// `direction`'s largest axis) of the sternum's surface nodes within this radius of the jugular notch
+  /// (landmark 502) is held at zero, as the clavicles hold the manubrium; the other translations stay free.
+  /// 0: no such support, the manubrium held only through the ribs (the thesis' Fig. 6-4).
+  double sternoclavicularRadius = 0;
 };
 
 /// The bar exit of intercostal space s on one side (1 right, 2 left): landmark 600 + 10*side + s when
@@ -220,6 +225,7 @@ struct Analysis {
   Location maxStressBodyAt;
   double maxStrainCartilage = 0, maxStrainBone = 0;
   std::vector<int> fixedNodes, sternumNodes;
+  std::vector<int> sternoclavicularNodes;  ///< held along the force direction only (Placement::sternoclavicularRadius)
   int fixedAtJoints = 0;   ///< of fixedNodes: within the joint radius of a costovertebral joint
   int fixedOnColumn = 0;   ///< of fixedNodes: the others, nodes of the vertebral column's tets (part kVertebralColumn)
   int jointsWidened = 0;         ///< joints with fewer than four nodes within the joint radius: fixed at their four nearest
