@@ -89,8 +89,7 @@ def run_case(case, sex, age, index, elevation, method, edge, out, source, cartil
                      cartilageModulus=cartilage_e, **METHODS[method])
     volumes = pipeline.measure_filters(cage, landmarks)
     if slice_from == "sternum":  # the slice method once more, over the envelope's range; its Log line comes second
-        volumes.append(pipeline.example("slice", "Thoracic Volume (Slice Method)").set(
-            compare=True, beforeLayer=cage, landmarkLayer=landmarks, lowerLimit=SLICE_FROM.index("sternum")))
+        volumes.append(pipeline.measure_filter("slice", cage, landmarks, lowerLimit=SLICE_FROM.index("sternum")))
     t0 = time.time()
     res = mlx.run([], mlx.Script(make + [fe] + volumes), timeout=4 * 3600)
     wall = time.time() - t0

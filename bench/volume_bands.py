@@ -37,8 +37,7 @@ CHANGE = r"Slice method intrathoracic volume change: \+?(-?[0-9.]+) cm3 \(\+?(-?
 
 
 def slice_method(**range_):
-    return pipeline.example("slice", "Thoracic Volume (Slice Method)").set(compare=True, beforeLayer=CAGE,
-                                                                           landmarkLayer=LANDMARKS, **range_)
+    return pipeline.measure_filter("slice", CAGE, LANDMARKS, **range_)
 
 
 def sternum_motion(vtu, bands):

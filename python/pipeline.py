@@ -76,12 +76,17 @@ def analysis_filters(outdir: str, elevation: float, quick: bool, cage: int, land
     return [nuss] + measure_filters(cage, landmarks)
 
 
+MEASURES = {"slice": "Thoracic Volume (Slice Method)", "envelope": "Thoracic Volume (Ferguson Envelope)", "index": "Pectus Index"}
+
+
+def measure_filter(key: str, cage: int, landmarks: int, **params) -> mlx.Filter:
+    """One of MEASURES (its example's settings, then `params`) on the current layer (after) against `cage` (before)."""
+    return example(key, MEASURES[key]).set(compare=True, beforeLayer=cage, landmarkLayer=landmarks, **params)
+
+
 def measure_filters(cage: int, landmarks: int) -> list:
     """Both thoracic volumes and the pectus index of the current layer (after) against `cage` (before)."""
-    compare = dict(compare=True, beforeLayer=cage, landmarkLayer=landmarks)
-    return [example(k, n).set(**compare) for k, n in (("slice", "Thoracic Volume (Slice Method)"),
-                                                     ("envelope", "Thoracic Volume (Ferguson Envelope)"),
-                                                     ("index", "Pectus Index"))]
+    return [measure_filter(k, cage, landmarks) for k in MEASURES]
 
 
 def build_script(outdir: str, age: float, haller: float, elevation: float, quick: bool, planner: dict | None = None) -> mlx.Script:
