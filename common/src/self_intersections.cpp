@@ -4,6 +4,7 @@
 #include <vector>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
+#include <CGAL/box_intersection_d.h>
 #include <CGAL/Polygon_mesh_processing/manifoldness.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
@@ -36,6 +37,8 @@ SelfIntersections::SelfIntersections(std::size_t numPoints, const std::vector<st
     polys.push_back({std::size_t(t[0]), std::size_t(t[1]), std::size_t(t[2])});
     faceOf_.push_back(int(f));
   }
+  meshFace_.assign(triangles.size(), -1);
+  for (std::size_t i = 0; i < faceOf_.size(); ++i) meshFace_[std::size_t(faceOf_[i])] = int(i);
   if (buildAsGiven(numPoints, polys)) return;
   // orientation only changes the order of a triangle's corners; touching sheets get their own copy of
   // the vertex (the faces then meet at a point they do not share: reported as intersecting). The soup's
@@ -82,17 +85,26 @@ bool SelfIntersections::buildAsGiven(std::size_t numPoints, const std::vector<st
 
 SelfIntersections::~SelfIntersections() = default;
 
-std::vector<FacePair> SelfIntersections::operator()(const std::vector<Eigen::Vector3d>& points) {
-  auto& mesh = mesh_->mesh;
+void SelfIntersections::moveTo(const std::vector<Eigen::Vector3d>& points) {
   std::size_t i = 0;
-  for (const auto v : mesh.vertices()) {
+  for (const auto v : mesh_->mesh.vertices()) {
     const Eigen::Vector3d& p = points[mesh_->pointOf[i++]];
-    mesh.point(v) = K::Point_3(p.x(), p.y(), p.z());
+    mesh_->mesh.point(v) = K::Point_3(p.x(), p.y(), p.z());
   }
-  std::vector<FacePair> out = degenerate_;
-  std::vector<std::pair<CGAL::SM_Face_index, CGAL::SM_Face_index>> pairs;
-  PMP::self_intersections(mesh, std::back_inserter(pairs));
-  for (const auto& [x, y] : pairs) {
+}
+
+std::vector<FacePair> SelfIntersections::pairs(const std::vector<std::size_t>* faces, std::vector<FacePair> out) const {
+  using SM = CGAL::Surface_mesh<K::Point_3>;
+  std::vector<std::pair<SM::Face_index, SM::Face_index>> found;
+  if (faces == nullptr) {
+    PMP::self_intersections(mesh_->mesh, std::back_inserter(found));
+  } else {
+    std::vector<SM::Face_index> range;
+    range.reserve(faces->size());
+    for (std::size_t f : *faces) range.push_back(SM::Face_index(SM::size_type(f)));
+    PMP::self_intersections(range, mesh_->mesh, std::back_inserter(found));
+  }
+  for (const auto& [x, y] : found) {
     const int a = faceOf_[x.idx()], b = faceOf_[y.idx()];
     out.push_back({std::min(a, b), std::max(a, b)});
   }
@@ -102,6 +114,49 @@ std::vector<FacePair> SelfIntersections::operator()(const std::vector<Eigen::Vec
     return dx != dy ? dx : (x.a != y.a ? x.a < y.a : x.b < y.b);
   });
   return out;
+}
+
+std::vector<FacePair> SelfIntersections::operator()(const std::vector<Eigen::Vector3d>& points) {
+  moveTo(points);
+  return pairs(nullptr, degenerate_);
+}
+
+std::vector<FacePair> SelfIntersections::involving(const std::vector<int>& triangles,
+                                                   const std::vector<Eigen::Vector3d>& points) {
+  moveTo(points);
+  const auto& mesh = mesh_->mesh;
+  std::vector<char> given(faceOf_.size(), 0);
+  std::vector<FacePair> out;
+  for (int t : triangles) {
+    if (t < 0 || std::size_t(t) >= meshFace_.size()) continue;
+    if (meshFace_[std::size_t(t)] < 0) out.push_back({t, t});
+    else given[std::size_t(meshFace_[std::size_t(t)])] = 1;
+  }
+  // the faces whose boxes meet a given face's box (CGAL's box intersection, the given faces against all)
+  using Box = CGAL::Box_intersection_d::Box_with_info_d<double, 3, std::size_t>;
+  std::vector<Box> all, mine;
+  all.reserve(faceOf_.size());
+  for (const auto f : mesh.faces()) {
+    CGAL::Bbox_3 bb;
+    for (const auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) bb += mesh.point(v).bbox();
+    all.emplace_back(bb, std::size_t(f.idx()));
+    if (given[f.idx()]) mine.push_back(all.back());
+  }
+  std::vector<char> inRange = given;
+  CGAL::box_intersection_d(mine.begin(), mine.end(), all.begin(), all.end(),
+                           [&](const Box&, const Box& b) { inRange[b.info()] = 1; });
+  std::vector<std::size_t> range;
+  for (std::size_t f = 0; f < inRange.size(); ++f)
+    if (inRange[f]) range.push_back(f);
+  std::vector<FacePair> found = pairs(&range, out);
+  // pairs of two faces in the range but neither given were not asked for
+  std::vector<char> asked(meshFace_.size(), 0);
+  for (int t : triangles)
+    if (t >= 0 && std::size_t(t) < asked.size()) asked[std::size_t(t)] = 1;
+  found.erase(std::remove_if(found.begin(), found.end(),
+                             [&](const FacePair& p) { return !asked[std::size_t(p.a)] && !asked[std::size_t(p.b)]; }),
+              found.end());
+  return found;
 }
 
 std::vector<FacePair> selfIntersections(const std::vector<Eigen::Vector3d>& points,

@@ -57,6 +57,8 @@ Topology::Topology(const Surface& m) {
   std::sort(keys.begin(), keys.end());
   faceEdge.assign(std::size_t(nf), {-1, -1, -1});
   edgeFace.reserve(keys.size());
+  edges.reserve(keys.size() / 2 + 1);  // a closed manifold has half as many edges as face corners
+  edgeFaceStart.reserve(keys.size() / 2 + 2);
   edgeFaceStart.push_back(0);
   for (std::size_t i = 0; i < keys.size();) {
     std::size_t j = i;

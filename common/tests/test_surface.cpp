@@ -269,3 +269,38 @@ TEST(SelfIntersections, FaceTurnedOverGivesTheSamePairs) {
     EXPECT_EQ(oriented[i].b, mended[i].b);
   }
 }
+
+// the local check gives exactly the whole check's pairs that have one of the given faces in them: the second
+// tetrahedron pierces the first, and each single face and the set of all faces are asked for in turn; a
+// degenerate face asked for is reported with itself
+TEST(SelfIntersections, InvolvingGivesTheWholeChecksPairsOfTheGivenFaces) {
+  Surface through = twoTetrahedra();
+  for (std::size_t i = 4; i < 8; ++i) through.V[i] -= V3(4.8, -0.1, -0.1);
+  pectus::SelfIntersections check(through.V.size(), through.F);
+  const auto all = check(through.V);
+  ASSERT_FALSE(all.empty());
+  std::size_t seen = 0;
+  for (int t = 0; t < int(through.F.size()); ++t) {
+    const auto mine = check.involving({t}, through.V);
+    std::size_t expected = 0;
+    for (const auto& p : all) expected += p.a == t || p.b == t;
+    EXPECT_EQ(mine.size(), expected) << t;
+    for (const auto& p : mine) EXPECT_TRUE(p.a == t || p.b == t) << t;
+    seen += mine.size();
+  }
+  EXPECT_GE(seen, all.size());
+  std::vector<int> every(through.F.size());
+  for (std::size_t t = 0; t < every.size(); ++t) every[t] = int(t);
+  const auto whole = check.involving(every, through.V);
+  ASSERT_EQ(whole.size(), all.size());
+  for (std::size_t i = 0; i < all.size(); ++i) EXPECT_TRUE(whole[i].a == all[i].a && whole[i].b == all[i].b);
+  Surface apart = twoTetrahedra();
+  EXPECT_TRUE(check.involving(every, apart.V).empty());  // the same check at other positions
+
+  Surface collapsed = twoTetrahedra();
+  collapsed.F[2] = {collapsed.F[2][0], collapsed.F[2][0], collapsed.F[2][1]};
+  pectus::SelfIntersections withDegenerate(collapsed.V.size(), collapsed.F);
+  const auto d = withDegenerate.involving({2}, collapsed.V);
+  ASSERT_FALSE(d.empty());
+  EXPECT_TRUE(d[0].a == 2 && d[0].b == 2);
+}

@@ -38,13 +38,22 @@ class SelfIntersections {
   /// the pairs at these positions (points.size() == numPoints), as selfIntersections gives them (it moves
   /// the mesh's points: one call at a time)
   std::vector<FacePair> operator()(const std::vector<Eigen::Vector3d>& points);
+  /// the pairs of operator() that have one of `triangles` (indices into the triangle list) in them: only
+  /// the faces whose bounding box meets one of theirs are tested, so a check after a few local changes
+  /// costs a fraction of the whole
+  std::vector<FacePair> involving(const std::vector<int>& triangles, const std::vector<Eigen::Vector3d>& points);
 
  private:
   struct Mesh;
   bool buildAsGiven(std::size_t numPoints, const std::vector<std::vector<std::size_t>>& polys);
+  void moveTo(const std::vector<Eigen::Vector3d>& points);
+  /// the mesh's crossing pairs among `faces` (all faces if null) as triangle pairs, after `out`'s
+  /// degenerate ones, sorted as operator() sorts them
+  std::vector<FacePair> pairs(const std::vector<std::size_t>* faces, std::vector<FacePair> out) const;
   std::unique_ptr<Mesh> mesh_;
   std::vector<FacePair> degenerate_;  // triangles repeating a vertex or pointing outside the points
   std::vector<int> faceOf_;           // mesh face -> triangle
+  std::vector<int> meshFace_;         // triangle -> mesh face (-1: degenerate)
 };
 
 /// The triangles (sorted, unique indices) taking part in any of the pairs.
