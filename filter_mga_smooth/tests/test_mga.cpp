@@ -43,7 +43,7 @@ TEST(Mga, ElitismBestNeverDecreasesAndSeedPointIsKept) {
   o.maxGenerations = 50;
   auto f = [](const std::vector<double>& x) { return std::sin(12 * x[0]) * std::cos(9 * x[1]); };
   const std::vector<double> start{0.13, 0.0};
-  auto r = optimize({{0, 1}, {0, 1}}, f, o, &start);
+  auto r = optimize({{0, 1}, {0, 1}}, f, o, {start});
   for (std::size_t i = 1; i < r.bestHistory.size(); ++i) EXPECT_GE(r.bestHistory[i], r.bestHistory[i - 1]);
   EXPECT_GE(r.fitness, f(start) - 1e-3);
 }
@@ -80,4 +80,17 @@ TEST(Mga, RejectsNonsense) {
   EXPECT_THROW(optimize({{0, 1}}, f, o), pectus::InternalError);
   o.accuracy = 1e-3;
   EXPECT_THROW(optimize({{1, 1}}, f, o), pectus::InternalError);
+}
+
+// a second seed better than the first is kept to the end (elitism), and the seeds are checked
+TEST(Mga, EverySeedIsInTheFirstPopulation) {
+  Options o;
+  o.seed = 3;
+  o.maxGenerations = 2;
+  auto f = [](const std::vector<double>& x) { return -std::abs(x[0] - 0.7) - std::abs(x[1] - 0.2); };
+  const auto r = optimize({{0, 1}, {0, 1}}, f, o, {{0.0, 0.0}, {0.7, 0.2}});
+  EXPECT_GE(r.fitness, -2e-3);
+  EXPECT_THROW(optimize({{0, 1}, {0, 1}}, f, o, {{0.0}}), pectus::InternalError);
+  o.population = 3;
+  EXPECT_THROW(optimize({{0, 1}}, f, o, {{0.1}, {0.2}, {0.3}, {0.4}}), pectus::InternalError);
 }

@@ -184,9 +184,12 @@ struct DepthGuard {
 }  // namespace
 
 Result optimize(const std::vector<Range>& ranges, const std::function<double(const std::vector<double>&)>& fitness,
-                const Options& opt, const std::vector<double>* seedPoint) {
+                const Options& opt, const std::vector<std::vector<double>>& seeds) {
   if (opt.population < 3) throw InternalError("MGA: population must be at least 3");
   if (ranges.empty()) throw InternalError("MGA: no design parameter");
+  if (seeds.size() > std::size_t(opt.population)) throw InternalError("MGA: more seeds than the population");
+  for (const auto& s : seeds)
+    if (s.size() != ranges.size()) throw InternalError("MGA: a seed of the wrong size");
   std::unique_ptr<Workspace> own;
   Workspace& ws = tlDepth == 0 ? tlWorkspace : *(own = std::make_unique<Workspace>());
   const DepthGuard depth;
@@ -245,7 +248,7 @@ Result optimize(const std::vector<Range>& ranges, const std::function<double(con
   };
 
   for (std::size_t i = 0; i < P; ++i) randomBits(ind(pop, i));
-  if (seedPoint != nullptr && seedPoint->size() == ranges.size()) codec.encode(*seedPoint, ind(pop, 0));
+  for (std::size_t i = 0; i < seeds.size(); ++i) codec.encode(seeds[i], ind(pop, i));
   for (std::size_t i = 0; i < P; ++i) fit[i] = eval(ind(pop, i));
   std::size_t bestIdx = std::size_t(std::max_element(fit.begin(), fit.end()) - fit.begin());
   std::copy_n(ind(pop, bestIdx), W, best.begin());

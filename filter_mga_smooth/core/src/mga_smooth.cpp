@@ -383,7 +383,7 @@ struct NodeSearch {
 /// of Options::elementSearch.
 void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, ElementSearch mode) {
   static const std::vector<mga::Range> ranges{{0.0, 1.0}, {0.0, 0.5}};
-  static const std::vector<double> seedPoint{0.0, 0.0};
+  static const std::vector<std::vector<double>> nodeSeed1{{0.0, 0.0}};
   const Mesh& M = ns.M;
   const int n = ns.n;
   // the triangles of the node's elements: V1 = node, (V2, V3) in boundary order (buffers reused per thread)
@@ -401,8 +401,14 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
     }
   }
   const int nf = int(fan.size());
-  // the micro-GA in fan triangle i; returns its best (r1, r2)
-  auto search = [&](int i) {
+  // GuidedLocal on a star that starts valid: the micro-GA measures its candidates on the triangle's plane
+  // (no projection), and only each triangle's best is projected and measured on the surface; a folded or
+  // invalid star, which needs the surface normal at every candidate to unfold, is searched on the surface
+  const bool onPlane = mode == ElementSearch::GuidedLocal && ns.startFit >= 0;
+  // the micro-GA in fan triangle i, seeded with the node itself (r2 = 0) and, if given, with `toward`;
+  // returns its best (r1, r2)
+  thread_local std::vector<std::vector<double>> seeds2{{0.0, 0.0}, {0.0, 0.0}};
+  auto search = [&](int i, const std::array<double, 2>* toward = nullptr) {
     const Vec3 V2 = M.X[std::size_t(fan[std::size_t(i)].first)];
     const Vec3 V3 = M.X[std::size_t(fan[std::size_t(i)].second)];
     auto candidate = [&](const std::vector<double>& r) {
@@ -410,6 +416,10 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
     };
     auto fitness = [&](const std::vector<double>& r) {
       if (r[1] <= 0) return ns.startFit;  // r2 = 0: the node itself, exactly
+      if (onPlane) {  // the candidate where it lies, with the node's normal
+        ++ns.evaluations;
+        return ns.fitness(candidate(r), ns.n0);
+      }
       Vec3 P;
       Loc L;
       return ns.eval(candidate(r), P, L);
@@ -417,8 +427,9 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
     mga::Options o = mo;
     o.seed = mga::itemSeed(nodeSeed, std::uint64_t(i));
     o.recordHistory = false;
-    const mga::Result r = mga::optimize(ranges, fitness, o, &seedPoint);
-    if (r.fitness > ns.bestFit && r.x[1] > 0) {
+    if (toward) seeds2[1] = {(*toward)[0], (*toward)[1]};
+    const mga::Result r = mga::optimize(ranges, fitness, o, toward ? seeds2 : nodeSeed1);
+    if ((onPlane || r.fitness > ns.bestFit) && r.x[1] > 0) {
       Vec3 P;
       Loc L;
       const Vec3 q = candidate(r.x);
@@ -431,7 +442,7 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
     return;
   }
   // Guided: start in the triangle whose sector (seen along the node's normal) holds the direction to
-  // the centroid of the node's neighbours; while the best point of a triangle lies on one of its two
+  // the centroid of the node's neighbours, with the centroid as a second seed there; while the best point of a triangle lies on one of its two
   // edges through the node (r1 within kEdgeR1 of 0 or 1), go on into the triangle across that edge; stop
   // at an optimum inside a triangle. A triangle where no move gains (r2 ~ 0) sends the search to every
   // triangle, as the thesis does (GuidedLocal: only if the star starts folded or invalid; else the
@@ -449,6 +460,21 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
       break;
     }
   }
+  // the centroid as (r1, r2) of the start triangle: c ~ a d2 + b d3 (least squares in the triangle's
+  // plane), r2 = a + b (at most 0.5, the search's range), r1 = b / (a + b): the point tangential
+  // relaxation would move to, as a second seed of the start triangle's micro-GA
+  std::array<double, 2> towardC{0.0, 0.0};
+  {
+    const Vec3 d2 = M.X[std::size_t(fan[std::size_t(cur)].first)] - ns.x0;
+    const Vec3 d3 = M.X[std::size_t(fan[std::size_t(cur)].second)] - ns.x0;
+    const double g22 = d2.dot(d2), g23 = d2.dot(d3), g33 = d3.dot(d3), det = g22 * g33 - g23 * g23;
+    if (det > 1e-12 * g22 * g33) {
+      const double a = std::max(0.0, (g33 * d2.dot(c) - g23 * d3.dot(c)) / det);
+      const double b = std::max(0.0, (g22 * d3.dot(c) - g23 * d2.dot(c)) / det);
+      if (a + b > 0) towardC = {b / (a + b), std::min(a + b, 0.5)};
+    }
+  }
+  const std::array<double, 2>* toward = towardC[1] > 0 ? &towardC : nullptr;
   thread_local std::vector<char> done;
   done.assign(std::size_t(nf), 0);
   auto across = [&](int i, int v) {  // the other fan triangle with the edge (node, v)
@@ -458,7 +484,8 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
   };
   while (cur >= 0 && !done[std::size_t(cur)]) {
     done[std::size_t(cur)] = 1;
-    const auto x = search(cur);
+    const auto x = search(cur, toward);
+    toward = nullptr;  // the centroid seeds the start triangle only
     if (x[1] < 2 * mo.accuracy) {  // no gain in this triangle
       if (mode == ElementSearch::Guided || ns.startFit < 0)
         for (int i = 0; i < nf; ++i)
@@ -947,16 +974,25 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
     tris.push_back({f[0], f[1], f[2]});
     if (f.size() == 4) tris.push_back({f[0], f[2], f[3]});
   }
-  // the input's own crossings are left as they are: only faces that cross after smoothing are undone
-  // (the input is checked only when the result crosses somewhere)
+  // one full check of the result; after that only the faces of the nodes put back can cross anew, and
+  // only the faces of crossing pairs are looked up in the input (whose own crossings are left as they are)
   SelfIntersections crossings(before.size(), tris);
   std::vector<FacePair> now = crossings(after);
   if (now.empty()) return {};
+  std::vector<std::vector<int>> trisOf(before.size());
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int v : tris[t]) trisOf[std::size_t(v)].push_back(int(t));
   std::set<std::pair<int, int>> inInput;
-  for (const FacePair& p : crossings(before)) inInput.insert(std::minmax(p.a, p.b));
+  std::vector<char> lookedUp(tris.size(), 0);
   std::vector<int> back;
-  for (;; now = crossings(after)) {  // each round puts back at least one node, so this ends (at the latest with the input)
-    bool any = false;
+  for (;;) {  // each round puts back at least one node, so this ends (at the latest with the input)
+    std::vector<int> toLookUp;
+    for (const FacePair& p : now)
+      for (int t : {p.a, p.b})
+        if (!lookedUp[std::size_t(t)]) lookedUp[std::size_t(t)] = 1, toLookUp.push_back(t);
+    if (!toLookUp.empty())
+      for (const FacePair& p : crossings.involving(toLookUp, before)) inInput.insert(std::minmax(p.a, p.b));
+    std::vector<int> changed;
     for (const FacePair& p : now) {
       if (inInput.count(std::minmax(p.a, p.b))) continue;
       for (int t : {p.a, p.b})
@@ -964,10 +1000,13 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
           if (after[std::size_t(v)] != before[std::size_t(v)]) {
             after[std::size_t(v)] = before[std::size_t(v)];
             back.push_back(v);
-            any = true;
+            changed.insert(changed.end(), trisOf[std::size_t(v)].begin(), trisOf[std::size_t(v)].end());
           }
     }
-    if (!any) break;
+    if (changed.empty()) break;
+    std::sort(changed.begin(), changed.end());
+    changed.erase(std::unique(changed.begin(), changed.end()), changed.end());
+    now = crossings.involving(changed, after);
   }
   std::sort(back.begin(), back.end());
   return back;

@@ -43,11 +43,13 @@ struct Result {
 int substringLength(double interval, double accuracy);
 
 /// Runs the micro-GA. `fitness` gets the decoded parameters; higher is better.
-/// `seedPoint` (optional, size = ranges.size()) is encoded into the first individual, so the search
-/// starts from a known solution (e.g. the node's current position) and can never end worse than it.
-/// Throws pectus::InternalError for a population below 3, no range or an empty range (callers check first).
+/// `seeds` (each of size ranges.size(), at most the population) are encoded into the first individuals,
+/// so the search starts from known solutions (e.g. the node's current position) and can never end worse
+/// than the best of them.
+/// Throws pectus::InternalError for a population below 3, no range, an empty range, or more seeds than
+/// the population or a seed of the wrong size (callers check first).
 Result optimize(const std::vector<Range>& ranges, const std::function<double(const std::vector<double>&)>& fitness,
-                const Options& opt, const std::vector<double>* seedPoint = nullptr);
+                const Options& opt, const std::vector<std::vector<double>>& seeds = {});
 
 /// A per-item seed from a global seed and an item index (splitmix64): results do not depend on the
 /// order or the thread items are processed in.

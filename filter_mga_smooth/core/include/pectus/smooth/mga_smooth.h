@@ -81,13 +81,17 @@ inline constexpr ParamRange kAngleRange{0, 180, true, false};
 /// MicroGA: which elements around a node the micro-GA searches
 enum class ElementSearch {
   Every,   ///< every adjacent element, the best kept (thesis step 3)
-  /// start in the element towards the centroid of the node's neighbours, go on across an edge while the
-  /// best point lies on it, stop at an optimum inside an element; an element where no move gains sends
-  /// the search to every element (searchMga in mga_smooth.cpp)
+  /// start in the element towards the centroid of the node's neighbours (the centroid itself, where
+  /// tangential relaxation would move the node, seeds that element's micro-GA beside the node), go on
+  /// across an edge while the best point lies on it, stop at an optimum inside an element; an element
+  /// where no move gains sends the search to every element (searchMga in mga_smooth.cpp)
   Guided,
   /// Guided, but an element where no move gains ends the node's search (the node stays where it is):
-  /// every element only for a star that starts folded or invalid. The fastest; on smooth scans (the
-  /// bunny) the same mean as Guided, on rough ones (the femur) lower
+  /// every element only for a star that starts folded or invalid. The micro-GA of a star that starts
+  /// valid measures its candidates where they lie, on the element's plane, and only each element's best
+  /// is projected onto the C1 surface and measured there (a folded star is searched on the surface, whose
+  /// normals it needs to unfold). The fastest; on smooth scans (the bunny) the same mean as Guided, on
+  /// rough ones (the femur) lower
   GuidedLocal,
 };
 
