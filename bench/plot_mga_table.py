@@ -1,5 +1,5 @@
 #!/usr/bin/python3
-"""Mean quality against wall time for one mesh section of bench/mga_smooth.py's table.
+"""Mean quality against time for one mesh section of bench/mga_smooth.py's table.
 
     bench/mga_smooth.py --build build --only bunny > bunny.txt
     bench/plot_mga_table.py bunny.txt out.png [--plateau 0.956 --target 0.96]
@@ -54,7 +54,7 @@ def main():
     if a.target:
         ax.axhline(a.target, ls=":", color="black", lw=1)
         ax.text(ax.get_xlim()[0], a.target, f" target {a.target}", va="bottom", fontsize=7)
-    ax.set_xlabel("wall time, s (2 cores; meshlabserver rows minus a no-op run)")
+    ax.set_xlabel("time, s (2 cores; the table's time column)")
     ax.set_ylabel("mean element quality")
     ax.set_title(title or a.table, fontsize=9)
     ax.grid(alpha=0.3)

@@ -149,12 +149,14 @@ void FilterMgaSmoothPlugin::initParameters(int id, const MeshDocument&, RichPara
                             "Element search",
                             "Every adjacent element: the micro-GA runs inside each triangle around the node and the best "
                             "is kept (thesis step 3). Guided: it starts in the element towards the centroid of the "
-                            "node's neighbours and goes on across an edge only while the best point lies on that edge "
-                            "(every element when that element gives no gain): about 2x faster, mean quality within "
-                            "0.0003 on the femur and bunny benchmarks. Guided, local: as guided, but a node whose "
-                            "first element gives no gain stays (every element only for a folded star): about 1.4x "
-                            "faster again, the same mean on smooth scans (bunny), lower on rough ones (femur). With "
-                            "it, more sweeps of fewer generations (e.g. 6 x 8) beat fewer long ones."));
+                            "node's neighbours (the centroid seeds its search) and goes on across an edge only while "
+                            "the best point lies on that edge (every element when that element gives no gain): about "
+                            "2x faster, mean quality within 0.001 on the femur and bunny benchmarks. Guided, local: as "
+                            "guided, but a node whose first element gives no gain stays (every element only for a "
+                            "folded star), and a valid star's candidates are measured on the element's plane, only "
+                            "each element's best on the C1 surface: 5 to 8x faster again on the femur and bunny "
+                            "benchmarks, nearly the same mean on smooth scans (bunny), lower on rough ones (femur). With it, more sweeps of fewer generations "
+                            "(e.g. 5 x 3, mga_smooth_fast.mlx) beat fewer long ones."));
     } else {
       addInt(par, "cgIterations", 10, "CG iterations per node",
              "Conjugate gradient iterations (each: a numerical gradient and a line search) per node "
