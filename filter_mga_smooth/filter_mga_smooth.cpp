@@ -155,8 +155,9 @@ void FilterMgaSmoothPlugin::initParameters(int id, const MeshDocument&, RichPara
                             "guided, but a node whose first element gives no gain stays (every element only for a "
                             "folded star), and a valid star's candidates are measured on the element's plane, only "
                             "each element's best on the C1 surface: 5 to 8x faster again on the femur and bunny "
-                            "benchmarks, nearly the same mean on smooth scans (bunny), lower on rough ones (femur). With it, more sweeps of fewer generations "
-                            "(e.g. 5 x 3, mga_smooth_fast.mlx) beat fewer long ones."));
+                            "benchmarks, nearly the same mean on smooth scans (bunny), lower on rough ones (femur). "
+                            "With it, more sweeps of fewer generations (e.g. 5 x 3, mga_smooth_fast.mlx) beat fewer "
+                            "long ones."));
     } else {
       addInt(par, "cgIterations", 10, "CG iterations per node",
              "Conjugate gradient iterations (each: a numerical gradient and a line search) per node "
