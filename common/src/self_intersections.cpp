@@ -149,12 +149,12 @@ std::vector<FacePair> SelfIntersections::involving(const std::vector<int>& trian
   for (std::size_t f = 0; f < inRange.size(); ++f)
     if (inRange[f]) range.push_back(f);
   std::vector<FacePair> found = pairs(&range, out);
-  // pairs of two faces in the range but neither given were not asked for
-  std::vector<char> asked(meshFace_.size(), 0);
-  for (int t : triangles)
-    if (t >= 0 && std::size_t(t) < asked.size()) asked[std::size_t(t)] = 1;
+  // pairs of two faces in the range but neither given were not asked for (a degenerate pair was)
   found.erase(std::remove_if(found.begin(), found.end(),
-                             [&](const FacePair& p) { return !asked[std::size_t(p.a)] && !asked[std::size_t(p.b)]; }),
+                             [&](const FacePair& p) {
+                               const int fa = meshFace_[std::size_t(p.a)], fb = meshFace_[std::size_t(p.b)];
+                               return fa >= 0 && fb >= 0 && !given[std::size_t(fa)] && !given[std::size_t(fb)];
+                             }),
               found.end());
   return found;
 }
