@@ -442,9 +442,9 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
     return;
   }
   // Guided: start in the triangle whose sector (seen along the node's normal) holds the direction to
-  // the centroid of the node's neighbours, with the centroid as a second seed there; while the best point of a triangle lies on one of its two
-  // edges through the node (r1 within kEdgeR1 of 0 or 1), go on into the triangle across that edge; stop
-  // at an optimum inside a triangle. A triangle where no move gains (r2 ~ 0) sends the search to every
+  // the centroid of the node's neighbours, with the centroid as a second seed there; while the best
+  // point of a triangle lies on one of its two edges through the node (r1 within kEdgeR1 of 0 or 1), go
+  // on into the triangle across that edge; stop at an optimum inside a triangle. A triangle where no move gains (r2 ~ 0) sends the search to every
   // triangle, as the thesis does (GuidedLocal: only if the star starts folded or invalid; else the
   // search ends there).
   constexpr double kEdgeR1 = 0.05;
