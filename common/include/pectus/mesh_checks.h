@@ -37,7 +37,8 @@ struct MeshRequirements {
 
 /// Throws naming the first requirement `m` fails; `layer` names the layer in the message: InputError for
 /// NaN/Inf coordinates, TopologyError for the others (empty, no faces, duplicate faces, non-manifold edges
-/// or vertices, zero-area faces, open).
+/// or vertices, zero-area faces, open). The mesh's topology (an edge sort, the largest cost) is built only
+/// for the edge, vertex and closed requirements; without them the report's topological counts stay 0.
 MeshReport requireMesh(const CMeshO& m, const MeshRequirements& req, const std::string& layer);
 
 }  // namespace pectus

@@ -29,13 +29,14 @@ struct EdgeTable {
   std::vector<Edge> E;
   std::vector<std::array<int, 3>> faceEdges;
 
-  EdgeTable(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& F) : faceEdges(F.size()) {
-    const Surface s{V, F};
-    const Topology topo(s);
+  EdgeTable(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& F, const Topology& topo)
+      : faceEdges(F.size()) {
     if (topo.badFace >= 0)
       throw InternalError("crease detection: face " + std::to_string(topo.badFace) + " uses vertex index " +
                           std::to_string(topo.badIndex) + " of " + std::to_string(V.size()));
-    number(s, topo);
+    if (topo.vfStart.size() != V.size() + 1 || topo.faceEdge.size() != F.size())
+      throw InternalError("crease detection: the topology given is not that of the mesh given");
+    number(V.size(), F, topo);
     for (auto& e : E) {
       if (e.faces != 2) continue;
       const Vec3 a = unitNormal(V, F[std::size_t(e.f0)]), b = unitNormal(V, F[std::size_t(e.f1)]);
@@ -48,12 +49,12 @@ struct EdgeTable {
     return n.norm() > 0 && n.allFinite() ? Vec3(n.normalized()) : Vec3::Zero();
   }
   // E in first-use order from the topology's edges; f0 the first face of an edge, f1 its last other one
-  void number(const Surface& s, const Topology& topo) {
-    std::vector<int> ofEdge(topo.edges.size(), -1), ofCollapsed(s.V.size(), -1);
-    for (std::size_t f = 0; f < s.F.size(); ++f)
+  void number(std::size_t nv, const std::vector<std::array<int, 3>>& F, const Topology& topo) {
+    std::vector<int> ofEdge(topo.edges.size(), -1), ofCollapsed(nv, -1);
+    for (std::size_t f = 0; f < F.size(); ++f)
       for (int k = 0; k < 3; ++k) {
         const int e = topo.faceEdge[f][std::size_t((k + 2) % 3)];  // local edge l is opposite corner l
-        const int a = s.F[f][std::size_t(k)];
+        const int a = F[f][std::size_t(k)];
         int& id = e >= 0 ? ofEdge[std::size_t(e)] : ofCollapsed[std::size_t(a)];
         if (id < 0) {
           id = int(E.size());
@@ -287,8 +288,13 @@ std::string Creases::summary() const {
 
 Creases detectCreases(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& F,
                       const std::vector<std::uint64_t>& ignored, const CreaseOptions& opt) {
+  return detectCreases(V, F, Topology(Surface{V, F}), ignored, opt);
+}
+
+Creases detectCreases(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& F, const Topology& topo,
+                      const std::vector<std::uint64_t>& ignored, const CreaseOptions& opt) {
   const std::size_t nv = V.size();
-  const EdgeTable T(V, F);
+  const EdgeTable T(V, F, topo);
   Creases out;
 
   // 1. sharp edges, and the mesh's noise level

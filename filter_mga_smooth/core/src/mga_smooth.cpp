@@ -712,7 +712,7 @@ NodeKinds classifyNodes(const c1::TriMesh& tm, const Mesh& M, const C1Surface& S
     if (e.f1 < 0) nk.boundary[std::size_t(e.a)] = nk.boundary[std::size_t(e.b)] = 1;
   if (opt.features == FeatureDetection::Creases) {
     // crease chains told from noise (creases.h); their corners are the singular points
-    const Creases cr = detectCreases(tm.V, tm.F, diagonals);
+    const Creases cr = detectCreases(tm.V, tm.F, S.topology(), diagonals);
     for (std::size_t i = 0; i < nv; ++i) {
       nk.feature[i] = cr.node[i] && !cr.corner[i];
       nk.singular[i] = cr.corner[i];
@@ -1015,23 +1015,18 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
 Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& userFixed) {
   const auto t0 = std::chrono::steady_clock::now();
   validateOptions(opt);
-  MeshRequirements req;
-  req.faces = true;
-  req.finite = true;
-  req.edgeManifold = true;
-  req.vertexManifold = true;
-  requireMesh(m, req, "input");
+  requireMesh(m, MeshRequirements(), "input");  // faces, finite; the C1 surface refuses non-manifold meshes
 
-  // the nodes, the elements on them, and the C1 surface of the original mesh, built once (its topology
-  // also gives the edges for the fixed nodes)
+  // the C1 surface of the original mesh, built once (its topology refuses a non-manifold mesh and gives
+  // the edges for the fixed nodes and the creases), then the nodes and the elements on them
   std::vector<int> toM;
   const c1::TriMesh tm = pectus::surfaceOf(m, {}, &toM);
+  C1Surface S(tm);
   const ElementMesh em = buildElements(m, opt.kind);
   Mesh M = buildMesh(tm, toM, em, m.vert.size());
   Result res;
   res.elements = M.E.size();
   res.quads = em.quads();
-  C1Surface S(tm);
 
   std::vector<char> fixed;
   const NodeKinds kinds = classifyNodes(tm, M, S, opt);
@@ -1046,6 +1041,7 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   const Projector proj(S);
   std::vector<Loc> loc = cornerLocations(tm);
   M.N.resize(tm.V.size());
+#pragma omp parallel for schedule(static)
   for (std::size_t i = 0; i < tm.V.size(); ++i) M.N[i] = normalAt(S, loc[i]);
 
   const std::vector<std::vector<int>> classes = colourClasses(M, freeNodes);

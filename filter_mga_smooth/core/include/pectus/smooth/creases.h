@@ -31,6 +31,7 @@
 #include <vector>
 
 #include "pectus/quality.h"  // Vec3
+#include "pectus/surface.h"  // Topology
 
 namespace pectus::smooth {
 
@@ -64,6 +65,10 @@ struct Creases {
 /// two, and the edges whose key edgeKey(a, b) is in `ignored` (sorted; e.g. the faux edges inside quads),
 /// are never sharp. Degenerate faces (no normal) make no edge sharp.
 Creases detectCreases(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& F,
+                      const std::vector<std::uint64_t>& ignored = {}, const CreaseOptions& opt = {});
+/// The same on the topology of (V, F) the caller has built already (Topology(Surface{V, F}), e.g. that of
+/// the C1 surface on them).
+Creases detectCreases(const std::vector<Vec3>& V, const std::vector<std::array<int, 3>>& F, const Topology& topo,
                       const std::vector<std::uint64_t>& ignored = {}, const CreaseOptions& opt = {});
 
 /// the key of the undirected edge a-b, as `ignored` takes it
