@@ -1,6 +1,7 @@
 #include "pectus/self_intersections.h"
 
 #include <algorithm>
+#include <exception>
 #include <vector>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
@@ -93,26 +94,94 @@ void SelfIntersections::moveTo(const std::vector<Eigen::Vector3d>& points) {
   }
 }
 
+namespace {
+
+using SM = CGAL::Surface_mesh<K::Point_3>;
+using FoundPairs = std::vector<std::pair<SM::Face_index, SM::Face_index>>;
+
+CGAL::Bbox_3 faceBox(const SM& mesh, SM::Face_index f) {
+  CGAL::Bbox_3 bb;
+  for (const auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) bb += mesh.point(v).bbox();
+  return bb;
+}
+
+// CGAL's check on the faces in `range`: the crossing pairs of two faces in it
+FoundPairs crossingsAmong(const std::vector<SM::Face_index>& range, const SM& mesh) {
+  FoundPairs found;
+  PMP::self_intersections(range, mesh, std::back_inserter(found));
+  return found;
+}
+
+// Every crossing pair of the mesh, on two threads. The faces are split at the median centre of their boxes
+// along the longest axis of the mesh's box, into A (boxes that start below the median) and B (boxes that
+// end at or above it). Two crossing faces have overlapping boxes, so both are in A or both in B: a face
+// not in A starts at or above the median, so the other's box ends there or above. Each half is CGAL's
+// check; the few faces in both halves may give a pair twice, which the caller keeps once.
+FoundPairs allCrossings(const SM& mesh) {
+  constexpr std::size_t kSplitFrom = 4000;  // below this many faces one check costs less than the split
+  if (mesh.number_of_faces() < kSplitFrom) {
+    FoundPairs found;
+    PMP::self_intersections(mesh, std::back_inserter(found));
+    return found;
+  }
+  std::vector<CGAL::Bbox_3> box;
+  box.reserve(mesh.number_of_faces());
+  CGAL::Bbox_3 all;
+  for (const auto f : mesh.faces()) all += box.emplace_back(faceBox(mesh, f));
+  int axis = 0;
+  for (int d = 1; d < 3; ++d)
+    if (all.max(d) - all.min(d) > all.max(axis) - all.min(axis)) axis = d;
+  std::vector<double> centre;
+  centre.reserve(box.size());
+  for (const auto& b : box) centre.push_back(0.5 * (b.min(axis) + b.max(axis)));
+  std::nth_element(centre.begin(), centre.begin() + std::ptrdiff_t(centre.size() / 2), centre.end());
+  const double median = centre[centre.size() / 2];
+  std::vector<SM::Face_index> half[2];
+  std::size_t i = 0;
+  for (const auto f : mesh.faces()) {
+    const CGAL::Bbox_3& b = box[i++];
+    if (b.min(axis) < median) half[0].push_back(f);
+    if (b.max(axis) >= median) half[1].push_back(f);
+  }
+  FoundPairs found[2];
+  std::exception_ptr failed[2];
+#pragma omp parallel for num_threads(2) schedule(static, 1)
+  for (int h = 0; h < 2; ++h) try {
+      found[h] = crossingsAmong(half[h], mesh);
+    } catch (...) {
+      failed[h] = std::current_exception();
+    }
+  for (const auto& e : failed)
+    if (e) std::rethrow_exception(e);
+  found[0].insert(found[0].end(), found[1].begin(), found[1].end());
+  return std::move(found[0]);
+}
+
+}  // namespace
+
 std::vector<FacePair> SelfIntersections::pairs(const std::vector<std::size_t>* faces, std::vector<FacePair> out) const {
-  using SM = CGAL::Surface_mesh<K::Point_3>;
-  std::vector<std::pair<SM::Face_index, SM::Face_index>> found;
+  FoundPairs found;
   if (faces == nullptr) {
-    PMP::self_intersections(mesh_->mesh, std::back_inserter(found));
+    found = allCrossings(mesh_->mesh);
   } else {
     std::vector<SM::Face_index> range;
     range.reserve(faces->size());
     for (std::size_t f : *faces) range.push_back(SM::Face_index(SM::size_type(f)));
-    PMP::self_intersections(range, mesh_->mesh, std::back_inserter(found));
+    found = crossingsAmong(range, mesh_->mesh);
   }
   for (const auto& [x, y] : found) {
     const int a = faceOf_[x.idx()], b = faceOf_[y.idx()];
     out.push_back({std::min(a, b), std::max(a, b)});
   }
-  // degenerate faces first (a crossing next to one is often just its collapsed corner touching a neighbour)
-  std::sort(out.begin(), out.end(), [](const FacePair& x, const FacePair& y) {
+  // degenerate faces first (a crossing next to one is often just its collapsed corner touching a
+  // neighbour); a pair found twice is kept once
+  const auto before = [](const FacePair& x, const FacePair& y) {
     const bool dx = x.a == x.b, dy = y.a == y.b;
     return dx != dy ? dx : (x.a != y.a ? x.a < y.a : x.b < y.b);
-  });
+  };
+  std::sort(out.begin(), out.end(), before);
+  out.erase(std::unique(out.begin(), out.end(), [](const FacePair& x, const FacePair& y) { return x.a == y.a && x.b == y.b; }),
+            out.end());
   return out;
 }
 
@@ -137,9 +206,7 @@ std::vector<FacePair> SelfIntersections::involving(const std::vector<int>& trian
   std::vector<Box> all, mine;
   all.reserve(faceOf_.size());
   for (const auto f : mesh.faces()) {
-    CGAL::Bbox_3 bb;
-    for (const auto v : CGAL::vertices_around_face(mesh.halfedge(f), mesh)) bb += mesh.point(v).bbox();
-    all.emplace_back(bb, std::size_t(f.idx()));
+    all.emplace_back(faceBox(mesh, f), std::size_t(f.idx()));
     if (given[f.idx()]) mine.push_back(all.back());
   }
   std::vector<char> inRange = given;

@@ -270,6 +270,36 @@ TEST(SelfIntersections, FaceTurnedOverGivesTheSamePairs) {
   }
 }
 
+// a whole check of a large mesh runs in two halves side by side: it gives the pairs that one check of all
+// faces gives (involving every face), on both sides of the line where the halves meet and across it. The
+// grid is longer along x, so it is split near x = 40; a node moved past its neighbours makes its faces
+// overlap theirs.
+TEST(SelfIntersections, LargeMeshInTwoHalvesGivesThePairsOfOneCheck) {
+  const int nx = 80, ny = 40;  // 6400 triangles
+  Surface grid;
+  auto id = [&](int i, int j) { return j * (nx + 1) + i; };
+  for (int j = 0; j <= ny; ++j)
+    for (int i = 0; i <= nx; ++i) grid.V.push_back(V3(i, j, 0));
+  for (int j = 0; j < ny; ++j)
+    for (int i = 0; i < nx; ++i) {
+      grid.F.push_back({id(i, j), id(i + 1, j), id(i + 1, j + 1)});
+      grid.F.push_back({id(i, j), id(i + 1, j + 1), id(i, j + 1)});
+    }
+  pectus::SelfIntersections check(grid.V.size(), grid.F);
+  EXPECT_TRUE(check(grid.V).empty());
+  for (int i : {5, 39, 40, 75}) grid.V[std::size_t(id(i, 20))] += V3(2.5, 0.5, 0);
+  const auto halves = check(grid.V);
+  std::vector<int> every(grid.F.size());
+  for (std::size_t t = 0; t < every.size(); ++t) every[t] = int(t);
+  const auto one = check.involving(every, grid.V);
+  ASSERT_FALSE(halves.empty());
+  ASSERT_EQ(halves.size(), one.size());
+  for (std::size_t i = 0; i < one.size(); ++i) EXPECT_TRUE(halves[i].a == one[i].a && halves[i].b == one[i].b) << i;
+  int near[4] = {0, 0, 0, 0};  // pairs with a face at x < 20, 20..40, 40..60, > 60
+  for (const auto& p : halves) ++near[std::min(3, int(grid.V[std::size_t(grid.F[std::size_t(p.a)][0])].x()) / 20)];
+  for (int q = 0; q < 4; ++q) EXPECT_GT(near[q], 0) << q;
+}
+
 // the local check gives exactly the whole check's pairs that have one of the given faces in them: the second
 // tetrahedron pierces the first, and each single face and the set of all faces are asked for in turn; a
 // degenerate face asked for is reported with itself

@@ -36,7 +36,8 @@ class SelfIntersections {
   SelfIntersections(const SelfIntersections&) = delete;
   SelfIntersections& operator=(const SelfIntersections&) = delete;
   /// the pairs at these positions (points.size() == numPoints), as selfIntersections gives them (it moves
-  /// the mesh's points: one call at a time)
+  /// the mesh's points: one call at a time); a mesh of 4000 faces or more is checked in two halves on two
+  /// threads
   std::vector<FacePair> operator()(const std::vector<Eigen::Vector3d>& points);
   /// the pairs of operator() that have one of `triangles` (indices into the triangle list) in them: only
   /// the faces whose bounding box meets one of theirs are tested, so a check after a few local changes
