@@ -6,6 +6,7 @@
 #include <QFileInfo>
 
 #include "pectus/errors.h"
+#include "pectus/fe/solver.h"
 #include "pectus/labels.h"
 #include "pectus/ribcage/haller.h"
 #include "pectus/nuss/bar_planner.h"
@@ -35,6 +36,7 @@ QString num(double v) { return QString::number(v); }
 }  // namespace
 
 FilterNussFeaPlugin::FilterNussFeaPlugin() {
+  pectus::fe::restBlasThreads();  // loaded with this plugin, OpenBLAS's idle threads would spin at start-up
   pectus::ml::FilterSpec s;
   s.id = FP_CREATE_RIBCAGE;
   s.name = "Create Pectus Excavatum Rib Cage";

@@ -182,19 +182,32 @@ double eqStrainOf(const Matrix3d& e, double nu) {
 // looked up at run time (the BLAS behind libblas.so.3 is chosen by Debian's alternatives; the reference
 // BLAS has no threads to set). PECTUS_BLAS_THREADS=n forces n.
 constexpr double kBlasThreadFlops = 2e10;
+
+// an OpenBLAS function in the BLAS this process has loaded; null for another BLAS
+void* openBlasFunction(const char* name) {
+  for (const char* lib : {"libopenblas.so.0", "libblas.so.3", "libopenblas.so"})
+    if (void* h = dlopen(lib, RTLD_LAZY | RTLD_NOLOAD))
+      if (void* f = dlsym(h, name)) return f;
+  return dlsym(RTLD_DEFAULT, name);
+}
+
 void setBlasThreads(double flops) {
   using SetThreads = void (*)(int);
-  static const SetThreads set = [] {
-    for (const char* lib : {"libopenblas.so.0", "libblas.so.3", "libopenblas.so"})
-      if (void* h = dlopen(lib, RTLD_LAZY | RTLD_NOLOAD))
-        if (void* f = dlsym(h, "openblas_set_num_threads")) return reinterpret_cast<SetThreads>(f);
-    return reinterpret_cast<SetThreads>(dlsym(RTLD_DEFAULT, "openblas_set_num_threads"));
-  }();
+  static const auto set = reinterpret_cast<SetThreads>(openBlasFunction("openblas_set_num_threads"));
   if (!set) return;
   int n = flops >= kBlasThreadFlops ? omp_get_max_threads() : 1;
   if (const char* e = std::getenv("PECTUS_BLAS_THREADS")) n = std::max(1, std::atoi(e));
   set(n);
 }
+
+}  // namespace
+
+void restBlasThreads() {
+  using Shutdown = int (*)();
+  if (const auto shutdown = reinterpret_cast<Shutdown>(openBlasFunction("blas_thread_shutdown_"))) shutdown();
+}
+
+namespace {
 
 // Bytes a new allocation can take without swapping or the kernel's out-of-memory killer: the kernel's
 // MemAvailable, bounded by the process' address-space limit (ulimit -v) and by PECTUS_FE_MEMORY_GB when

@@ -2,7 +2,10 @@
 // nonlinear vs linear, singular systems and non-converging Newton solves.
 #include <gtest/gtest.h>
 
+#include <dlfcn.h>
 #include <omp.h>
+#include <sys/resource.h>
+#include <unistd.h>
 
 #include <Eigen/Eigenvalues>
 
@@ -626,4 +629,35 @@ TEST(FeSolver, DisplacementControlRefusesPrescribedDisplacements) {
     EXPECT_NE(std::string(e.what()).find("zero prescribed displacements"), std::string::npos) << e.what();
   }
   EXPECT_THROW(s.solveControlled(Eigen::VectorXd::Zero(3), 1.0), pectus::InputError);
+}
+
+// OpenBLAS's threads spin for about 0.1 s of CPU after they start and after each threaded call; after
+// restBlasThreads the process takes no CPU while it waits, and the BLAS still multiplies right (it starts
+// its threads again). With a BLAS without threads both hold as well.
+TEST(FeSolver, RestingTheBlasThreadsStopsTheirSpin) {
+  using Dgemm = void (*)(const char*, const char*, const int*, const int*, const int*, const double*, const double*,
+                         const int*, const double*, const int*, const double*, double*, const int*);
+  const auto dgemm = reinterpret_cast<Dgemm>(dlsym(RTLD_DEFAULT, "dgemm_"));  // CHOLMOD's BLAS
+  ASSERT_NE(dgemm, nullptr);
+  const int n = 400;
+  std::vector<double> a(std::size_t(n * n), 1.0), b(std::size_t(n * n), 2.0), c(std::size_t(n * n), 0.0);
+  const double one = 1, zero = 0;
+  auto product = [&] { dgemm("N", "N", &n, &n, &n, &one, a.data(), &n, b.data(), &n, &zero, c.data(), &n); };
+  auto cpuWhileWaiting = [] {
+    auto seconds = [] {
+      rusage r{};
+      getrusage(RUSAGE_SELF, &r);
+      return double(r.ru_utime.tv_sec + r.ru_stime.tv_sec) + 1e-6 * double(r.ru_utime.tv_usec + r.ru_stime.tv_usec);
+    };
+    const double before = seconds();
+    usleep(300000);
+    return seconds() - before;
+  };
+  product();
+  restBlasThreads();
+  EXPECT_LT(cpuWhileWaiting(), 0.02);
+  std::fill(c.begin(), c.end(), 0.0);
+  product();
+  EXPECT_EQ(c.front(), 2.0 * n);
+  EXPECT_EQ(c.back(), 2.0 * n);
 }

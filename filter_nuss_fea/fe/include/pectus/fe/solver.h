@@ -169,6 +169,12 @@ class Solver {
 void setMinParallelTets(int tets);
 int minParallelTets();
 
+/// Stops the threads Debian's OpenBLAS (pthreads build) starts when it is loaded. Each spins for about
+/// 0.1 s of a core before it sleeps; MeshLab loads every plugin at start-up, so they would take a core
+/// from the first filter a script runs, whichever plugin it is. OpenBLAS starts them again at the first
+/// call that needs them. With another BLAS it does nothing.
+void restBlasThreads();
+
 inline Result solveLinear(const Problem& p) { return Solver(p).solveLinear(); }
 inline Result solveNonlinear(const Problem& p, const NewtonOptions& o = {}) { return Solver(p).solveNonlinear(o); }
 
