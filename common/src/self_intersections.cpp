@@ -16,9 +16,10 @@ namespace pectus {
 
 namespace PMP = CGAL::Polygon_mesh_processing;
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+using SM = CGAL::Surface_mesh<K::Point_3>;
 
 struct SelfIntersections::Mesh {
-  CGAL::Surface_mesh<K::Point_3> mesh;
+  SM mesh;
   std::vector<std::size_t> pointOf;  // mesh vertex -> point (a vertex split by the orientation is a copy)
 };
 
@@ -63,7 +64,6 @@ SelfIntersections::SelfIntersections(std::size_t numPoints, const std::vector<st
 // mesh empty and returns false, for the soup's orientation to mend.
 bool SelfIntersections::buildAsGiven(std::size_t numPoints, const std::vector<std::vector<std::size_t>>& polys) {
   auto& mesh = mesh_->mesh;
-  using SM = CGAL::Surface_mesh<K::Point_3>;
   auto vertex = [](std::size_t i) { return SM::Vertex_index(SM::size_type(i)); };
   mesh.reserve(SM::size_type(numPoints), SM::size_type(2 * polys.size()), SM::size_type(polys.size()));
   for (std::size_t i = 0; i < numPoints; ++i) mesh.add_vertex();
@@ -96,7 +96,6 @@ void SelfIntersections::moveTo(const std::vector<Eigen::Vector3d>& points) {
 
 namespace {
 
-using SM = CGAL::Surface_mesh<K::Point_3>;
 using FoundPairs = std::vector<std::pair<SM::Face_index, SM::Face_index>>;
 
 CGAL::Bbox_3 faceBox(const SM& mesh, SM::Face_index f) {
@@ -118,7 +117,7 @@ FoundPairs crossingsAmong(const std::vector<SM::Face_index>& range, const SM& me
 // not in A starts at or above the median, so the other's box ends there or above. Each half is CGAL's
 // check; the few faces in both halves may give a pair twice, which the caller keeps once.
 FoundPairs allCrossings(const SM& mesh) {
-  constexpr std::size_t kSplitFrom = 4000;  // below this many faces one check costs less than the split
+  constexpr std::size_t kSplitFrom = 4000;  // a small mesh: one check, without the boxes and the thread start
   if (mesh.number_of_faces() < kSplitFrom) {
     FoundPairs found;
     PMP::self_intersections(mesh, std::back_inserter(found));
