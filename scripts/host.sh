@@ -9,7 +9,8 @@
 #     .hosts/meshlab-<version>;
 #  4. the plugins, pectus-mlrun and the unit tests configured and built in build-<release>/ by the
 #     userland's compiler, the repository appearing there at its own path.
-# Every step is skipped when its result already exists; each step says what it does.
+# Every step is skipped when its result already exists; each step says what it does. .hosts is a link into
+# the machine's cache folder (scripts/cache.sh), so the userland outlives the clone; the build uses ccache there.
 #   scripts/host.sh 2025.07            # userland + headers + build (2022.02 likewise)
 #   scripts/host.sh 2025.07 userland   # only steps 1-3
 #   scripts/host.sh 2025.07 shell      # a shell inside the userland, in the repository
@@ -17,6 +18,7 @@
 # Environment: PECTUS_HOST_DIR (default .hosts/<suite>), PECTUS_JOBS (default: the core count).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+. "$ROOT/scripts/cache.sh"   # .hosts and ccache outside the clone
 MLVER_WANT="${1:-}"
 # the release's Debian suite and TetGen package (scripts/meshlab_hosts.txt)
 read -r SUITE TETGEN < <(awk -v r="$MLVER_WANT" '$1 == r {print $2, $3}' "$ROOT/scripts/meshlab_hosts.txt") || true
@@ -26,6 +28,9 @@ if [ -z "${MLVER_WANT}" ] || [ -z "${SUITE:-}" ]; then
 fi
 shift
 HOSTDIR="${PECTUS_HOST_DIR:-$ROOT/.hosts/$SUITE}"
+# the userland's own ccache objects (its ccache and compiler differ from bookworm's)
+export CCACHE_DIR="$PECTUS_CACHE/ccache-$SUITE"
+mkdir -p "$CCACHE_DIR"
 BUILD="build-$MLVER_WANT"
 JOBS="${PECTUS_JOBS:-$(nproc)}"
 export DEBIAN_FRONTEND=noninteractive
@@ -96,7 +101,7 @@ fi
 #    bookworm benchmarks and docs need)
 PKGS=(meshlab g++ make cmake qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev $TETGEN
       libsuitesparse-dev libomp-dev libgtest-dev libcgal-dev liblemon-dev libnifti2-dev zlib1g-dev
-      python3 xvfb xauth dpkg-dev file)
+      python3 xvfb xauth dpkg-dev file ccache)
 if [ ! -f "$HOSTDIR/.complete-pkgs" ] || ! in_root dpkg-query -W "${PKGS[@]}" >/dev/null 2>&1; then
   t=$(date +%s)
   say "installing $SUITE's meshlab and the build dependencies in the userland (about 2 min, +1.3 GB)"
@@ -141,13 +146,15 @@ fi
 
 # Inside the userland the repository, the headers and /tmp appear at their own paths (bind mounts in a
 # private mount namespace: they vanish with the command, nothing to unmount, parallel runs do not meet).
-BINDS=("$ROOT" "$(readlink -f "$HDR")" /tmp)
+BINDS=("$ROOT" "$(readlink -f "$HDR")" /tmp "$CCACHE_DIR")
 in_ns() {
   $SUDO unshare --mount --propagation private bash -c '
     set -e; root=$1; n=$2; shift 2
     for ((i = 0; i < n; i++)); do mkdir -p "$root$1"; mount --bind "$1" "$root$1"; shift; done
     exec chroot "$root" /usr/bin/env -i PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root LANG=C.UTF-8 "$@"' \
-    bash "$HOSTDIR" "${#BINDS[@]}" "${BINDS[@]}" "$@"
+    bash "$HOSTDIR" "${#BINDS[@]}" "${BINDS[@]}" \
+    CCACHE_DIR="$CCACHE_DIR" CCACHE_BASEDIR="$CCACHE_BASEDIR" CCACHE_NOHASHDIR="$CCACHE_NOHASHDIR" \
+    CCACHE_MAXSIZE="$CCACHE_MAXSIZE" "$@"
 }
 
 if [ "${1:-}" = shell ]; then

@@ -72,7 +72,7 @@ done
 
 # the environment the runner sees: a clean one, plus the variables that steer the filters
 envs=(PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root LANG=C.UTF-8)
-for v in OMP_NUM_THREADS PECTUS_MLRUN_PLUGINS PECTUS_MLRUN_VERBOSE; do
+for v in OMP_NUM_THREADS OMP_WAIT_POLICY PECTUS_MLRUN_PLUGINS PECTUS_MLRUN_VERBOSE; do
   [ -n "${!v:-}" ] && envs+=("$v=${!v}")
 done
 

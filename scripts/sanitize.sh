@@ -12,6 +12,7 @@
 #                                # memory to exit (the cores' leaks are checked by the GoogleTest runs). Not in CI
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+. "$ROOT/scripts/cache.sh"   # ccache outside the clone
 MODE="${1:-asan}"
 cd "$ROOT"
 start=$(date +%s)

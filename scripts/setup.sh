@@ -4,8 +4,10 @@
 # and configures + builds the project into build/.
 #   scripts/setup.sh            # install deps, fetch headers, build
 #   SKIP_BUILD=1 scripts/setup.sh
+# The headers and the compiler cache are kept outside the clone (scripts/cache.sh).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+. "$ROOT/scripts/cache.sh"   # ccache and the headers outside the clone
 THIRD="$ROOT/third_party"
 export DEBIAN_FRONTEND=noninteractive
 
@@ -16,7 +18,7 @@ PKGS=(meshlab qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev
       libtet1.5-dev libsuitesparse-dev libomp-dev libgtest-dev
       xvfb xauth cmake g++ make dpkg-dev python3 python3-numpy
       python3-matplotlib python3-scipy imagemagick libcgal-dev calculix-ccx libopenblas0-pthread
-      liblemon-dev gmsh libcgal-demo parallel libopenmesh-apps libnifti2-dev)
+      liblemon-dev gmsh libcgal-demo parallel libopenmesh-apps libnifti2-dev ccache debootstrap)
 
 missing=()
 for p in "${PKGS[@]}"; do

@@ -14,6 +14,7 @@
 #include "pectus/ribcage/ribcage.h"
 #include "pectus/ribcage/ribcage_model.h"
 #include "pectus/surface_cmesh.h"
+#include "coarse_cage.h"
 
 using namespace pectus;
 using namespace pectus::ribcage;
@@ -74,13 +75,15 @@ TEST(MarchingTets, SphereIsClosedOrientedAndAccurate) {
   for (const auto& v : s.V) EXPECT_NEAR(v.norm(), 4.0, 0.05);
 }
 
+// the coarse cage, generated once per ctest run (coarse_cage.h)
 class RibCageCoarse : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
-    mesh = new OwnedMesh;
-    lms = new std::vector<Landmark>(generateRibCage(coarse(), *mesh, &stats));
+    auto& c = pectus::fixture::generatedCage("edge5", coarse());
+    mesh = &c.mesh;
+    lms = &c.lms;
+    stats = c.stats;
   }
-  static void TearDownTestSuite() { delete mesh; delete lms; }
   static OwnedMesh* mesh;
   static std::vector<Landmark>* lms;
   static RibCageStats stats;
