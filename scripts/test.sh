@@ -30,10 +30,10 @@ report() {
   local rc=$?
   echo
   echo "[test] stages"
-  printf '  %-34s %8s  %s\n' stage seconds result
+  printf '  %-44s %8s  %s\n' stage seconds result
   local s
-  for s in "${STAGES[@]}"; do IFS='|' read -r n secs res <<<"$s"; printf '  %-34s %8s  %s\n' "$n" "$secs" "$res"; done
-  printf '  %-34s %8s\n' total "$(( $(date +%s) - start ))"
+  for s in "${STAGES[@]}"; do IFS='|' read -r n secs res <<<"$s"; printf '  %-44s %8s  %s\n' "$n" "$secs" "$res"; done
+  printf '  %-44s %8s\n' total "$(( $(date +%s) - start ))"
   if [ -f "$LOGS/ctest.log" ]; then
     echo "[test] the 15 slowest tests (s)"
     sed -nE 's/^ *[0-9]+\/[0-9]+ Test +#[0-9]+: ([^ ]+) \.+.* ([0-9.]+) sec$/\2 \1/p' "$LOGS/ctest.log" |
