@@ -25,15 +25,14 @@ export CCACHE_BASEDIR="${CCACHE_BASEDIR:-$ROOT}"
 export CCACHE_NOHASHDIR="${CCACHE_NOHASHDIR:-1}"
 export CCACHE_MAXSIZE="${CCACHE_MAXSIZE:-8G}"
 
-# cache_link NAME: <clone>/NAME -> $PECTUS_CACHE/NAME, unless <clone>/NAME is a folder of its own
+# cache_link NAME FOLDER: <clone>/NAME -> $PECTUS_CACHE/FOLDER, unless <clone>/NAME is a folder of its own
 cache_link() {
-  local name="$1" target
-  case "$name" in .hosts) target="$PECTUS_CACHE/hosts";; *) target="$PECTUS_CACHE/$name";; esac
-  if [ -L "$ROOT/$name" ] || [ ! -e "$ROOT/$name" ]; then
-    [ "$(readlink "$ROOT/$name" 2>/dev/null)" = "$target" ] || ln -sfn "$target" "$ROOT/$name"
+  local target="$PECTUS_CACHE/$2"
+  if [ -L "$ROOT/$1" ] || [ ! -e "$ROOT/$1" ]; then
+    [ "$(readlink "$ROOT/$1" 2>/dev/null)" = "$target" ] || ln -sfn "$target" "$ROOT/$1"
   fi
 }
 if [ "$PECTUS_CACHE" != "$ROOT/.cache" ]; then
-  cache_link .hosts
-  cache_link third_party
+  cache_link .hosts hosts
+  cache_link third_party third_party
 fi
