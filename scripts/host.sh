@@ -63,7 +63,7 @@ debian_mirror() {
   done
 }
 
-MIRROR="$(debian_mirror | head -n1)"
+MIRROR="$(debian_mirror | sed -n 1p)"
 MIRROR="${MIRROR%/}"
 if [ -z "$MIRROR" ]; then
   say "no deb entry for the Debian archive (this release's suite, component main) in /etc/apt: add one"

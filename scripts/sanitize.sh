@@ -37,7 +37,7 @@ if [ "$MODE" = ci ]; then
     rm -f "$log"
   }
   for s in "${SUITES[@]}"; do
-    run "$(find build-asan -name "$s" -type f -executable | head -1)"
+    run "$(find build-asan -name "$s" -type f -executable | sed -n 1p)"
   done
   for r in "${REPLAYS[@]}"; do
     run "build-asan/tests/fuzz/replay_$r" "tests/fuzz/corpus/$r"

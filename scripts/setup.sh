@@ -115,12 +115,12 @@ if [ ! -f "$HDR/.complete" ]; then
   echo "[setup] fetching MeshLab $MLVER source package for headers"
   rm -rf "$HDR" && mkdir -p "$HDR" "$THIRD/dl"
   ( cd "$THIRD/dl" && apt-get source --download-only "meshlab=$MLVER" >/dev/null )
-  ORIG="$(ls "$THIRD"/dl/meshlab_*.orig.tar.* | head -n1)"
+  ORIG="$(ls "$THIRD"/dl/meshlab_*.orig.tar.* | sed -n 1p)"
   tmp="$(mktemp -d)"
   tar -xf "$ORIG" -C "$tmp"
   top="$(ls "$tmp")"
   # patches of the Debian package (headers may be patched)
-  DEB="$(ls "$THIRD"/dl/meshlab_*.debian.tar.* | head -n1)"
+  DEB="$(ls "$THIRD"/dl/meshlab_*.debian.tar.* | sed -n 1p)"
   tar -xf "$DEB" -C "$tmp/$top"
   if [ -f "$tmp/$top/debian/patches/series" ]; then
     ( cd "$tmp/$top" && while read -r p; do
