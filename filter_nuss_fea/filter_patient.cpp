@@ -76,11 +76,12 @@ void FilterNussFeaPlugin::addPatientFilters() {
       "axis along it, superior from the rib numbers or the ribs' slope, left from the right-handed scanner frame); "
       "fragments under the minimum volume dropped; bone fused to the vertebral column cut at the costovertebral "
       "joints (pieces that do not reach the spine, such as scapulae, left out); the column left out, or kept as "
-      "the fixed support (parameter 'Spine': then wrapped and joined to the ribs as bone, part 400); ribs numbered per side from the top; "
-      "each structure made a closed, manifold, self-intersection-free surface by the least repair that does it "
-      "(duplicate faces removed, holes closed, else CGAL's alpha wrapping; the costal cartilages are always wrapped, "
-      "so that they overlap the ribs and sternum they join; the Log gives each repair and volume change); the "
-      "structures joined into one surface with tissue and part per face; decimated "
+      "the fixed support (parameter 'Spine': then joined to the ribs as bone, part 400); ribs numbered per side from the top. "
+      "Every structure first becomes a solid on one grid (parameter 'Grid step'): the grid points that cannot be reached "
+      "from outside without crossing its faces, so that holes, duplicate faces, self-intersections, nested marrow shells "
+      "and slivers change nothing; holes are sealed by a ball as wide as the widest one (the Log gives each solid's "
+      "volume and seal). Fragments, the column and pieces that are not ribs are separated in that grid, and the "
+      "structures' points give one closed surface with tissue and part per face, decimated "
       "to the edge length; landmarks placed (costovertebral joints, sternum ends, deepest funnel point, vertebra at "
       "that level, bar exits at the mid-axillary line for every intercostal space, diaphragm dome and lung apex "
       "heights). Picked points override them.<br>"
@@ -109,19 +110,14 @@ void FilterNussFeaPlugin::initPreparePatient(RichParameterList& par) {
   addFloat(par, "minVolume", d.minVolume, "Fragment volume (mm^3)",
            "Connected pieces smaller than this are fragments and are dropped (a child's rib "
            "holds 2000-10000 mm^3).", pectus::patient::kMinVolumeRange);
-  addFloat(par, "alpha", d.alpha, "Wrap detail, alpha (mm)",
-           "Alpha wrapping (of the costal cartilages, and of structures that stay open, non-manifold or "
-           "self-intersecting after removing duplicate faces and closing holes): the smallest gap kept "
-           "open (smaller: closer to the input, slower).", pectus::patient::kAlphaRange);
-  addFloat(par, "offset", d.offset, "Wrap offset (mm)",
-           "Distance of the wrap from the input (it adds about offset x area to the volume; the "
-           "wrapped cartilages overlap the ribs and sternum they join by this much).", pectus::patient::kOffsetRange);
+  addFloat(par, "gridStep", d.gridStep, "Grid step (mm)",
+           "Every structure becomes a solid on a grid of this step (about the CT's voxel size); between grid points "
+           "the surface follows the input's faces. Smaller: finer features kept, more time and memory.",
+           pectus::patient::kGridStepRange);
   addFloat(par, "edgeLength", d.edgeLength, "Target edge length (mm)",
            "The joined surface is decimated to this edge length; 0 keeps every face, else " + QString::number(kMinEdgeLength) + " mm at least. The FE analysis's "
            "time and memory grow with the cube of 1/edge: 4 mm suits it, 2 mm shows the anatomy finer.",
            kEdgeLengthRange);
-  par.addParam(RichBool("wrapAll", d.wrapAll, "Wrap every structure",
-                        "Wrap the clean structures too (by default only the ones that need it are wrapped)."));
   par.addParam(RichEnum("spine", int(d.spine),
                         QStringList() << "cut at the costovertebral joints" << "keep as the fixed support", "Spine",
                         "The vertebral column (bone fused to the ribs in one layer, and vertebra layers). Cut: left out of "
@@ -139,13 +135,11 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
   o.units = pectus::patient::Units(ctx.enumIn("units", 4));
   o.frame = pectus::patient::FrameMode(ctx.enumIn("frame", 4));
   o.minVolume = ctx.floatIn("minVolume");
-  o.alpha = ctx.floatIn("alpha");
-  o.offset = ctx.floatIn("offset");
+  o.gridStep = ctx.floatIn("gridStep");
   o.edgeLength = ctx.floatIn("edgeLength");
   if (o.edgeLength > 0 && o.edgeLength < kMinEdgeLength)
     throw pectus::InputError("parameter 'edgeLength' (Target edge length) must be 0 or " + num(kMinEdgeLength) + "-" +
                              num(kEdgeLengthRange.hi) + " mm, got " + fmt(o.edgeLength));
-  o.wrapAll = ctx.boolean("wrapAll");
   o.spine = pectus::patient::SpineMode(ctx.enumIn("spine", 2));
   const std::string pp = ctx.string("pickedPoints").trimmed().toStdString();
   if (!pp.empty()) {
@@ -201,8 +195,7 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
     t += (i ? "; " : "") + fmt(T(i, 0), 4) + " " + fmt(T(i, 1), 4) + " " + fmt(T(i, 2), 4) + " " + fmt(T(i, 3), 2);
   ctx.log("input -> result transform (rows x y z: 3x3 | shift mm): " + t);
   ctx.log("Patient rib cage: " + std::to_string(mm.cm.fn) + " faces, " + std::to_string(r.ribsRight) + " right and " +
-          std::to_string(r.ribsLeft) + " left ribs, " + std::to_string(r.wrapped) + " structures wrapped, " +
-          std::to_string(r.dropped) + " pieces left out, " + std::to_string(r.landmarks.size()) + " landmarks; " +
+          std::to_string(r.ribsLeft) + " left ribs, " + std::to_string(r.dropped) + " pieces left out, " + std::to_string(r.landmarks.size()) + " landmarks; " +
           fmt(r.seconds, 3) + " s");
 }
 

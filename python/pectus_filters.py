@@ -55,7 +55,7 @@ PREPARE_SPINE = ["cut at the costovertebral joints", "keep as the fixed support"
 def prepare_patient_rib_cage(**kw) -> Filter:
     return _build("Prepare Patient Rib Cage", {
         "units": (Enum, 0, PREPARE_UNITS), "frame": (Enum, 0, PREPARE_FRAME), "minVolume": (Float, 200.0),
-        "alpha": (Float, 0.5), "offset": (Float, 0.03), "edgeLength": (Float, 4.0), "wrapAll": (Bool, False),
+        "gridStep": (Float, 0.8), "edgeLength": (Float, 4.0),
         "spine": (Enum, 0, PREPARE_SPINE), "pickedPoints": (String, "")}, dict(kw))
 
 

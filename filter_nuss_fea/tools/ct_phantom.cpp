@@ -5,10 +5,11 @@
 //   multilabel.nii.gz        one label map with TotalSegmentator's label table
 //   masks/<name>.nii.gz      one binary mask per structure (TotalSegmentator's default output)
 //   stl_clean/<name>.stl     each structure's marching-cubes surface, binary STL, scanner frame, mm
-//   stl_messy/               what a real export looks like: bone.stl (ribs and vertebrae fused, small
-//                            fragments, ~1 % duplicated faces), sternum.stl (ASCII, a few faces crossing
-//                            the surface), costal_cartilages_left/right.stl (the left one with a hole),
-//                            scapula_left/right.stl; in metres with --metres, ASCII with --ascii
+//   stl_messy/               what a real export looks like (ct_phantom_core.h, messyExport): bone.stl (ribs,
+//                            vertebrae and scapulae fused, cut by the field of view, marrow shells, specks,
+//                            blocks beside the spine, duplicated faces), sternum.stl (ASCII; manubrium and body
+//                            apart, marrow shells, slivers, faces crossing the surface), costal_cartilages.stl
+//                            (every piece, three with a hole); in metres with --metres, ASCII with --ascii
 //   truth.json               parameters, the project-frame -> scanner transform, landmarks (scanner frame)
 // Every output is in the scanner frame given by --axes (default RAS), millimetres unless noted.
 #include <chrono>
@@ -18,8 +19,6 @@
 #include <cstring>
 #include <filesystem>
 #include <fstream>
-#include <map>
-#include <random>
 #include <set>
 #include <sstream>
 #include <string>
@@ -179,125 +178,12 @@ Args parse(int argc, char** argv) {
   return a;
 }
 
-// The messy export: surfaces as a user's segmentation software writes them
-void writeMessy(const Phantom& ph, const Args& a, const fs::path& dir, std::mt19937& rng) {
-  const patient::LabelVolume& v = ph.volume;
-  auto uni = [&](int n) { return int((std::uint64_t(rng()) * std::uint64_t(n)) >> 32); };
-  const double scale = a.metres ? 0.001 : 1.0;
-  auto report = [&](const fs::path& p, std::size_t n, std::uintmax_t bytes) {
-    std::printf("  %-48s %8zu triangles %10ju bytes\n", p.string().c_str(), n, bytes);
-  };
-  std::set<int> boneLabels;
-  for (const auto& [l, name] : v.names)
-    if (name.rfind("rib_", 0) == 0 || name.rfind("vertebrae_", 0) == 0) boneLabels.insert(l);
-
-  // bone: ribs and vertebrae as one surface (fused at the rib heads), small fragments, ~1 % duplicated faces
-  {
-    patient::LabelVolume m = maskOf(v, [&](std::size_t, std::int32_t l) { return boneLabels.count(l) > 0; });
-    const int nx = v.dims[0], ny = v.dims[1], nz = v.dims[2];
-    const Vec3 sp = v.spacing();
-    int placed = 0;
-    for (int attempt = 0; attempt < 20000 && placed < 4; ++attempt) {
-      const int bx = 1 + uni(2), by = 1 + uni(2), bz = 1 + uni(2);
-      const int i0 = uni(nx - bx), j0 = uni(ny - by), k0 = uni(nz - bz);
-      const int r = int(std::ceil(8.0 / sp.minCoeff()));
-      bool ok = true;
-      for (int k = std::max(0, k0 - r); ok && k < std::min(nz, k0 + bz + r); ++k)
-        for (int j = std::max(0, j0 - r); ok && j < std::min(ny, j0 + by + r); ++j)
-          for (int i = std::max(0, i0 - r); ok && i < std::min(nx, i0 + bx + r); ++i)
-            if (v.at(i, j, k) != 0) ok = false;
-      if (!ok) continue;
-      for (int k = k0; k < k0 + bz; ++k)
-        for (int j = j0; j < j0 + by; ++j)
-          for (int i = i0; i < i0 + bx; ++i) m.labels[std::size_t(i) + std::size_t(nx) * (std::size_t(j) + std::size_t(ny) * std::size_t(k))] = 1;
-      ++placed;
-    }
-    OwnedMesh s;
-    patient::extractLabelSurface(m, 1, s);
-    std::vector<Tri> t = triangles(s);
-    const std::size_t n0 = t.size();
-    for (std::size_t i = 0; i < n0; ++i)
-      if (uni(100) == 0) t.push_back(t[i]);
-    const fs::path p = dir / "bone.stl";
-    report(p, t.size(), writeStl(p.string(), t, a.ascii, scale, "bone"));
-  }
-
-  // sternum: a few faces copied, tilted 25 degrees and moved 0.3 mm so that they cross the surface; ASCII
-  {
-    OwnedMesh s;
-    patient::extractLabelSurface(v, kSternumLabel, s);
-    std::vector<Tri> t = triangles(s);
-    if (!t.empty()) {
-      const Tri seed = t[std::size_t(uni(int(t.size())))];
-      const Vec3 c0 = (seed[0] + seed[1] + seed[2]) / 3.0;
-      std::vector<Tri> patch;
-      for (const auto& tr : t)
-        if (((tr[0] + tr[1] + tr[2]) / 3.0 - c0).norm() < 1.6 * v.spacing().maxCoeff()) patch.push_back(tr);
-      const Vec3 n = (seed[1] - seed[0]).cross(seed[2] - seed[0]).normalized();
-      const Vec3 axis = (seed[1] - seed[0]).normalized();
-      const Eigen::Matrix3d R = Eigen::AngleAxisd(25.0 * 3.14159265358979323846 / 180, axis).toRotationMatrix();
-      for (const auto& tr : patch) {
-        Tri q;
-        for (int k = 0; k < 3; ++k) q[std::size_t(k)] = c0 + R * (tr[std::size_t(k)] - c0) + 0.3 * n;
-        t.push_back(q);
-      }
-    }
-    const fs::path p = dir / "sternum.stl";
-    report(p, t.size(), writeStl(p.string(), t, true, scale, "sternum"));
-  }
-
-  // costal cartilages, one file per side (project frame x > 0: left); the left one with a hole of 3-6 faces
-  {
-    const Eigen::Matrix4d toCage = ph.cageToScanner.inverse() * v.voxelToMm;
-    const int nx = v.dims[0], ny = v.dims[1];
-    for (int side = 2; side >= 1; --side) {
-      patient::LabelVolume m = maskOf(v, [&](std::size_t q, std::int32_t l) {
-        if (l != kCartilageLabel) return false;
-        const Vec3 ijk(double(q % std::size_t(nx)), double((q / std::size_t(nx)) % std::size_t(ny)), double(q / (std::size_t(nx) * ny)));
-        const double x = (toCage.topLeftCorner<3, 3>() * ijk + toCage.block<3, 1>(0, 3)).x();
-        return side == 2 ? x > 0 : x <= 0;
-      });
-      OwnedMesh s;
-      patient::extractLabelSurface(m, 1, s);
-      std::vector<Tri> t = triangles(s);
-      if (side == 2 && !t.empty()) {
-        // remove a seed face and edge neighbours until 3-6 faces are gone
-        const int want = 3 + uni(4);
-        std::vector<int> faces{uni(int(s.face.size()))};
-        std::set<int> gone{faces[0]};
-        std::map<std::pair<const void*, const void*>, std::vector<int>> edgeFaces;
-        for (int f = 0; f < int(s.face.size()); ++f)
-          for (int k = 0; k < 3; ++k) {
-            const void* x = s.face[std::size_t(f)].cV(k);
-            const void* y = s.face[std::size_t(f)].cV((k + 1) % 3);
-            edgeFaces[x < y ? std::make_pair(x, y) : std::make_pair(y, x)].push_back(f);
-          }
-        for (std::size_t qi = 0; qi < faces.size() && int(gone.size()) < want; ++qi)
-          for (int k = 0; k < 3 && int(gone.size()) < want; ++k) {
-            const auto& fc = s.face[std::size_t(faces[qi])];
-            const void* x = fc.cV(k);
-            const void* y = fc.cV((k + 1) % 3);
-            for (int g : edgeFaces[x < y ? std::make_pair(x, y) : std::make_pair(y, x)])
-              if (int(gone.size()) < want && gone.insert(g).second) faces.push_back(g);
-          }
-        std::vector<Tri> kept;
-        for (int f = 0; f < int(t.size()); ++f)
-          if (!gone.count(f)) kept.push_back(t[std::size_t(f)]);
-        t.swap(kept);
-      }
-      const std::string name = side == 2 ? "costal_cartilages_left" : "costal_cartilages_right";
-      const fs::path p = dir / (name + ".stl");
-      report(p, t.size(), writeStl(p.string(), t, a.ascii, scale, name));
-    }
-  }
-
-  for (int label : {kScapulaLeftLabel, kScapulaRightLabel}) {
-    OwnedMesh s;
-    patient::extractLabelSurface(v, label, s);
-    const std::string name = label == kScapulaLeftLabel ? "scapula_left" : "scapula_right";
-    const fs::path p = dir / (name + ".stl");
-    const auto t = triangles(s);
-    report(p, t.size(), writeStl(p.string(), t, a.ascii, scale, name));
+// The messy export (messyExport: the defects of real exports), in metres with --metres, ASCII with --ascii
+void writeMessy(const Phantom& ph, const Args& a, const fs::path& dir) {
+  for (const auto& f : messyExport(ph, a.p.seed)) {
+    const fs::path p = dir / (f.name + ".stl");
+    const std::uintmax_t bytes = writeStl(p.string(), f.tris, f.ascii || a.ascii, a.metres ? 0.001 : 1.0, f.name);
+    std::printf("  %-48s %8zu triangles %10ju bytes\n", p.string().c_str(), f.tris.size(), bytes);
   }
 }
 
@@ -406,8 +292,7 @@ int main(int argc, char** argv) {
     t0 = Clock::now();
     if (a.only.count("messy")) {
       fs::create_directories(dir / "stl_messy");
-      std::mt19937 rng(a.p.seed * 2654435761u + 17u);
-      writeMessy(ph, a, dir / "stl_messy", rng);
+      writeMessy(ph, a, dir / "stl_messy");
     }
     const double tMessy = secondsSince(t0);
     writeTruth(ph, a, dir / "truth.json");

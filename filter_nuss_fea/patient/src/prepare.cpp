@@ -22,8 +22,9 @@
 #include "pectus/ribcage/mesh_simplify.h"
 #include "pectus/errors.h"
 #include "pectus/patient/shape_classify.h"
+#include "pectus/patient/solid_grid.h"
 #include "pectus/patient/soup.h"
-#include "pectus/nuss/tissue_join.h"
+#include "marching_cubes.h"
 
 namespace pectus::patient {
 
@@ -47,7 +48,7 @@ struct Structure {
   std::string name;  // layer name, or "<layer> piece k"
   NameClass cls;
   Soup soup;
-  bool wrapped = false;  // already wrapped (closed, manifold, embedded by construction)
+  int layer = -1;  // the layer of `all` it comes from (its solid gives the surface's crossings)
 };
 
 std::vector<std::string> words(const std::string& name) {
@@ -68,42 +69,14 @@ std::vector<std::string> words(const std::string& name) {
 }
 
 // ---------------------------------------------------------------------------------------------------
-// 6. repair: CGAL's alpha wrap, refused when the result is no surface of the structure: empty, open or
-// non-manifold (a detail too fine for the input's gaps), or holding far more than the structure grown by the
-// offset (a detail coarser than the structure bridges its gaps and fills its concavities). Grown by the offset o,
-// a bar of thickness t = 2V/A gains about o A + o^2 A / (2 t); twice that much is not the structure any more.
-constexpr double kWrapGrowth = 2.0;
-
-// A hole wider than the detail lets the wrap in: it then wraps the structure's inside as well, and the result is
-// a hollow shell, twice the offset thick where it hugs both sides of the surface (TetGen fills such a shell with
-// hundreds of thousands of slivers). So the wrap is given the structure with its holes closed, where it is
-// 2-manifold; a wrap holding less than half the structure is still hollow and refused.
-constexpr double kWrapHollow = 0.5;
-
-Soup wrapOf(const std::string& name, const Soup& s, const PrepareOptions& opt) {
-  Soup sealed = s;
-  removeDuplicateFaces(sealed);
-  if (closeHoles(sealed) <= 0) sealed = s;
-  Soup w = alphaWrap(sealed, opt.alpha, opt.offset);
-  const std::string still = w.empty() ? std::string("empty") : defects(w);
-  if (!still.empty())
-    throw TopologyError("Alpha wrapping cannot close '" + name + "' at detail " + mm(opt.alpha, 2) + " mm (the result is " + still +
-                     "): raise 'Wrap detail (alpha)' or check the structure.");
-  const double v0 = volume(sealed), a0 = area(sealed), v1 = volume(w);
-  if (v1 < kWrapHollow * v0)
-    throw TopologyError("Alpha wrapping went inside '" + name + "' through a hole wider than its detail (" + mm(opt.alpha, 2) +
-                     " mm): the wrap is a hollow shell of " + mm(v1 / 1000, 2) + " cm3 around a structure of " + mm(v0 / 1000, 2) +
-                     " cm3. Close the structure's holes (e.g. Filters > Remeshing > Close Holes) or raise 'Wrap detail (alpha)' "
-                     "above the holes' width.");
-  const double t = 2 * v0 / std::max(a0, 1e-300), o = opt.offset;
-  const double grown = v0 + o * a0 + o * o * a0 / std::max(2 * t, 1e-300);
-  if (v1 > kWrapGrowth * grown)
-    throw TopologyError("Alpha wrapping cannot follow '" + name + "' at detail " + mm(opt.alpha, 2) + " mm: the wrap holds " +
-                     mm(v1 / 1000, 2) + " cm3, " + mm(v1 / grown, 1) + " times the structure grown by the offset (" +
-                     mm(grown / 1000, 2) + " cm3), so it bridges the structure's gaps. Lower 'Wrap detail (alpha)' towards "
-                     "the structure's thickness (about " + mm(t, 1) + " mm).");
-  return w;
-}
+// 4. the solids on one grid
+// A piece of a fused bone layer shorter than this share of the cage's width is no rib: a fragment of a vertebra,
+// of a scapula or of a rib cut by the field of view (a child's 12th rib is still a quarter of the width)
+constexpr double kMinRibShare = 0.15;
+// The ribs are cut off the vertebral column this far (mm) beyond the column's band, square: a rib running along
+// the cut (the 1st rib beside its vertebra) would otherwise keep a sheet of bone in the cut's plane, which the tet
+// mesh fills with sub-millimetre tets
+constexpr double kCutTrim = 1.5;
 
 // ---------------------------------------------------------------------------------------------------
 // 3. the frame
@@ -202,11 +175,7 @@ Frame findFrame(const std::vector<Structure>& all, const PrepareOptions& opt, do
 }
 
 // ---------------------------------------------------------------------------------------------------
-// 4. the vertebral column inside a bone layer. Kept as the support (SpineMode::Keep), it reaches this far (mm)
-// along each rib beyond the cut, into the rib's end (cut square kCutTrim beyond the cut), so that column
-// and rib overlap
-constexpr double kColumnOverlap = 3.0;
-
+// 4. the vertebral column inside a bone layer
 // The column: the posterior midline bone that runs the whole height.
 // Returns the half-width of the cut band around the midline (0: no column found).
 double spineHalfWidth(const Soup& bone, double x0, double yMid) {
@@ -440,39 +409,64 @@ void relabel(CMeshO& m, const CMeshO& from) {
   writeFaceLabels(m, tissue, part);
 }
 
-// Deletes the closed shells of m whose signed volume is under minVolume: the voids and specks that a union
-// leaves where two structures' surfaces nearly coincide (a wrapped cartilage on the rib it joins). Each would
-// be a piece of its own in the tet mesh. Returns how many.
-int dropTinyShells(CMeshO& m, double minVolume) {
-  std::vector<int> parent(m.vert.size());
+// The cartilages' faces take the part of the nearest rib face (the vertebral column is no rib)
+void partsOfCartilage(const Soup& u, const std::vector<int>& tissue, std::vector<int>& part) {
+  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
+  using Tri = K::Triangle_3;
+  using Prim = CGAL::AABB_triangle_primitive<K, std::vector<Tri>::const_iterator>;
+  using Tree = CGAL::AABB_tree<CGAL::AABB_traits<K, Prim>>;
+  auto P = [&](int v) { return K::Point_3(u.V[std::size_t(v)].x(), u.V[std::size_t(v)].y(), u.V[std::size_t(v)].z()); };
+  std::vector<Tri> ribs;
+  std::vector<int> ribPartOf;
+  for (std::size_t f = 0; f < u.F.size(); ++f)
+    if (tissue[f] == int(Tissue::Bone) && part[f] != kVertebralColumn)
+      ribs.emplace_back(P(u.F[f][0]), P(u.F[f][1]), P(u.F[f][2])), ribPartOf.push_back(part[f]);
+  if (ribs.empty()) return;
+  Tree tree(ribs.begin(), ribs.end());
+  tree.accelerate_distance_queries();
+  for (std::size_t f = 0; f < u.F.size(); ++f) {
+    if (tissue[f] != int(Tissue::Cartilage)) continue;
+    const Vec3 c = (u.V[std::size_t(u.F[f][0])] + u.V[std::size_t(u.F[f][1])] + u.V[std::size_t(u.F[f][2])]) / 3.0;
+    const auto hit = tree.closest_point_and_primitive(K::Point_3(c.x(), c.y(), c.z()));
+    part[f] = ribPartOf[std::size_t(hit.second - ribs.begin())];
+  }
+}
+
+// "N connected pieces: the cage (...), right rib 11, ...": what each piece of the joined surface holds, the largest
+// first (the user sees which ribs float and what came loose)
+std::string piecesOf(const Soup& s, const FaceLabels& lab) {
+  std::vector<int> parent(s.V.size());
   std::iota(parent.begin(), parent.end(), 0);
-  const auto find = [&](int a) {
-    while (parent[std::size_t(a)] != a) a = parent[std::size_t(a)] = parent[std::size_t(parent[std::size_t(a)])];
-    return a;
+  auto find = [&](int v) {
+    while (parent[std::size_t(v)] != v) v = parent[std::size_t(v)] = parent[std::size_t(parent[std::size_t(v)])];
+    return v;
   };
-  const auto idx = [&](const CFaceO& f, int k) { return int(vcg::tri::Index(m, f.cV(k))); };
-  for (const auto& f : m.face)
-    if (!f.IsD()) parent[std::size_t(find(idx(f, 1)))] = find(idx(f, 0)), parent[std::size_t(find(idx(f, 2)))] = find(idx(f, 0));
-  std::map<int, double> vol;
-  for (const auto& f : m.face)
-    if (!f.IsD()) {
-      const auto P = [&](int k) { return Vec3(f.cP(k)[0], f.cP(k)[1], f.cP(k)[2]); };
-      const Vec3 a = P(0), b = P(1), c = P(2);
-      vol[find(idx(f, 0))] += a.dot(b.cross(c)) / 6;
+  for (const auto& f : s.F) parent[std::size_t(find(f[1]))] = find(f[0]), parent[std::size_t(find(f[2]))] = find(f[0]);
+  std::map<int, std::pair<std::size_t, std::set<int>>> pieces;  // root -> faces, parts (tissue * 1000 + part)
+  for (std::size_t f = 0; f < s.F.size(); ++f) {
+    auto& p = pieces[find(s.F[f][0])];
+    ++p.first;
+    p.second.insert(lab.tissue[f] * 1000 + lab.part[f]);
+  }
+  std::vector<std::pair<std::size_t, std::set<int>>> list;
+  for (auto& [root, p] : pieces) list.push_back(std::move(p));
+  std::stable_sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
+  std::string out = std::to_string(list.size()) + " connected piece" + (list.size() == 1 ? "" : "s");
+  for (std::size_t i = 0; i < list.size(); ++i) {
+    std::set<int> tissues;
+    std::string what;
+    for (int code : list[i].second) {
+      tissues.insert(code / 1000);
+      const int part = code % 1000, side = part / 100, rib = part % 100;
+      if (code / 1000 == int(Tissue::Bone) && (side == 1 || side == 2) && rib >= 1 && rib <= 24)
+        what += (what.empty() ? "" : ", ") + sideName(side) + " rib " + std::to_string(rib);
     }
-  int dropped = 0;
-  for (const auto& [root, v] : vol) dropped += v < minVolume;
-  if (!dropped) return 0;
-  for (auto& f : m.face)
-    if (!f.IsD() && vol[find(idx(f, 0))] < minVolume) vcg::tri::Allocator<CMeshO>::DeleteFace(m, f);
-  for (auto& v : m.vert)
-    if (!v.IsD()) v.ClearV();
-  for (auto& f : m.face)
-    if (!f.IsD())
-      for (int k = 0; k < 3; ++k) f.V(k)->SetV();
-  for (auto& v : m.vert)
-    if (!v.IsD() && !v.IsV()) vcg::tri::Allocator<CMeshO>::DeleteVertex(m, v);
-  return dropped;
+    if (tissues.count(int(Tissue::Sternum))) what = "the cage";
+    else if (what.empty()) what = "costal cartilage";
+    else if (tissues.count(int(Tissue::Cartilage))) what += " with cartilage";
+    out += (i ? ", " : ": ") + what;
+  }
+  return out;
 }
 
 // The preparation's state, as each step hands it on to the next: the structures (in the project frame's axes
@@ -482,10 +476,8 @@ class Preparation {
   Preparation(const PrepareOptions& o, const std::function<void(int, const char*)>& progress) : opt(o), progress_(progress) {
     if (!kMinVolumeRange.contains(opt.minVolume))
       throw InputError("parameters: the minimum volume must lie in " + kMinVolumeRange.text() + " mm^3");
-    if (!kAlphaRange.contains(opt.alpha))
-      throw InputError("parameters: the wrap detail alpha must lie in " + kAlphaRange.text() + " mm");
-    if (!kOffsetRange.contains(opt.offset))
-      throw InputError("parameters: the wrap offset must lie in " + kOffsetRange.text() + " mm");
+    if (!kGridStepRange.contains(opt.gridStep))
+      throw InputError("parameters: the grid step must lie in " + kGridStepRange.text() + " mm");
     if (!kEdgeLengthRange.contains(opt.edgeLength) || (opt.edgeLength > 0 && opt.edgeLength < kMinEdgeLength))
       throw InputError("parameters: the target edge length must be 0 or lie in " +
                        ParamRange{kMinEdgeLength, kEdgeLengthRange.hi}.text() + " mm");
@@ -493,12 +485,11 @@ class Preparation {
   void classify(const std::vector<InputLayer>& layers);  ///< 1. each layer's kind from its name, else its shape
   void toMillimetres();                                  ///< 2. the units
   void orient();                                         ///< 3. the anatomical frame's axes
-  void separate();                                       ///< 4. the spine cut, fragments and what is not cage
+  void separate();                                       ///< 4. solids, the spine cut, fragments, what is not cage
   void settleSuperiorAndLeft();                          ///< 3, finished on the separated ribs
   void numberRibs();                                     ///< 5. rib numbers and sides
-  void repair();                                         ///< 6. closed, manifold, embedded structures
-  void join(CMeshO& cage);                               ///< 7. one labelled surface, decimated
-  void placeAndCentre(CMeshO& cage);                     ///< 8. landmarks, the origin, the user's points
+  void join(CMeshO& cage);                               ///< 6. one labelled surface, decimated
+  void placeAndCentre(CMeshO& cage);                     ///< 7. landmarks, the origin, the user's points
   PrepareResult res;
 
  private:
@@ -506,8 +497,14 @@ class Preparation {
   void classifyUnknownByShape(std::vector<Structure>& unknown);  ///< 1, for the layers whose names say nothing
   void checkTheCage(std::size_t layers) const;  ///< 1, finished: a sternum, cartilage and ribs are there
   Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
-  void repairColumn(const Structure& s);     ///< 6. for the column kept as the support, into `column`
-  int squareOffCutEnd(Soup& rib) const;     ///< 6. a rib's end at the column's cut made planar; 1 if cut
+  void takeApart(std::size_t layer);         ///< 4, for one layer: its pieces kept, cut or left out
+  void bridgeAlongTheLength(const std::string& name, const Solid& so, std::vector<std::uint8_t>& mask);  ///< 4, the sternum
+  /// 4. the surface of the points of layer's solid (local box indices) for which keep() holds, in the box sub
+  template <class Keep>
+  Soup solidSurface(std::size_t layer, const Box3i& sub, const Keep& keep) const;
+  void keep(Structure s, std::size_t layer, const Box3i& sub, const std::vector<std::int32_t>& comp, std::int32_t id);
+  void unite(bool withColumn, OwnedMesh& out) const;  ///< 6. the surface of the kept structures' points, labelled
+  void decimate(OwnedMesh& joinedSurface, CMeshO& cage);  ///< 6. to the edge length
 
   const PrepareOptions& opt;
   std::function<void(int, const char*)> progress_;
@@ -517,14 +514,13 @@ class Preparation {
   std::vector<Vec3> spine;      // vertebral column points: vertebra layers and the cut-away bone
   double diag = 0, scale = 1;   // the input's size (its units) and the factor to mm
   Frame fr;
+  Mat3 flip = Mat3::Identity(); // the turns of settleSuperiorAndLeft, after the grid was laid
   double x0 = 0, yMid = 0;      // the sternum's midline; halfway between the back of the cage and the sternum
-  double cutHalfWidth = 0;      // half the width of the band cut out of a bone layer as its vertebral column (0: none)
-  Soup bone, cartilage, sternum;
-  std::vector<int> bonePart;    // per face of `bone`: its rib's part id
-  Soup column;                  // the vertebral column kept as the fixed support (SpineMode::Keep), repaired
-  OwnedMesh joined;             // the labelled union of ribs, cartilages and sternum, before decimation
-  void unite(const std::vector<nuss::TissueLayer>& layers, OwnedMesh& out, bool logIt);  ///< 7. the union, cleaned
-  void decimate(OwnedMesh& joinedSurface, CMeshO& cage);                                  ///< 7. to the edge length
+  double cageWidth = 0;         // the structures' extent across (mm)
+  Grid grid;                    // one grid for every structure, in the frame's axes (before `flip`)
+  std::vector<Solid> solids;    // per layer of `all`
+  std::vector<std::uint16_t> owner;  // per grid point: 1 + the index in `kept` of the structure it belongs to
+  OwnedMesh joined;             // the labelled surface of ribs, cartilages and sternum, before decimation
 };
 
 void Preparation::classify(const std::vector<InputLayer>& layers) {
@@ -624,118 +620,226 @@ void Preparation::orient() {
   yMid = 0.5 * (cageBox.min().y() + centroid(sternumAll).y());
 }
 
+// Every structure becomes a solid on one grid (solid_grid.h): what a surface's defects would make ambiguous
+// (holes, duplicate faces, self-intersections, nested marrow shells, slivers) does not change which grid points
+// are inside. The solids are then taken apart: a fused bone layer loses its vertebral column, and its pieces
+// are ribs, loose bone or fragments; the structures claim their points in the order sternum, ribs, bone,
+// cartilage, vertebrae (where two overlap, the first keeps the point).
 void Preparation::separate() {
-  prog(10, "fragments and the spine");
-  // positions of the bone and sternum vertices: a cartilage sharing any of them touches its neighbours
-  std::set<std::tuple<double, double, double>> bonePoints;
+  prog(10, "the structures' solids on one grid");
+  Eigen::AlignedBox3d box;
   for (const auto& s : all)
-    if (s.cls.kind == Kind::Rib || s.cls.kind == Kind::Bone || s.cls.kind == Kind::Sternum)
-      for (const auto& p : s.soup.V) bonePoints.emplace(p.x(), p.y(), p.z());
-  // The cartilages join the ribs to the sternum. Where a segmentation's labels only touch, their surfaces
-  // coincide face to face, which a union cannot join into a manifold: wrapped with the offset, the
-  // cartilage overlaps the bone it joins. The wrap also reconnects the thin strips that a voxel surface
-  // splits where voxels meet at an edge or corner only (so it comes before the fragments are counted).
-  // The wraps are the step's costly part: computed side by side.
-  const auto touches = [&](const Soup& c) {
-    return std::any_of(c.V.begin(), c.V.end(), [&](const Vec3& p) { return bonePoints.count({p.x(), p.y(), p.z()}) > 0; });
-  };
-  std::vector<std::size_t> toWrap;
-  for (std::size_t i = 0; i < all.size(); ++i)
-    if (all[i].cls.kind == Kind::Cartilage && (touches(all[i].soup) || !defects(all[i].soup).empty())) toWrap.push_back(i);
-  std::vector<Soup> wraps(toWrap.size());
-  std::vector<std::exception_ptr> wrapErrors(toWrap.size());
+    for (const auto& p : s.soup.V) box.extend(p);
+  cageWidth = box.sizes().x();
+  grid.h = opt.gridStep;
+  grid.origin = box.min();
+  for (int a = 0; a < 3; ++a) grid.box.n[std::size_t(a)] = int(std::ceil(box.sizes()[a] / grid.h)) + 1;
+  solids.assign(all.size(), Solid{});
 #pragma omp parallel for schedule(dynamic)
-  for (int k = 0; k < int(toWrap.size()); ++k) {
-    const Structure& c = all[toWrap[std::size_t(k)]];
-    try {
-      wraps[std::size_t(k)] = wrapOf(c.name, c.soup, opt);
-    } catch (...) {
-      wrapErrors[std::size_t(k)] = std::current_exception();
+  for (int i = 0; i < int(all.size()); ++i) solids[std::size_t(i)] = solidify(all[std::size_t(i)].soup, grid);
+  owner.assign(grid.box.size(), 0);
+  const auto rank = [](Kind k) { return k == Kind::Sternum ? 0 : k == Kind::Rib ? 1 : k == Kind::Bone ? 2 : k == Kind::Cartilage ? 3 : 4; };
+  std::vector<std::size_t> order(all.size());
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return rank(all[a].cls.kind) < rank(all[b].cls.kind); });
+  for (std::size_t i : order) {
+    prog(10 + int(15 * (&i - order.data()) / std::max<std::ptrdiff_t>(1, std::ptrdiff_t(order.size()))), "separating the structures");
+    takeApart(i);
+  }
+  log.push_back("grid: " + mm(grid.h, 2) + " mm steps, " + std::to_string(grid.box.n[0]) + " x " + std::to_string(grid.box.n[1]) +
+                " x " + std::to_string(grid.box.n[2]) + " points");
+}
+
+template <class Keep>
+Soup Preparation::solidSurface(std::size_t layer, const Box3i& sub, const Keep& keep) const {
+  const Solid& so = solids[layer];
+  const auto in = [&](int a, int b, int c) {  // a, b, c: the sub-box's point less one (padded)
+    const int la = sub.lo[0] + a - 1, lb = sub.lo[1] + b - 1, lc = sub.lo[2] + c - 1;
+    if (la < sub.lo[0] || lb < sub.lo[1] || lc < sub.lo[2] || la >= sub.lo[0] + sub.n[0] || lb >= sub.lo[1] + sub.n[1] ||
+        lc >= sub.lo[2] + sub.n[2])
+      return false;
+    return bool(keep(so.box.index(la, lb, lc)));
+  };
+  Soup out;
+  marchCubes(
+      sub.n[0] + 2, sub.n[1] + 2, sub.n[2] + 2, in,
+      [&](int a, int b, int c, int axis) {
+        const int i = so.box.lo[0] + sub.lo[0] + a - 1, j = so.box.lo[1] + sub.lo[1] + b - 1, k = so.box.lo[2] + sub.lo[2] + c - 1;
+        Vec3 q = grid.point(i, j, k);
+        q[axis] += grid.h * so.exit(i, j, k, axis, in(a, b, c));
+        return q;
+      },
+      out.V, [&](int, int, int, const std::array<int, 3>& f) { out.F.push_back(f); });
+  return out;
+}
+
+void Preparation::keep(Structure st, std::size_t layer, const Box3i& sub, const std::vector<std::int32_t>& comp, std::int32_t id) {
+  const Solid& so = solids[layer];
+  if (kept.size() + 1 >= 65535) throw InputError("More than 65,534 structures to keep: raise the minimum volume.");
+  st.layer = int(layer);
+  st.soup = solidSurface(layer, sub, [&](std::size_t p) { return comp[p] == id; });
+  const std::uint16_t me = std::uint16_t(kept.size() + 1);
+  for (int c = sub.lo[2]; c < sub.lo[2] + sub.n[2]; ++c)
+    for (int b = sub.lo[1]; b < sub.lo[1] + sub.n[1]; ++b)
+      for (int a = sub.lo[0]; a < sub.lo[0] + sub.n[0]; ++a) {
+        if (comp[so.box.index(a, b, c)] != id) continue;
+        const int i = so.box.lo[0] + a, j = so.box.lo[1] + b, k = so.box.lo[2] + c;
+        if (!grid.box.contains(i, j, k)) continue;
+        std::uint16_t& o = owner[grid.box.index(i, j, k)];
+        if (!o) o = me;
+      }
+  kept.push_back(std::move(st));
+}
+
+// A segmentation often parts the manubrium from the body of the sternum (their joint is cartilage, not bone): the
+// gaps along the sternum's length, up to kSternumGap, are filled, so that the sternum is one piece as in the body.
+constexpr double kSternumGap = 4.0;
+
+void Preparation::bridgeAlongTheLength(const std::string& name, const Solid& so, std::vector<std::uint8_t>& mask) {
+  const int longest = int(kSternumGap / grid.h);
+  std::size_t filled = 0;
+  for (int b = 0; b < so.box.n[1]; ++b)
+    for (int a = 0; a < so.box.n[0]; ++a) {
+      int last = -1;  // the last inside point along the column
+      for (int c = 0; c < so.box.n[2]; ++c) {
+        if (!mask[so.box.index(a, b, c)]) continue;
+        if (last >= 0 && c - last > 1 && c - last - 1 <= longest)
+          for (int g = last + 1; g < c; ++g) mask[so.box.index(a, b, g)] = 1, ++filled;
+        last = c;
+      }
+    }
+  if (filled)
+    log.push_back("'" + name + "': gaps along its length up to " + mm(kSternumGap, 0) + " mm bridged (the manubriosternal joint), " +
+                  mm(double(filled) * grid.h * grid.h * grid.h / 1000, 2) + " cm3 added");
+}
+
+void Preparation::takeApart(std::size_t layer) {
+  Structure& s = all[layer];
+  const Solid& so = solids[layer];
+  const double h3 = grid.h * grid.h * grid.h;
+  const Box3i whole{{0, 0, 0}, so.box.n};
+  const auto pos = [&](int a, int b, int c) { return grid.point(so.box.lo[0] + a, so.box.lo[1] + b, so.box.lo[2] + c); };
+  const std::size_t pieces0 = components(s.soup).size();
+  log.push_back("'" + s.name + "': " + std::to_string(pieces0) + " piece" + (pieces0 == 1 ? "" : "s") + " -> a solid of " +
+                mm(double(so.count()) * h3 / 1000, 2) + " cm3" +
+                (so.capped > 0 ? " (" + std::to_string(so.capped) + " hole" + (so.capped == 1 ? "" : "s") + " capped)" : std::string()) +
+                (so.duplicates > 0 ? " (" + std::to_string(so.duplicates) + " duplicate faces ignored)" : std::string()));
+  std::vector<std::uint8_t> mask = so.in;
+  std::vector<std::int32_t> comp;
+  if (s.cls.kind == Kind::Vertebra) {
+    const Soup surface = solidSurface(layer, whole, [&](std::size_t p) { return so.in[p] != 0; });
+    spine.insert(spine.end(), surface.V.begin(), surface.V.end());
+    if (opt.spine == SpineMode::Keep) {
+      comp.assign(mask.begin(), mask.end());
+      keep({s.name, s.cls, {}, -1}, layer, whole, comp, 1);
+    }
+    return;
+  }
+  if (s.cls.kind == Kind::Sternum) bridgeAlongTheLength(s.name, so, mask);
+  // the pieces of the solid, those under the minimum volume fragments
+  auto count = components6(so.box.n, mask, comp);
+  const auto fragment = [&](std::int32_t id) { return id > 0 && double(count[std::size_t(id - 1)]) * h3 < opt.minVolume; };
+  double band = 0;  // the vertebral column's cut: |x - x0| < band behind yMid
+  if (s.cls.kind == Kind::Bone) {
+    // the column's width from the input's own vertices on the solid's large pieces (specks along the midline
+    // would stretch its height; the solid's surface is denser than the input, which would widen it)
+    Soup onPieces;
+    for (const auto& q : s.soup.V) {
+      const Vec3 g = (q - grid.origin) / grid.h;
+      bool on = false;
+      for (int corner = 0; corner < 8 && !on; ++corner) {
+        const int a = int(std::floor(g.x())) + (corner & 1) - so.box.lo[0], b = int(std::floor(g.y())) + ((corner >> 1) & 1) - so.box.lo[1],
+                  c = int(std::floor(g.z())) + ((corner >> 2) & 1) - so.box.lo[2];
+        if (a < 0 || b < 0 || c < 0 || a >= so.box.n[0] || b >= so.box.n[1] || c >= so.box.n[2]) continue;
+        const std::int32_t id = comp[so.box.index(a, b, c)];
+        on = id > 0 && !fragment(id);
+      }
+      if (on) onPieces.V.push_back(q);
+    }
+    if (const double rCut = spineHalfWidth(onPieces, x0, yMid); rCut > 0) {
+      band = rCut + kCutTrim;
+      const Soup surface = solidSurface(layer, whole, [&](std::size_t p) { return so.in[p] && !fragment(comp[p]); });
+      for (const auto& q : surface.V)
+        if (q.y() < yMid && std::abs(q.x() - x0) < rCut) spine.push_back(q);
+      std::vector<std::int32_t> column(mask.size(), 0);
+      std::size_t removed = 0;
+      for (int c = 0; c < so.box.n[2]; ++c)
+        for (int b = 0; b < so.box.n[1]; ++b)
+          for (int a = 0; a < so.box.n[0]; ++a) {
+            const std::size_t p = so.box.index(a, b, c);
+            const Vec3 q = pos(a, b, c);
+            if (mask[p] && !fragment(comp[p]) && q.y() < yMid && std::abs(q.x() - x0) < band) mask[p] = 0, column[p] = 1, ++removed;
+          }
+      const bool keepColumn = opt.spine == SpineMode::Keep;
+      log.push_back("'" + s.name + "': vertebral column found (posterior midline, " + mm(2 * rCut) + " mm wide): cut at the "
+                    "costovertebral joints, the ribs' ends square at " + mm(band) + " mm from the midline (" +
+                    mm(double(removed) * h3 / 1000, 1) + " cm3 removed)" + (keepColumn ? "; the column is kept as the fixed support" : ""));
+      if (keepColumn) keep({s.name + " vertebral column", {Kind::Vertebra, 0, 0}, {}, -1}, layer, whole, column, 1);
+      count = components6(so.box.n, mask, comp);
     }
   }
-  for (const auto& e : wrapErrors)
-    if (e) std::rethrow_exception(e);
-  for (auto& s : all) {
-    if (s.cls.kind == Kind::Vertebra) {
-      spine.insert(spine.end(), s.soup.V.begin(), s.soup.V.end());
-      if (opt.spine == SpineMode::Keep) kept.push_back({s.name, s.cls, s.soup});  // the support, repaired in step 6
+  std::vector<Box3i> boxes(count.size());
+  std::vector<std::array<int, 3>> hi(count.size(), {-1, -1, -1});
+  std::vector<char> reaches(count.size(), 0);
+  for (auto& b : boxes) b.lo = so.box.n;
+  for (int c = 0; c < so.box.n[2]; ++c)
+    for (int b = 0; b < so.box.n[1]; ++b)
+      for (int a = 0; a < so.box.n[0]; ++a) {
+        const std::int32_t id = comp[so.box.index(a, b, c)];
+        if (!id) continue;
+        Box3i& bx = boxes[std::size_t(id - 1)];
+        auto& h = hi[std::size_t(id - 1)];
+        bx.lo = {std::min(bx.lo[0], a), std::min(bx.lo[1], b), std::min(bx.lo[2], c)};
+        h = {std::max(h[0], a), std::max(h[1], b), std::max(h[2], c)};
+        const Vec3 q = pos(a, b, c);
+        if (band > 0 && q.y() < yMid && std::abs(q.x() - x0) < band + 1.5 * grid.h) reaches[std::size_t(id - 1)] = 1;
+      }
+  for (std::size_t k = 0; k < boxes.size(); ++k)
+    for (int a = 0; a < 3; ++a) boxes[k].n[std::size_t(a)] = hi[k][std::size_t(a)] - boxes[k].lo[std::size_t(a)] + 1;
+  int fragments = 0, loose = 0;
+  double fragmentVolume = 0;
+  std::vector<std::int32_t> together(s.cls.kind == Kind::Bone ? 0 : comp.size(), 0);  // the kept pieces of a structure
+  Box3i togetherBox{so.box.n, {0, 0, 0}};
+  std::array<int, 3> togetherHi{-1, -1, -1};
+  for (std::size_t k = 0; k < count.size(); ++k) {
+    const double v = double(count[k]) * h3;
+    if (v < opt.minVolume) {
+      ++fragments, fragmentVolume += v;
       continue;
     }
-    double rCut = 0;
+    const Box3i& bx = boxes[k];
+    const Vec3 centre = 0.5 * (pos(bx.lo[0], bx.lo[1], bx.lo[2]) + pos(hi[k][0], hi[k][1], hi[k][2]));
+    const std::string piece = "a piece of " + mm(v / 1000, 2) + " cm3 at " + at(centre);
     if (s.cls.kind == Kind::Bone) {
-      rCut = spineHalfWidth(s.soup, x0, yMid);
-      cutHalfWidth = std::max(cutHalfWidth, rCut);
-      if (rCut > 0) {
-        Soup cut, away;
-        int removed = 0;
-        for (const auto& f : s.soup.F) {
-          const Vec3 c = (s.soup.V[std::size_t(f[0])] + s.soup.V[std::size_t(f[1])] + s.soup.V[std::size_t(f[2])]) / 3.0;
-          const bool behind = c.y() < yMid;
-          if (behind && std::abs(c.x() - x0) < rCut) {
-            for (int k = 0; k < 3; ++k) spine.push_back(s.soup.V[std::size_t(f[std::size_t(k)])]);
-            ++removed;
-          } else {
-            cut.F.push_back(f);
-          }
-          // the column kept as the support reaches kColumnOverlap mm further along the ribs than the cut, so
-          // that the two solids overlap there (the union then joins them; their cut ends would only touch)
-          if (behind && std::abs(c.x() - x0) < rCut + kColumnOverlap) away.F.push_back(f);
-        }
-        cut.V = s.soup.V;
-        weld(cut);
-        away.V = std::move(s.soup.V);
-        weld(away);
-        const bool keepColumn = opt.spine == SpineMode::Keep;
-        log.push_back("'" + s.name + "': vertebral column found (posterior midline, " + mm(2 * rCut) + " mm wide): cut at the "
-                      "costovertebral joints, " + std::to_string(removed) + " faces removed" +
-                      (keepColumn ? "; the column is kept as the fixed support" : ""));
-        s.soup = std::move(cut);
-        if (keepColumn) kept.push_back({s.name + " vertebral column", {Kind::Vertebra, 0, 0}, std::move(away)});
-      }
-    }
-    if (const auto w = std::find(toWrap.begin(), toWrap.end(), std::size_t(&s - all.data())); w != toWrap.end()) {
-      const double v0 = volume(s.soup);
-      const std::size_t pieces0 = components(s.soup).size();
-      s.soup = std::move(wraps[std::size_t(w - toWrap.begin())]);
-      const double v1 = volume(s.soup);
-      log.push_back("'" + s.name + "': wrapped so that it overlaps the ribs and the sternum it joins (" + std::to_string(pieces0) +
-                    " -> " + std::to_string(components(s.soup).size()) + " pieces, " + mm(v0 / 1000, 2) + " -> " +
-                    mm(v1 / 1000, 2) + " cm3)");
-      s.wrapped = true;
-      ++res.wrapped;
-    }
-    auto pieces = components(s.soup);
-    int fragments = 0, loose = 0;
-    double fragmentVolume = 0;
-    Soup keep;
-    for (auto& p : pieces) {
-      const double v = volume(p);
-      if (v < opt.minVolume) {
-        ++fragments, fragmentVolume += v;
+      const double length = (pos(hi[k][0], hi[k][1], hi[k][2]) - pos(bx.lo[0], bx.lo[1], bx.lo[2])).norm();
+      const char* why = band > 0 && !reaches[k] ? "does not reach the spine (scapula, clavicle or loose bone)"
+                        : length < kMinRibShare * cageWidth ? "is too short for a rib (a fragment of a vertebra, a scapula or a cut rib)"
+                                                            : nullptr;
+      if (why) {
+        ++loose;
+        log.push_back("'" + s.name + "': left out " + piece + ", " + mm(length, 0) + " mm long, that " + why);
         continue;
       }
-      if (rCut > 0) {  // a piece of a fused bone layer is a rib only if it reached the column
-        bool reaches = false;
-        for (const auto& q : p.V) reaches = reaches || (q.y() < yMid && std::abs(q.x() - x0) < rCut + 3.0);
-        if (!reaches) {
-          ++loose;
-          log.push_back("'" + s.name + "': left out a piece of " + std::to_string(p.F.size()) + " faces, " + mm(v / 1000, 2) +
-                        " cm3 at " + at(centroid(p)) + " that does not reach the spine (scapula or loose bone)");
-          continue;
-        }
-      }
-      if (s.cls.kind == Kind::Bone) {
-        kept.push_back({s.name + " piece " + std::to_string(kept.size() + 1), {Kind::Rib, 0, 0}, std::move(p)});
-        continue;
-      }
-      append(keep, p);
+      keep({s.name + " piece " + std::to_string(kept.size() + 1), {Kind::Rib, 0, 0}, {}, -1}, layer, bx, comp, std::int32_t(k + 1));
+      continue;
     }
-    if (fragments) log.push_back("'" + s.name + "': dropped " + std::to_string(fragments) + " fragments under " + mm(opt.minVolume, 0) +
-                                 " mm3 (" + mm(fragmentVolume, 0) + " mm3 in all)");
-    res.dropped += fragments + loose;
-    if (s.cls.kind != Kind::Bone && !keep.empty()) kept.push_back({s.name, s.cls, std::move(keep), s.wrapped});
-    else if (s.cls.kind != Kind::Bone) log.push_back("'" + s.name + "': nothing left after dropping fragments");
+    for (int a = 0; a < 3; ++a)
+      togetherBox.lo[std::size_t(a)] = std::min(togetherBox.lo[std::size_t(a)], bx.lo[std::size_t(a)]),
+      togetherHi[std::size_t(a)] = std::max(togetherHi[std::size_t(a)], hi[k][std::size_t(a)]);
+    for (std::size_t p = 0; p < comp.size(); ++p)
+      if (comp[p] == std::int32_t(k + 1)) together[p] = 1;
   }
+  if (fragments)
+    log.push_back("'" + s.name + "': dropped " + std::to_string(fragments) + " fragments under " + mm(opt.minVolume, 0) + " mm3 (" +
+                  mm(fragmentVolume, 0) + " mm3 in all)");
+  res.dropped += fragments + loose;
+  if (s.cls.kind == Kind::Bone) return;
+  if (togetherHi[0] < 0) {
+    log.push_back("'" + s.name + "': nothing left after dropping fragments");
+    return;
+  }
+  for (int a = 0; a < 3; ++a) togetherBox.n[std::size_t(a)] = togetherHi[std::size_t(a)] - togetherBox.lo[std::size_t(a)] + 1;
+  keep({s.name, s.cls, {}, -1}, layer, togetherBox, together, 1);
 }
 
 Vec3 Preparation::vertebralEnd(const Soup& r) const {
@@ -764,6 +868,7 @@ void Preparation::settleSuperiorAndLeft() {
       for (auto& st : kept) transform(st.soup, turn, Vec3::Zero());
       for (auto& p : spine) p = turn * p;
       fr.R = turn * fr.R;
+      flip = turn * flip;
       x0 = -x0;
     }
     log.push_back("superior from the ribs' slope (" + std::to_string(ends.size()) + " ribs: each runs down from its vertebral end)");
@@ -779,6 +884,7 @@ void Preparation::settleSuperiorAndLeft() {
       for (auto& st : kept) transform(st.soup, mirror, Vec3::Zero());
       for (auto& p : spine) p = mirror * p;
       fr.R = mirror * fr.R;
+      flip = mirror * flip;
       x0 = -x0;
       log.push_back("the names put the left ribs on the right of a right-handed scanner frame: the file is mirrored, and "
                     "the names are followed");
@@ -826,161 +932,78 @@ void Preparation::numberRibs() {
   res.ribsRight = int(named[1].size()), res.ribsLeft = int(named[2].size());
 }
 
-// The column is cut out of a fused bone layer face by face, and the hole each rib's end is left with is
-// closed afterwards. Where a rib runs along the cut (the 1st rib beside its vertebra), that leaves a sheet
-// of bone about 0.6 mm thick in the cut's plane: the tet mesh fills it with sub-millimetre tets, and the
-// edge of the fixed joint on it carries a stress several times the posterior ribs'. Each rib's end is
-// therefore cut again, square, by the solid difference with the band widened by kCutTrim on each side
-// (beyond the sheet and the voxel steps of a 1 mm CT surface).
-constexpr double kCutTrim = 1.5;
-
-int Preparation::squareOffCutEnd(Soup& rib) const {
-  Vec3 lo(x0 - cutHalfWidth - kCutTrim, 1e300, 1e300), hi(x0 + cutHalfWidth + kCutTrim, yMid, -1e300);
-  for (const auto& p : rib.V) lo.y() = std::min(lo.y(), p.y() - 1), lo.z() = std::min(lo.z(), p.z() - 1), hi.z() = std::max(hi.z(), p.z() + 1);
-  if (!(lo.y() < hi.y())) return 0;
-  return cutAwayBox(rib, lo, hi) ? 1 : 0;
-}
-
-void Preparation::repair() {
-  prog(25, "repairing the structures");
-  int done = 0, squared = 0;
-  for (auto& s : kept) {
-    prog(25 + 35 * done++ / int(kept.size()), "repairing the structures");
-    if (s.cls.kind == Kind::NotCage) continue;
-    if (s.cls.kind == Kind::Vertebra) continue;  // the column kept as the support: last, below
-    if (s.wrapped) {
-      append(cartilage, s.soup);
-      continue;
-    }
-    const std::string label = s.cls.kind == Kind::Rib ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number) : s.name;
-    // the least repair that makes it a closed, manifold, embedded surface: duplicate faces removed, holes
-    // closed, else alpha wrapping (which moves the whole surface out by the offset)
-    std::string why = opt.wrapAll ? std::string("every structure wrapped") : defects(s.soup);
-    std::string repaired;
-    if (!opt.wrapAll && !why.empty()) {
-      Soup fixed = s.soup;
-      const int dup = removeDuplicateFaces(fixed);
-      const int holes = defects(fixed).rfind("open", 0) == 0 ? closeHoles(fixed) : 0;
-      if (dup > 0 || holes > 0) {
-        const std::string still = defects(fixed);
-        if (still.empty()) {
-          repaired = (dup ? std::to_string(dup) + " duplicate faces removed" : std::string()) + (dup && holes > 0 ? ", " : "") +
-                     (holes > 0 ? std::to_string(holes) + " holes closed" : std::string());
-          s.soup = std::move(fixed);
-          why.clear();
+// The joined surface is the boundary of the kept structures' grid points, by marching cubes on the one grid:
+// closed, 2-manifold and embedded by construction, whatever the structures were. Each face takes the tissue and
+// part of the structure whose point is nearest to it; the cartilages take the part of the nearest rib.
+void Preparation::unite(bool withColumn, OwnedMesh& out) const {
+  const Box3i& B = grid.box;
+  const auto at = [&](int i, int j, int k) -> int {  // the structure at grid point (i, j, k), -1 for none
+    if (!B.contains(i, j, k)) return -1;
+    const int o = owner[B.index(i, j, k)] - 1;
+    if (o < 0) return -1;
+    const Kind kind = kept[std::size_t(o)].cls.kind;
+    return kind == Kind::NotCage || (kind == Kind::Vertebra && !withColumn) ? -1 : o;
+  };
+  Soup u;
+  std::vector<int> faceOf;  // the structure of each face
+  marchCubes(
+      B.n[0] + 2, B.n[1] + 2, B.n[2] + 2, [&](int a, int b, int c) { return at(a - 1, b - 1, c - 1) >= 0; },
+      [&](int a, int b, int c, int axis) {
+        const int i = a - 1, j = b - 1, k = c - 1;
+        std::array<int, 3> n{i, j, k};
+        ++n[std::size_t(axis)];
+        const int s0 = at(i, j, k), st = s0 >= 0 ? s0 : at(n[0], n[1], n[2]);
+        Vec3 q = grid.point(i, j, k);
+        q[axis] += grid.h * solids[std::size_t(kept[std::size_t(st)].layer)].exit(i, j, k, axis, s0 >= 0);
+        return q;
+      },
+      u.V,
+      [&](int a, int b, int c, const std::array<int, 3>& f) {
+        const Vec3 centre = (u.V[std::size_t(f[0])] + u.V[std::size_t(f[1])] + u.V[std::size_t(f[2])]) / 3.0;
+        int best = -1;
+        double bd = 1e300;
+        for (int corner = 0; corner < 8; ++corner) {
+          const int i = a - 1 + (corner & 1), j = b - 1 + ((corner >> 1) & 1), k = c - 1 + ((corner >> 2) & 1);
+          const int st = at(i, j, k);
+          if (st < 0) continue;
+          if (const double d = (grid.point(i, j, k) - centre).squaredNorm(); d < bd) bd = d, best = st;
         }
-      }
-    }
-    if (!repaired.empty()) log.push_back(label + ": " + repaired + ", " + mm(volume(s.soup) / 1000, 2) + " cm3");
-    if (!why.empty()) {
-      const double v0 = volume(s.soup);
-      Soup w = wrapOf(s.cls.kind == Kind::Rib ? label : s.name, s.soup, opt);
-      const double v1 = volume(w);
-      log.push_back(label + ": " + why + ": wrapped, " + mm(v0 / 1000, 2) + " -> " + mm(v1 / 1000, 2) + " cm3 (" +
-                    (v1 >= v0 ? "+" : "") + mm(100 * (v1 - v0) / std::max(v0, 1e-9), 1) + " %)");
-      s.soup = std::move(w);
-      ++res.wrapped;
-    }
-    if (s.cls.kind == Kind::Rib && cutHalfWidth > 0) squared += squareOffCutEnd(s.soup);  // either spine mode: the same landmarks
-    if (s.cls.kind == Kind::Rib) {
-      append(bone, s.soup);
-      bonePart.insert(bonePart.end(), s.soup.F.size(), ribPart(s.cls.side, s.cls.number));
-    } else if (s.cls.kind == Kind::Cartilage) {
-      append(cartilage, s.soup);
-    } else if (s.cls.kind == Kind::Sternum) {
-      append(sternum, s.soup);
+        u.F.push_back(f);
+        faceOf.push_back(best);
+      });
+  transform(u, flip, Vec3::Zero());  // the turns found after the grid was laid
+  std::vector<int> tissue(u.F.size()), part(u.F.size());
+  for (std::size_t f = 0; f < u.F.size(); ++f) {
+    const Structure& st = kept[std::size_t(faceOf[f])];
+    switch (st.cls.kind) {
+      case Kind::Rib: tissue[f] = int(Tissue::Bone), part[f] = ribPart(st.cls.side, st.cls.number); break;
+      case Kind::Vertebra: tissue[f] = int(Tissue::Bone), part[f] = kVertebralColumn; break;
+      case Kind::Sternum: tissue[f] = int(Tissue::Sternum), part[f] = kSternumBody; break;
+      default: tissue[f] = int(Tissue::Cartilage), part[f] = 0; break;
     }
   }
-  if (squared)
-    log.push_back(std::to_string(squared) + " ribs' ends cut square at " + mm(cutHalfWidth + kCutTrim) + " mm from the midline (" +
-                  mm(kCutTrim) + " mm beyond the vertebral column's cut)");
-  // after the others, so that they are repaired in the same order as when the column is cut
-  for (const auto& s : kept)
-    if (s.cls.kind == Kind::Vertebra) repairColumn(s);
-}
-
-// The column kept as the support: closed (duplicate faces removed, holes closed: the ends the cut left), then
-// always wrapped, so that it overlaps the rib ends it holds (the offset, as the cartilages overlap; vertebra
-// layers that only touch the ribs are joined so too). Its shape matters little (all of it is held fixed),
-// so it is wrapped at a coarse detail, kColumnAlpha at least: the wrap bridges the disc gaps between the
-// vertebrae and the narrow gaps between the column and the ribs beside it, which would leave the joined
-// surface with walls closer than the decimation's edge length (a decimated surface folding through itself
-// there). Wrapping an open surface would give a thin hollow shell (the wrap enters through the holes): a
-// column whose holes do not close is wrapped at 4 mm, which bridges them. Pieces under the minimum volume
-// are dropped.
-void Preparation::repairColumn(const Structure& s) {
-  Soup c = s.soup;
-  const double v0 = volume(c);
-  const int dup = removeDuplicateFaces(c);
-  int holes = 0, border = 0;
-  // edges in one face, a degenerate face's collapsed edge included (as defects() counts them)
-  auto countBorder = [&] { return int(Topology(c).edgeUse().once); };
-  if (countBorder() > 0) holes = closeHoles(c);
-  border = countBorder();
-  constexpr double kColumnAlpha = 2.0, kOpenAlpha = 4.0;
-  const double alpha = std::max(opt.alpha, border > 0 ? kOpenAlpha : kColumnAlpha);
-  Soup w = alphaWrap(border > 0 ? s.soup : c, alpha, opt.offset);
-  Soup keep;
-  int small = 0;
-  for (auto& p : components(w)) {
-    if (volume(p) < opt.minVolume) {
-      ++small;
-      continue;
-    }
-    append(keep, p);
-  }
-  const std::string still = defects(keep);
-  if (keep.empty() || !still.empty())
-    throw TopologyError("Alpha wrapping cannot close the vertebral column from '" + s.name + "' at detail " + mm(alpha, 2) + " mm (" +
-                     (keep.empty() ? std::string("nothing is left") : "the result is " + still) +
-                     "): set 'Spine' to cut at the costovertebral joints, or check the layer.");
-  log.push_back("vertebral column ('" + s.name + "'), kept as the fixed support: " +
-                (dup ? std::to_string(dup) + " duplicate faces removed, " : std::string()) +
-                (holes > 0 ? std::to_string(holes) + " holes closed, " : std::string()) +
-                (border > 0 ? std::to_string(border) + " border edges stay open, " : std::string()) + "wrapped at detail " +
-                mm(alpha, 1) + " mm" +
-                ", " + mm(v0 / 1000, 2) + " -> " + mm(volume(keep) / 1000, 2) + " cm3, " + std::to_string(components(keep).size()) +
-                " pieces" + (small ? " (" + std::to_string(small) + " under the minimum volume dropped)" : std::string()));
-  append(column, keep);
-  ++res.wrapped;
+  partsOfCartilage(u, tissue, part);
+  toMesh(u, out);
+  writeFaceLabels(out, tissue, part);
 }
 
 void Preparation::join(CMeshO& cage) {
   prog(60, "joining the tissues");
-  OwnedMesh boneM, cartM, sternM, columnM;
-  toMesh(bone, boneM);
-  writeFaceLabels(boneM, std::vector<int>(bone.F.size(), int(Tissue::Bone)), bonePart);
-  toMesh(cartilage, cartM);
-  toMesh(sternum, sternM);
-  std::vector<nuss::TissueLayer> layers{{"ribs", &boneM, Tissue::Bone}, {"costal cartilage", &cartM, Tissue::Cartilage},
-                                        {"sternum", &sternM, Tissue::Sternum}};
-  if (column.empty()) {
-    unite(layers, joined, true);
+  unite(false, joined);
+  const Soup s = surfaceOf(joined, kFiniteFaces);
+  log.push_back("joined on the grid: " + piecesOf(s, *readFaceLabels(joined)) + ", " + mm(volume(s) / 1000, 1) + " cm3, " +
+                std::to_string(joined.fn) + " faces");
+  if (std::none_of(kept.begin(), kept.end(), [](const Structure& st) { return st.cls.kind == Kind::Vertebra; })) {
     decimate(joined, cage);
     return;
   }
-  // the landmarks come from the cage as the cut mode joins it, so that they are the same either way: with the
-  // column, the rib ends (and so the costovertebral joints) lie inside it
-  unite(layers, joined, false);
+  // the landmarks come from the cage without the column, so that they are the same in either spine mode: with
+  // the column, the rib ends (and so the costovertebral joints) lie inside it
   prog(70, "joining the tissues and the vertebral column");
-  // the column: a layer of its own (it overlaps the ribs), its faces and tets part kVertebralColumn
-  toMesh(column, columnM);
-  writeFaceLabels(columnM, std::vector<int>(column.F.size(), int(Tissue::Bone)), std::vector<int>(column.F.size(), kVertebralColumn));
-  layers.push_back({"vertebral column", &columnM, Tissue::Bone});
   OwnedMesh withColumn;
-  unite(layers, withColumn, true);
+  unite(true, withColumn);
+  log.push_back("with the vertebral column as the fixed support: " + std::to_string(withColumn.fn) + " faces");
   decimate(withColumn, cage);
-}
-
-void Preparation::unite(const std::vector<nuss::TissueLayer>& layers, OwnedMesh& out, bool logIt) {
-  nuss::JoinStats js;
-  nuss::joinTissueLayers(layers, {}, out, &js);
-  const int shells = dropTinyShells(out, std::max(opt.minVolume, 1.0));
-  if (logIt)
-    log.push_back("joined: " + std::to_string(js.components - shells) + " connected pieces" +
-                  (shells ? " (" + std::to_string(shells) + " tiny shells where two surfaces touch removed)" : std::string()) +
-                  ", " + mm(js.unionVolume / 1000, 1) + " cm3 (the structures add up to " + mm(js.sumVolume / 1000, 1) +
-                  " cm3), " + std::to_string(out.fn) + " faces");
 }
 
 // edges shorter than this share of the edge length are collapsed after the decimation
@@ -1154,11 +1177,10 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
   p.orient();
   lap("classify, units and frame");
   p.separate();
-  lap("separate");
+  lap("solids and separate");
   p.settleSuperiorAndLeft();
   p.numberRibs();
-  p.repair();
-  lap("number and repair");
+  lap("number");
   p.join(cage);
   lap("join and decimate");
   p.placeAndCentre(cage);

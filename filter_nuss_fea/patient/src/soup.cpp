@@ -8,12 +8,10 @@
 #include <tuple>
 
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
-#include <CGAL/Polygon_mesh_processing/corefinement.h>
 #include <CGAL/Polygon_mesh_processing/orient_polygon_soup.h>
 #include <CGAL/Polygon_mesh_processing/orientation.h>
 #include <CGAL/Polygon_mesh_processing/polygon_soup_to_polygon_mesh.h>
 #include <CGAL/Polygon_mesh_processing/triangulate_faces.h>
-#include <CGAL/Polygon_mesh_processing/triangulate_hole.h>
 #include <CGAL/Surface_mesh.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Bounded_normal_change_filter.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Constrained_placement.h>
@@ -21,7 +19,6 @@
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Edge_length_stop_predicate.h>
 #include <CGAL/Surface_mesh_simplification/Policies/Edge_collapse/Midpoint_placement.h>
 #include <CGAL/Surface_mesh_simplification/edge_collapse.h>
-#include <CGAL/alpha_wrap_3.h>
 #include <CGAL/boost/graph/generators.h>
 #include <CGAL/boost/graph/helpers.h>
 #include <vcg/complex/allocate.h>
@@ -161,27 +158,6 @@ int removeDuplicateFaces(Soup& s) {
   return removed;
 }
 
-int closeHoles(Soup& s) {
-  namespace PMP = CGAL::Polygon_mesh_processing;
-  auto [pts, polys] = polygonSoupOf(s);
-  if (!PMP::orient_polygon_soup(pts, polys) || !PMP::is_polygon_soup_a_polygon_mesh(polys)) return -1;
-  Mesh m;
-  PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
-  std::vector<Mesh::Halfedge_index> borders;
-  std::set<Mesh::Halfedge_index> visited;
-  for (auto h : m.halfedges()) {
-    if (!m.is_border(h) || visited.count(h)) continue;
-    borders.push_back(h);
-    for (auto g : CGAL::halfedges_around_face(h, m)) visited.insert(g);
-  }
-  for (auto h : borders) {
-    std::vector<Mesh::Face_index> added;
-    PMP::triangulate_hole(m, h, std::back_inserter(added));
-  }
-  s = soupOfSurfaceMesh(m);
-  return int(borders.size());
-}
-
 // A collapse that makes the surface cross itself is undone by collapsing again from the input with the edges
 // near the crossing kept: every edge with a vertex within kKeepMargin edge lengths of a crossing face's box
 // (grown by that much again on each attempt), so that the rest of the surface still loses its short edges.
@@ -236,24 +212,6 @@ int collapseShortEdges(Soup& s, double minLength, int* keptEdges) {
   return -1;
 }
 
-bool cutAwayBox(Soup& s, const Vec3& lo, const Vec3& hi) {
-  namespace PMP = CGAL::Polygon_mesh_processing;
-  if (!defects(s).empty()) return false;
-  auto [pts, polys] = polygonSoupOf(s);
-  Mesh m, box;
-  PMP::polygon_soup_to_polygon_mesh(pts, polys, m);
-  CGAL::make_hexahedron(K::Point_3(lo.x(), lo.y(), lo.z()), K::Point_3(hi.x(), lo.y(), lo.z()), K::Point_3(hi.x(), hi.y(), lo.z()),
-                        K::Point_3(lo.x(), hi.y(), lo.z()), K::Point_3(lo.x(), hi.y(), hi.z()), K::Point_3(lo.x(), lo.y(), hi.z()),
-                        K::Point_3(hi.x(), lo.y(), hi.z()), K::Point_3(hi.x(), hi.y(), hi.z()), box);
-  PMP::triangulate_faces(box);
-  if (!PMP::is_outward_oriented(m)) PMP::reverse_face_orientations(m);
-  if (!PMP::is_outward_oriented(box)) PMP::reverse_face_orientations(box);
-  Mesh out;
-  if (!PMP::corefine_and_compute_difference(m, box, out) || out.is_empty()) return false;
-  s = soupOfSurfaceMesh(out);
-  return true;
-}
-
 std::string defects(const Soup& s) {
   if (s.F.empty()) return "no faces";
   const Topology t(s);
@@ -277,20 +235,6 @@ std::string defects(const Soup& s) {
   if (const auto pairs = selfIntersections(s.V, s.F); !pairs.empty())
     return "intersects itself (" + std::to_string(pairs.size()) + " face pairs)";
   return "";
-}
-
-Soup alphaWrap(const Soup& s, double alpha, double offset) {
-  using K = CGAL::Exact_predicates_inexact_constructions_kernel;
-  using Point = K::Point_3;
-  std::vector<Point> pts;
-  pts.reserve(s.V.size());
-  for (const auto& p : s.V) pts.emplace_back(p.x(), p.y(), p.z());
-  std::vector<std::array<std::size_t, 3>> tris;
-  tris.reserve(s.F.size());
-  for (const auto& f : s.F) tris.push_back({std::size_t(f[0]), std::size_t(f[1]), std::size_t(f[2])});
-  CGAL::Surface_mesh<Point> w;
-  CGAL::alpha_wrap_3(pts, tris, alpha, offset, w);
-  return soupOfSurfaceMesh(w);
 }
 
 }  // namespace pectus::patient

@@ -251,24 +251,9 @@ TEST(PatientPrepare, RefusesShapesThatSettleNothing) {
   EXPECT_NE(twice.find("Rename the layers"), std::string::npos) << twice;
 }
 
-// A wrap detail coarser than the structure bridges the costal cartilages' gaps: refused, naming the structure
-// and the detail to lower.
-TEST(PatientPrepare, RefusesAWrapThatBridgesTheStructure) {
-  std::array<OwnedMesh, 3> m;
-  toScanner(m);
-  PrepareOptions o;
-  o.wrapAll = true;  // the generator's structures are clean: only then wrapped
-  o.alpha = 20;
-  OwnedMesh cage;
-  const std::string msg = errorOf([&] { preparePatientCage(inputs(m), o, cage); });
-  EXPECT_NE(msg.find("Alpha wrapping cannot follow 'costal cartilage' at detail 20.00 mm"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("Lower 'Wrap detail (alpha)'"), std::string::npos) << msg;
-}
-
 namespace {
-// A layer's pieces, the largest `holed` of them with a hole wider than the wrap's detail (the faces within 4 mm
-// of one vertex removed), each holed one with a fin as well when `fin` (a triangle on one of its edges: a
-// non-manifold edge, so that the hole cannot be closed)
+// A layer's pieces, the largest `holed` of them with a hole (the faces within 4 mm of one vertex removed), each
+// holed one with a fin as well when `fin` (a triangle on one of its edges: a non-manifold edge beside the hole)
 void punch(OwnedMesh& m, std::size_t holed, bool fin) {
   Soup s = surfaceOf(m, kFiniteFaces);
   weld(s);
@@ -297,57 +282,59 @@ void punch(OwnedMesh& m, std::size_t holed, bool fin) {
   m.Clear();
   toMesh(out, m);
 }
-// the structure's volume before and after its wrap, from the Log ("… (28 -> 11 pieces, 8.12 -> 8.48 cm3)")
-std::pair<double, double> wrappedVolumes(const PrepareResult& r, const std::string& name) {
+// a structure's solid volume (cm3) and holes capped from the Log ("'name': 12 pieces -> a solid of 8.12 cm3 (3 holes
+// capped)")
+std::pair<double, int> solidOf(const PrepareResult& r, const std::string& name) {
   for (const auto& l : r.log)
-    if (l.rfind("'" + name + "': wrapped", 0) == 0) {
-      const auto arrow = l.rfind(" -> "), open = l.rfind(", ", arrow);
-      return {std::stod(l.substr(open + 2)), std::stod(l.substr(arrow + 4))};
+    if (l.rfind("'" + name + "': ", 0) == 0 && l.find("a solid of ") != std::string::npos) {
+      const double v = std::stod(l.substr(l.find("a solid of ") + 11));
+      const auto open = l.find(" (", l.find("a solid of "));
+      return {v, open == std::string::npos ? 0 : std::stoi(l.substr(open + 2))};
     }
-  ADD_FAILURE() << "no wrap of '" << name << "' in the Log";
+  ADD_FAILURE() << "no solid of '" << name << "' in the Log";
   return {0, 0};
 }
-// the generator's layers in a scanner frame, the cartilage layer punched (punch), prepared at a wrap detail of
-// 1.5 mm: wider than the default, for the test's time; the holes are wider still
 PrepareResult prepareHoled(std::size_t holed, bool fin, OwnedMesh& cage) {
   std::array<OwnedMesh, 3> m;
   toScanner(m);
   punch(m[1], holed, fin);
   PrepareOptions o;
   o.edgeLength = 3.0;
-  o.alpha = 1.5;
   return preparePatientCage(inputs(m), o, cage);
 }
 }  // namespace
 
-// A cartilage with a hole wider than the wrap's detail: the wrap would go in through it and wrap the inside as
-// well, a hollow shell that TetGen fills with slivers. The hole is closed first, so the wrap holds the whole
-// cartilage and grows it a little (by the offset and the closed hole).
-TEST(PatientPrepare, HoledCartilageIsWrappedSolid) {
-  OwnedMesh cage;
-  const auto r = prepareHoled(1, false, cage);
-  const auto [before, after] = wrappedVolumes(r, "costal cartilage");
-  std::printf("  costal cartilage %.3f -> %.3f cm3\n", before, after);
-  EXPECT_GT(after, before);
-  EXPECT_LT(after, 1.1 * before);
+// Cartilages with holes, with and without a fin beside each hole (a non-manifold edge): every hole is capped, and
+// the solid holds what the whole cartilages hold, not a hollow shell (a cap is flat where the removed faces were
+// curved: 8 mm holes in 10 mm bars take a few per cent).
+TEST(PatientPrepare, HoledCartilageIsCappedSolid) {
+  OwnedMesh clean, one, every;
+  std::array<OwnedMesh, 3> m;
+  toScanner(m);
+  PrepareOptions o;
+  o.edgeLength = 3.0;
+  const auto [v0, caps0] = solidOf(preparePatientCage(inputs(m), o, clean), "costal cartilage");
+  const auto [v1, caps1] = solidOf(prepareHoled(1, false, one), "costal cartilage");
+  const auto [v2, caps2] = solidOf(prepareHoled(1000, true, every), "costal cartilage");
+  std::printf("  costal cartilage: clean %.3f cm3, one hole %.3f cm3 (%d capped), every piece holed and finned %.3f cm3 "
+              "(%d capped)\n", v0, v1, caps1, v2, caps2);
+  EXPECT_EQ(caps0, 0);
+  EXPECT_EQ(caps1, 1);
+  EXPECT_GE(caps2, 10);
+  EXPECT_NEAR(v1, v0, 0.01 * v0);
+  EXPECT_NEAR(v2, v0, 0.08 * v0);
 }
 
-// When the hole cannot be closed (a non-manifold edge beside it), a wrap that went in is hollow: refused,
-// naming the structure and what to do.
-TEST(PatientPrepare, RefusesAHollowWrap) {
-  OwnedMesh cage;
-  const std::string msg = errorOf([&] { prepareHoled(1000, true, cage); });
-  EXPECT_NE(msg.find("Alpha wrapping went inside 'costal cartilage' through a hole wider than its detail (1.50 mm)"), std::string::npos) << msg;
-  EXPECT_NE(msg.find("Close the structure's holes"), std::string::npos) << msg;
-}
-
-// A sternum split down its midline (the halves 30 mm apart, joined by their stretched faces) has no midline
+// A sternum split down its midline (the halves 30 mm apart, the faces across the midline removed) has no midline
 // front surface: the deepest point of the funnel cannot be placed, and the message says to pick it. A picked
 // point then stands for it.
 TEST(PatientPrepare, RefusesALandmarkThatCannotBePlacedUnlessPicked) {
   const auto& e = exported();
   std::array<OwnedMesh, 3> m;
   for (int k = 0; k < 3; ++k) mapInto(e.layers[std::size_t(k)], m[std::size_t(k)], Eigen::Matrix3d::Identity(), Eigen::Vector3d::Zero());
+  for (auto& f : m[2].face)
+    if (!f.IsD() && std::min({f.P(0)[0], f.P(1)[0], f.P(2)[0]}) < 0 && std::max({f.P(0)[0], f.P(1)[0], f.P(2)[0]}) >= 0)
+      vcg::tri::Allocator<CMeshO>::DeleteFace(m[2], f);
   for (auto& v : m[2].vert) v.P()[0] += v.P()[0] >= 0 ? 15.0f : -15.0f;
   PrepareOptions o;
   o.edgeLength = 0;
@@ -376,8 +363,7 @@ TEST(PatientPrepare, OptionsOutsideTheirRangesAreRefused) {
     EXPECT_NE(errorOf([&] { preparePatientCage({}, o, cage); }).find(words), std::string::npos) << words;
   };
   refused([](PrepareOptions& o) { o.minVolume = -1; }, "minimum volume must lie in [0, 100000] mm^3");
-  refused([](PrepareOptions& o) { o.alpha = kAlphaRange.lo / 2; }, "wrap detail alpha must lie in [0.2, 20] mm");
-  refused([](PrepareOptions& o) { o.offset = kOffsetRange.hi + 1; }, "wrap offset must lie in [0.01, 5] mm");
+  refused([](PrepareOptions& o) { o.gridStep = kGridStepRange.lo / 2; }, "grid step must lie in [0.3, 3] mm");
   refused([](PrepareOptions& o) { o.edgeLength = kMinEdgeLength / 2; },
           "target edge length must be 0 or lie in [0.5, 10] mm");
 }
@@ -442,27 +428,6 @@ TEST(PatientSoup, ShortEdgesCollapsedKeepingTheSolid) {
   Soup open = s;
   open.F.pop_back();
   EXPECT_EQ(collapseShortEdges(open, 100.0), 0);
-  EXPECT_EQ(open.F.size(), s.F.size() - 1);
-}
-
-TEST(PatientSoup, BoxCutAwayLeavesAPlanarCap) {
-  // a sphere of radius 10 less the box x < 2: a cap 8 mm high, closed by a disc in the plane x = 2
-  Soup s = ballOfRadius10();
-  const double ball = volume(s), exactBall = 4.0 / 3.0 * M_PI * 1000, exactCap = M_PI * 64 * (30 - 8) / 3;
-  ASSERT_TRUE(cutAwayBox(s, Eigen::Vector3d(-20, -20, -20), Eigen::Vector3d(2, 20, 20)));
-  EXPECT_EQ(defects(s), "");
-  double xMin = 1e300;
-  int onCap = 0;
-  for (const auto& p : s.V) xMin = std::min(xMin, p.x()), onCap += std::abs(p.x() - 2) < 1e-9;
-  EXPECT_NEAR(xMin, 2.0, 1e-9);
-  EXPECT_GT(onCap, 20);
-  // the polyhedral sphere holds 0.9 % less than the exact one; its cap about as much less
-  std::printf("  ball %.1f mm3 (exact %.1f), cap %.1f mm3 (exact %.1f)\n", ball, exactBall, volume(s), exactCap);
-  EXPECT_NEAR(volume(s) / exactCap, ball / exactBall, 0.01);
-  // an open soup is refused and left as it was
-  Soup open = s;
-  open.F.pop_back();
-  EXPECT_FALSE(cutAwayBox(open, Eigen::Vector3d(-20, -20, -20), Eigen::Vector3d(5, 20, 20)));
   EXPECT_EQ(open.F.size(), s.F.size() - 1);
 }
 

@@ -60,8 +60,7 @@ namespace pectus::patient {
 // Valid ranges of PrepareOptions (preparePatientCage checks them); 'Prepare Patient Rib Cage' declares its
 // parameters with the same constants.
 inline constexpr ParamRange kMinVolumeRange{0, 100000};  ///< PrepareOptions::minVolume (mm^3)
-inline constexpr ParamRange kAlphaRange{0.2, 20};        ///< PrepareOptions::alpha (mm)
-inline constexpr ParamRange kOffsetRange{0.01, 5};       ///< PrepareOptions::offset (mm)
+inline constexpr ParamRange kGridStepRange{0.3, 3};      ///< PrepareOptions::gridStep (mm)
 /// PrepareOptions::edgeLength (mm): 0 keeps every face, else at least kMinEdgeLength
 inline constexpr ParamRange kEdgeLengthRange{0, 10};
 inline constexpr double kMinEdgeLength = 0.5;
@@ -95,15 +94,12 @@ struct PrepareOptions {
   Units units = Units::Auto;
   FrameMode frame = FrameMode::Auto;
   double minVolume = 200;    ///< mm^3: smaller connected pieces are fragments, dropped
-  /// alpha wrapping (costal cartilages always, other structures when they need it): the detail (mm, the
-  /// smallest gap kept open) and the offset from the input (mm). Small, so that the wrap adds little volume:
-  /// the cartilages carry most of the cage's compliance (1 mm voxel export: +4 % cartilage volume)
-  double alpha = 0.5;
-  double offset = 0.03;
+  /// mm: the step of the grid on which every structure becomes a solid (about a CT's voxel). Features thinner
+  /// than a step may close up or vanish; the surface between grid points follows the input's faces
+  double gridStep = 0.8;
   /// mm: the joined surface is decimated to this edge length (0: kept as is). The FE analysis' cost grows
   /// with its cube: 4 mm gives about 100,000 tets for a child's cage (2 mm: about 480,000)
   double edgeLength = 4.0;
-  bool wrapAll = false;      ///< wrap every structure, clean or not
   SpineMode spine = SpineMode::Cut;
   /// user landmarks in the INPUT layers' frame and units (picked points); each replaces the automatic
   /// landmark of its code
@@ -114,7 +110,7 @@ struct PrepareResult {
   std::vector<Landmark> landmarks;        ///< in the project frame
   Eigen::Matrix4d inputToModel = Eigen::Matrix4d::Identity();  ///< input layer coordinates -> result (mm)
   std::vector<std::string> log;           ///< every decision, one line each
-  int ribsRight = 0, ribsLeft = 0, wrapped = 0, dropped = 0;
+  int ribsRight = 0, ribsLeft = 0, dropped = 0;
   double seconds = 0;
 };
 

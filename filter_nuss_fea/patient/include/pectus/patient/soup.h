@@ -32,9 +32,6 @@ void transform(Soup& s, const Eigen::Matrix3d& R, const Eigen::Vector3d& t);
 
 /// Removes faces with the same three vertices as an earlier face; returns how many
 int removeDuplicateFaces(Soup& s);
-/// Closes every hole (border loop) of a 2-manifold soup by a minimal-area triangulation (CGAL's
-/// triangulate_hole); returns the number of holes closed, -1 if the soup is not a 2-manifold mesh
-int closeHoles(Soup& s);
 
 /// Collapses the edges shorter than minLength, the shortest first, each to its midpoint (CGAL's edge
 /// collapse: Edge_length_cost, Midpoint_placement, Bounded_normal_change_filter), keeping the topology. A closed
@@ -43,14 +40,7 @@ int closeHoles(Soup& s);
 /// crossing kept (their number in keptEdges); -1 and s unchanged when a few such attempts still cross.
 int collapseShortEdges(Soup& s, double minLength, int* keptEdges = nullptr);
 
-/// Removes what lies inside the axis-aligned box lo..hi from the solid the soup bounds (CGAL's corefinement
-/// difference): the cut faces become planar caps on the box's sides. A closed, 2-manifold soup without
-/// self-intersections only; returns false and leaves s unchanged when it is not one or the difference fails.
-bool cutAwayBox(Soup& s, const Eigen::Vector3d& lo, const Eigen::Vector3d& hi);
-
 /// Why the soup is not a closed, 2-manifold, self-intersection-free surface ("" when it is)
 std::string defects(const Soup& s);
-/// CGAL's alpha wrap (detail alpha, offset; mm): a closed, 2-manifold, outward-oriented surface
-Soup alphaWrap(const Soup& s, double alpha, double offset);
 
 }  // namespace pectus::patient

@@ -65,3 +65,27 @@ constexpr int kSternumLabel = 116, kCartilageLabel = 117, kScapulaLeftLabel = 71
 Phantom makePhantom(const PhantomParams& p, const std::function<void(const char*)>& progress = {});
 
 }  // namespace pectus::phantom
+
+namespace pectus::phantom {
+
+/// A triangle as its three corners (an STL file keeps no shared vertices)
+using Triangle = std::array<Eigen::Vector3d, 3>;
+struct ExportedFile {
+  std::string name;             ///< the file's stem: bone, sternum, costal_cartilages
+  std::vector<Triangle> tris;   ///< scanner frame, mm
+  bool ascii = false;           ///< written as ASCII STL
+};
+
+/// The phantom as a hospital's segmentation software exports it (../notes/patient-data.md): three surfaces.
+///  - bone: the ribs, vertebrae and scapulae as one surface (fused wherever their voxels touch); the field of
+///    view cut flat at the top (through the first vertebra) and the bottom (8 voxels above the lowest rib's end);
+///    a closed marrow shell nested inside each rib and vertebra (the cavity's boundary, facing inward);
+///    900 specks of one voxel away from the anatomy; two blocks of bone beside the vertebral column, as large
+///    as a rib's piece by volume but no rib (a transverse process split off); 619 faces written twice;
+///  - sternum (ASCII): manubrium and body apart, each with its marrow shell, ten two-triangle slivers near it,
+///    and a patch of faces tilted through the surface (self-intersecting face pairs);
+///  - costal_cartilages: every cartilage piece in one file, three of them with a hole (open edges).
+/// Deterministic for a phantom and a seed.
+std::vector<ExportedFile> messyExport(const Phantom& ph, std::uint32_t seed);
+
+}  // namespace pectus::phantom
