@@ -171,7 +171,13 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
                              "Segmentation').");
 
   pectus::OwnedMesh cage;
-  const auto r = pectus::patient::preparePatientCage(layers, o, cage, [&](int pc, const char* w) { ctx.progress(pc, w); });
+  pectus::patient::PrepareResult r;
+  try {
+    r = pectus::patient::preparePatientCage(layers, o, cage, [&](int pc, const char* w) { ctx.progress(pc, w); });
+  } catch (const pectus::patient::PrepareRefusal& e) {
+    for (const auto& line : e.log) ctx.log(line);  // the decisions made before the refusal
+    throw pectus::InputError(e.what());
+  }
 
   MeshModel& mm = ctx.addLayer("patient rib cage");
   mm.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY);

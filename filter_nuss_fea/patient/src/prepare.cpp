@@ -496,6 +496,7 @@ class Preparation {
   void prog(int pc, const char* what) const { if (progress_) progress_(pc, what); }
   void classifyUnknownByShape(std::vector<Structure>& unknown);  ///< 1, for the layers whose names say nothing
   void checkTheCage(std::size_t layers) const;  ///< 1, finished: a sternum, cartilage and ribs are there
+  std::string whatTheScanHolds() const;         ///< 1, for a refusal: the layers' extent and anatomy
   Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
   void takeApart(std::size_t layer);         ///< 4, for one layer: its pieces kept, cut or left out
   void bridgeAlongTheLength(const std::string& name, const Solid& so, std::vector<std::uint8_t>& mask);  ///< 4, the sternum
@@ -503,6 +504,7 @@ class Preparation {
   template <class Keep>
   Soup solidSurface(std::size_t layer, const Box3i& sub, const Keep& keep) const;
   void keep(Structure s, std::size_t layer, const Box3i& sub, const std::vector<std::int32_t>& comp, std::int32_t id);
+  void dropUnanchored();                              ///< 6. pieces that join no rib left out
   void unite(bool withColumn, OwnedMesh& out) const;  ///< 6. the surface of the kept structures' points, labelled
   void decimate(OwnedMesh& joinedSurface, CMeshO& cage);  ///< 6. to the edge length
 
@@ -541,7 +543,6 @@ void Preparation::classify(const std::vector<InputLayer>& layers) {
     (s.cls.kind == Kind::Unknown ? unknown : all).push_back(std::move(s));
   }
   if (!unknown.empty()) classifyUnknownByShape(unknown);
-  checkTheCage(layers.size());
   for (const auto& s : all)
     log.push_back("'" + s.name + "': " +
                   (s.cls.kind == Kind::Rib ? (s.cls.number ? sideName(s.cls.side) + " rib " + std::to_string(s.cls.number)
@@ -551,6 +552,7 @@ void Preparation::classify(const std::vector<InputLayer>& layers) {
                    : s.cls.kind == Kind::Vertebra ? std::string(opt.spine == SpineMode::Keep ? "vertebral column (kept as the fixed support)" : "vertebral column (frame and landmarks, not in the model)")
                                                   : std::string("bone (ribs, maybe fused to the spine)")) +
                   ", " + std::to_string(s.soup.F.size()) + " faces");
+  checkTheCage(layers.size());
 }
 
 void Preparation::classifyUnknownByShape(std::vector<Structure>& unknown) {
@@ -572,6 +574,46 @@ void Preparation::classifyUnknownByShape(std::vector<Structure>& unknown) {
   }
 }
 
+// What the recognised layers hold and where, for the refusals of a partial scan: "The layers span z = -180.0 to
+// -93.0 (file units) and hold left ribs 7-12, right ribs 7-12, costal cartilage, vertebrae T11-T12."
+std::string Preparation::whatTheScanHolds() const {
+  Eigen::AlignedBox3d box;
+  std::map<int, std::set<int>> ribs;
+  std::vector<std::string> vertebrae;
+  std::set<std::string> other;
+  for (const auto& s : all) {
+    for (const auto& p : s.soup.V) box.extend(p);
+    if (s.cls.kind == Kind::Rib && s.cls.number) ribs[s.cls.side].insert(s.cls.number);
+    else if (s.cls.kind == Kind::Vertebra) vertebrae.push_back(s.name);
+    else other.insert(s.cls.kind == Kind::Cartilage ? "costal cartilage" : s.cls.kind == Kind::Sternum ? "sternum"
+                      : s.cls.kind == Kind::Bone ? "bone" : "ribs");
+  }
+  const auto range = [](const std::set<int>& n) {
+    std::string r;
+    for (auto it = n.begin(); it != n.end();) {
+      auto end = it;
+      while (std::next(end) != n.end() && *std::next(end) == *end + 1) ++end;
+      r += (r.empty() ? "" : ", ") + std::to_string(*it) + (end != it ? "-" + std::to_string(*end) : "");
+      it = std::next(end);
+    }
+    return r;
+  };
+  std::vector<std::string> parts;
+  for (const auto& [side, n] : ribs) parts.push_back((side == 2 ? "left ribs " : side == 1 ? "right ribs " : "ribs ") + range(n));
+  for (const auto& o : other) parts.push_back(o);
+  if (vertebrae.size() > 6) parts.push_back(std::to_string(vertebrae.size()) + " vertebrae");
+  for (std::size_t i = 0; vertebrae.size() <= 6 && i < vertebrae.size(); ++i) parts.push_back("'" + vertebrae[i] + "'");
+  std::string held;
+  for (std::size_t i = 0; i < parts.size(); ++i) held += (i ? (i + 1 == parts.size() ? " and " : ", ") : "") + parts[i];
+  if (box.isEmpty()) return "";
+  return " The layers span z = " + mm(box.min().z()) + " to " + mm(box.max().z()) + " (file units)" +
+         (held.empty() ? std::string(".") : " and hold " + held + ".") +
+         (ribs.empty() || *std::min_element(ribs.begin(), ribs.end(), [](const auto& a, const auto& b) {
+                            return *a.second.begin() < *b.second.begin(); })->second.begin() <= 1
+              ? std::string()
+              : " The scan looks partial (its top ends below the first ribs): the analysis needs the whole rib cage.");
+}
+
 void Preparation::checkTheCage(std::size_t layers) const {
   auto count = [&](Kind k) { return std::count_if(all.begin(), all.end(), [&](const Structure& s) { return s.cls.kind == k; }); };
   if (all.empty())
@@ -580,12 +622,13 @@ void Preparation::checkTheCage(std::size_t layers) const {
                      "'vertebrae_T1' ...) or 'bone', 'cartilage', 'sternum'.");
   if (!count(Kind::Sternum))
     throw InputError("No sternum: none of the layers is named 'sternum' (or 'manubrium', 'xiphoid'). Import the sternum's "
-                     "segmentation, or rename its layer.");
+                     "segmentation, or rename its layer." + whatTheScanHolds());
   if (!count(Kind::Cartilage))
     throw InputError("No costal cartilage: none of the layers is named like 'costal_cartilages' or 'cartilage'. The "
-                     "cartilages join the ribs to the sternum; segment them (TotalSegmentator's 'costal_cartilages').");
+                     "cartilages join the ribs to the sternum; segment them (TotalSegmentator's 'costal_cartilages')." +
+                     whatTheScanHolds());
   if (!count(Kind::Rib) && !count(Kind::Bone))
-    throw InputError("No ribs: none of the layers is named like 'rib_left_1', 'ribs' or 'bone'.");
+    throw InputError("No ribs: none of the layers is named like 'rib_left_1', 'ribs' or 'bone'." + whatTheScanHolds());
 }
 
 void Preparation::toMillimetres() {
@@ -987,8 +1030,48 @@ void Preparation::unite(bool withColumn, OwnedMesh& out) const {
   writeFaceLabels(out, tissue, part);
 }
 
+// A piece of cartilage or sternum that joins no rib would float in the analysis: a cartilage's end cut off by the
+// field of view, or a piece of a structure separated from the rest. Such pieces are left out.
+void Preparation::dropUnanchored() {
+  const Box3i& B = grid.box;
+  std::vector<std::uint8_t> mask(owner.size(), 0);
+  for (std::size_t p = 0; p < owner.size(); ++p) {
+    if (!owner[p]) continue;
+    const Kind k = kept[owner[p] - 1u].cls.kind;
+    mask[p] = k == Kind::Rib || k == Kind::Cartilage || k == Kind::Sternum;
+  }
+  std::vector<std::int32_t> comp;
+  const auto count = components6(B.n, mask, comp);
+  std::vector<char> anchored(count.size(), 0);
+  std::vector<Eigen::AlignedBox3d> where(count.size());
+  std::vector<std::set<std::string>> what(count.size());
+  for (int c = 0; c < B.n[2]; ++c)
+    for (int b = 0; b < B.n[1]; ++b)
+      for (int a = 0; a < B.n[0]; ++a) {
+        const std::size_t p = B.index(a, b, c);
+        if (!comp[p]) continue;
+        const Structure& st = kept[owner[p] - 1u];
+        const std::size_t k = std::size_t(comp[p] - 1);
+        anchored[k] = anchored[k] || st.cls.kind == Kind::Rib;
+        where[k].extend(grid.point(a, b, c));
+        what[k].insert(st.cls.kind == Kind::Cartilage ? "costal cartilage" : st.cls.kind == Kind::Sternum ? "sternum" : "rib");
+      }
+  const double h3 = grid.h * grid.h * grid.h;
+  for (std::size_t k = 0; k < count.size(); ++k) {
+    if (anchored[k]) continue;
+    std::string names;
+    for (const auto& n : what[k]) names += (names.empty() ? "" : " and ") + n;
+    log.push_back("left out a piece of " + names + " of " + mm(double(count[k]) * h3 / 1000, 2) + " cm3 at " +
+                  at(flip * where[k].center()) + " that joins no rib (cut off by the field of view, or apart from the rest)");
+    ++res.dropped;
+  }
+  for (std::size_t p = 0; p < owner.size(); ++p)
+    if (comp[p] && !anchored[std::size_t(comp[p] - 1)]) owner[p] = 0;
+}
+
 void Preparation::join(CMeshO& cage) {
   prog(60, "joining the tissues");
+  dropUnanchored();
   unite(false, joined);
   const Soup s = surfaceOf(joined, kFiniteFaces);
   log.push_back("joined on the grid: " + piecesOf(s, *readFaceLabels(joined)) + ", " + mm(volume(s) / 1000, 1) + " cm3, " +
@@ -1108,7 +1191,7 @@ NameClass classifyName(const std::string& name) {
     if (std::isdigit(static_cast<unsigned char>(x[0])) && x.size() <= 2) c.number = std::stoi(x);
   static const char* notCage[] = {"scapul", "clavic", "humer", "femur", "hip", "skull", "lung", "heart", "liver",
                                   "aorta", "trachea", "esophag", "kidney", "spleen", "stomach", "sacrum", "pelvi",
-                                  "skin", "body", "muscle", "fat", "vein", "arter", "atrial", "ventric", "thyroid"};
+                                  "skin", "body", "muscle", "fat", "vein", "arter", "atrial", "ventric", "thyroid", "cord"};
   for (const char* n : notCage)
     if (has(n)) return {Kind::NotCage, c.side, c.number};
   if (has("cartilag") || has("chondr")) return {Kind::Cartilage, c.side, c.number};
@@ -1117,7 +1200,17 @@ NameClass classifyName(const std::string& name) {
   const bool rib = has("rib") || has("costa");
   if (rib && c.number >= 1 && c.number <= 12) return {Kind::Rib, c.side, c.number};
   if (rib || has("bone") || has("skelet") || has("thorax") || has("cage")) return {Kind::Bone, c.side, 0};
-  return {Kind::Unknown, c.side, c.number};
+  // Only a name that says nothing ('Segment_1', 'label 3', '7') leaves the layer to its shape: any other name
+  // (an organ, a muscle, a vessel) is a structure that is not the rib cage, and never a candidate sternum.
+  static const char* generic[] = {"segment", "seg", "label", "structure", "object", "mesh", "model", "layer", "part",
+                                  "region", "mask", "roi", "untitled", "unnamed", "new", "surface", "export", "stl",
+                                  "obj", "ply", "off", "nii", "gz", "piece", "component", "item", "solid", "shape", "l", "r",
+                                  "left", "right"};
+  const bool saysNothing = std::all_of(w.begin(), w.end(), [&](const std::string& x) {
+    return std::isdigit(static_cast<unsigned char>(x[0])) ||
+           std::any_of(std::begin(generic), std::end(generic), [&](const char* g) { return x == g; });
+  });
+  return {saysNothing ? Kind::Unknown : Kind::NotCage, c.side, c.number};
 }
 
 std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped) {
@@ -1172,18 +1265,22 @@ PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const Pr
     t = now;
   };
   Preparation p(opt, progress);
-  p.classify(layers);
-  p.toMillimetres();
-  p.orient();
-  lap("classify, units and frame");
-  p.separate();
-  lap("solids and separate");
-  p.settleSuperiorAndLeft();
-  p.numberRibs();
-  lap("number");
-  p.join(cage);
-  lap("join and decimate");
-  p.placeAndCentre(cage);
+  try {
+    p.classify(layers);
+    p.toMillimetres();
+    p.orient();
+    lap("classify, units and frame");
+    p.separate();
+    lap("solids and separate");
+    p.settleSuperiorAndLeft();
+    p.numberRibs();
+    lap("number");
+    p.join(cage);
+    lap("join and decimate");
+    p.placeAndCentre(cage);
+  } catch (const InputError& e) {
+    throw PrepareRefusal(e.what(), p.res.log);
+  }
   lap("landmarks");
   p.res.log.push_back("time: " + times);
   p.res.seconds = std::chrono::duration<double>(Clock::now() - t0).count();

@@ -1,5 +1,6 @@
-// A patient's rib cage from a CT segmentation, made ready for the analyses: the structures classified,
-// repaired, put in the project's frame, numbered, joined into one labelled surface, and landmarked.
+// A patient's rib cage from a CT segmentation, made ready for the analyses: the structures classified, put in
+// the project's frame, made solids on one grid, separated, numbered, joined into one labelled surface, and
+// landmarked.
 // Host-free (vcglib + Eigen + CGAL, no Qt): 'Prepare Patient Rib Cage' maps it to layers.
 //
 // The steps, in order (each one Logged):
@@ -17,30 +18,27 @@
 //  3. the anatomical frame: anterior from the bone's centre to the sternum, the long axis along the
 //     sternum, snapped to the file's axes when within 30 degrees (CT exports are axis-aligned), superior
 //     where the cage is narrow, the patient's left from the right-handed scanner frame (or from the names);
-//  4. fragments (pieces under the minimum volume) are dropped; bone fused to the vertebral column is cut
-//     at the costovertebral joints (the column is the posterior midline bone running the whole height);
-//     pieces of such a layer that do not reach the cut (scapulae, loose pieces) are left out. The column
-//     (the cut-away bone and the vertebra layers) is left out of the model, as the thesis does, or kept as
-//     the fixed support (PrepareOptions::spine): then it is always wrapped (so that it overlaps the rib heads
-//     it joins, as the cartilages do) and joined as tissue bone, part kVertebralColumn (400);
+//  4. every structure becomes a solid on one grid (solid_grid.h; step PrepareOptions::gridStep, in the frame's
+//     axes): the grid points that cannot be reached from outside without crossing its faces. Holes are capped
+//     first (a fan over each rim) and faces written twice ignored; self-intersections, nested (marrow) shells,
+//     slivers and fused neighbours then change nothing, and no structure is refused for its geometry. In the
+//     grid: the sternum's gaps along its length (up to 4 mm: manubrium and body apart) are bridged; pieces
+//     under the minimum volume are fragments, dropped; a bone layer's vertebral column (the posterior midline
+//     bone that runs the whole height) is cut away at the costovertebral joints, the ribs' ends square 1.5 mm
+//     beyond it; of the rest, pieces that do not reach the cut (scapulae, clavicles, loose bone) and pieces
+//     shorter than 15 % of the cage's width (split-off processes, cut fragments) are left out, each Logged.
+//     The column (the cut-away bone and the vertebra layers) is left out of the model, as the thesis does, or
+//     kept as the fixed support (PrepareOptions::spine): tissue bone, part kVertebralColumn (400);
 //  5. ribs are numbered per side from the top by the height of their vertebral end (or from their names);
-//  6. each structure that is not a closed, 2-manifold, self-intersection-free surface gets the least repair
-//     that makes it one: duplicate faces removed, holes closed, else wrapped (CGAL alpha_wrap_3: detail
-//     alpha, offset), with its volume change reported; clean ones are kept. A wrap that is not closed and
-//     manifold, or holds more than twice the structure grown by the offset (the detail bridges its gaps),
-//     is refused naming the structure and the detail to change. The wrap is given the structure with its
-//     holes closed (where it is 2-manifold): through a hole wider than the detail it would wrap the inside
-//     too, a hollow shell; a wrap holding less than half the structure is refused. The costal cartilages are always
-//     wrapped (before the fragments are counted): a segmentation's labels only touch, and the small offset
-//     makes each cartilage overlap the bone it joins, which the union needs; the wrap also reconnects the
-//     strips a voxel surface splits where voxels meet at an edge or a corner;
-//  7. the structures are joined (corefinement union: joinTissueLayers) into one surface with tissue and
-//     part per face, the union's specks and voids (closed shells under the minimum volume) removed, then
-//     decimated to the target edge length (kept embedded) and relabelled; a column kept as the support is
-//     a structure of its own in a second union;
-//  8. landmarks (labels.h codes) are placed from the anatomy, on the full-detail union without the column
+//  6. the structures' grid points give one surface (marching cubes; between grid points it follows the input's
+//     faces): closed, 2-manifold and embedded by construction, each face with the tissue and part of the
+//     structure nearest to it (a cartilage face: the nearest rib's part); where structures overlap, the
+//     sternum keeps the point, then the ribs, the cartilages, the column. Its connected pieces are Logged,
+//     then it is decimated to the target edge length (kept embedded) and relabelled;
+//  7. landmarks (labels.h codes) are placed from the anatomy, on the full-detail surface without the column
 //     (the same whatever the edge length and the spine mode); user points override them. A landmark that
 //     cannot be placed is refused naming it and its code (pick it: .pp file), unless the user gives it.
+// Every step is deterministic: the same layers give the same cage, byte for byte, on any thread count.
 // The result is in the project frame (labels.h): mm, +x patient's left, +y anterior, +z superior, x = 0 on
 // the sternum's midline, y = 0 at the vertebral bodies' anterior surface (else at the costovertebral
 // joints), z = 0 half a rib level below the lowest costovertebral joint.
@@ -52,6 +50,7 @@
 #include <Eigen/Dense>
 
 #include "pectus/cmesh.h"
+#include "pectus/errors.h"
 #include "pectus/labels.h"
 #include "pectus/param_range.h"
 
@@ -75,7 +74,8 @@ struct NameClass {
 /// Classifies a structure name (case-insensitive; '_', '-', ' ' and '.' separate words): 'rib_left_3',
 /// 'Rib R 3', 'left rib 3' -> rib; 'costal_cartilages', 'cartilage_left_5' -> cartilage; 'sternum',
 /// 'manubrium', 'xiphoid' -> sternum; 'vertebrae_T5', 'spine' -> vertebra; 'bone', 'ribs', 'skeleton' ->
-/// bone; 'scapula_left', 'clavicula_*', 'humerus_*', organs -> not cage.
+/// bone; 'scapula_left', 'clavicula_*', 'humerus_*', organs and any other name that says something -> not cage;
+/// a name that says nothing ('Segment_1', 'label 3', '7', '') -> unknown (the layer is classified by its shape).
 NameClass classifyName(const std::string& name);
 
 struct InputLayer {
@@ -115,12 +115,20 @@ struct PrepareResult {
 };
 
 /// Builds the labelled cage into `cage` (cleared first; face labels by writeFaceLabels). Throws InputError
-/// naming what to fix: an option outside its range above, no sternum, no cartilage, ribs on one side only, ribs missing, nothing recognised by
-/// name or shape (rename the layers), a frame that cannot be found, a landmark that cannot be placed and is
-/// not given; TopologyError for a structure alpha wrapping cannot close or follow at the requested detail or
-/// that is hollow.
+/// naming what to fix, only for missing anatomy or settings: an option outside its range above, no sternum, no
+/// cartilage, ribs on one side only, ribs missing, nothing recognised by name or shape (rename the layers), a
+/// frame that cannot be found, a landmark that cannot be placed and is not given.
 PrepareResult preparePatientCage(const std::vector<InputLayer>& layers, const PrepareOptions& opt, CMeshO& cage,
                                  const std::function<void(int, const char*)>& progress = {});
+
+/// What preparePatientCage throws for an InputError: the same message, and the decisions made before it (what
+/// each layer was taken for, what was left out and why, the rib numbering), so that the user can rename a layer
+/// or pick a point and try again
+class PrepareRefusal : public InputError {
+ public:
+  PrepareRefusal(const std::string& what, std::vector<std::string> decisions) : InputError(what), log(std::move(decisions)) {}
+  std::vector<std::string> log;
+};
 
 /// Points picked with MeshLab's PickPoints tool (a .pp file: <point x=".." y=".." z=".." name=".." active="1"/>)
 /// as landmarks: the name is the code ("500") or starts with it ("500 lower sternum end"); inactive points
