@@ -3,8 +3,10 @@
 generator's own cage of the same child. One table.
 
 The export is the default cage (age 7, pectus index 4) rasterised on a 1 mm CT grid by pectus_ct_phantom and
-written as messy STL surfaces (ribs fused to the spine, fragments, duplicate faces, a self-intersecting patch,
-a hole, scapulae) and as TotalSegmentator's per-structure NIfTI masks. Rows:
+written as messy STL surfaces with a real export's defects (ribs, spine and scapulae in one surface cut by the
+field of view, marrow shells nested in the bones, 900 specks, blocks beside the spine, duplicate faces; the
+sternum in pieces with slivers and a self-intersecting patch; every cartilage in one file, three with holes)
+and as TotalSegmentator's per-structure NIfTI masks. Rows:
   - preparing it (import + prepare, meshlabserver): wall time, peak memory, faces, the prepare step's own time;
   - the generator making the same cage at the prepared cage's edge length (4 mm);
   - the calibrated analysis (44.7 mm) of each, large displacement TET10 with the FE filter's defaults (neo-Hookean, displacement
@@ -79,8 +81,9 @@ def main() -> int:
                                    [(cage, n, "fc fq"), (lms, n + 1, "vq")])
         step = mlx.grab(log, r"Patient rib cage: .*; ([0-9.]+) s")
         faces = mlx.grab(log, r"Patient rib cage: (\d+) faces", int)
-        rows.append((f"prepare: {name} ({n} layers)", f"{faces} faces", f"{step:.1f} s step" if step else "failed",
-                     wall, rss))
+        inputs = mlx.grab(log, r"Imported \d+ structures from .*?: (\d+) faces", int)
+        rows.append((f"prepare: {name} ({n} layers, {inputs} faces)", f"{faces} faces",
+                     f"{step:.1f} s step" if step else "failed", wall, rss))
         cages[name] = (cage, lms)
     gen = os.path.join(a.out, "generated.ply"), os.path.join(a.out, "generated_landmarks.ply")
     edge = prepare_patient_rib_cage().params["edgeLength"].value  # both cages meshed alike

@@ -252,6 +252,7 @@ int main(int argc, char** argv) {
       std::printf("  %-48s %10ju bytes\n", p.string().c_str(), fs::file_size(p));
     }
     if (a.only.count("masks")) {
+      fs::remove_all(dir / "masks");
       fs::create_directories(dir / "masks");
       const std::vector<std::pair<int, std::string>> items(v.names.begin(), v.names.end());
       std::vector<std::string> errors(items.size());
@@ -276,6 +277,7 @@ int main(int argc, char** argv) {
     const double tNifti = secondsSince(t0);
     t0 = Clock::now();
     if (a.only.count("stl")) {
+      fs::remove_all(dir / "stl_clean");
       fs::create_directories(dir / "stl_clean");
       std::uintmax_t total = 0;
       std::size_t tris = 0;
@@ -291,6 +293,7 @@ int main(int argc, char** argv) {
     const double tStl = secondsSince(t0);
     t0 = Clock::now();
     if (a.only.count("messy")) {
+      fs::remove_all(dir / "stl_messy");  // an earlier run's files would be imported with these
       fs::create_directories(dir / "stl_messy");
       writeMessy(ph, a, dir / "stl_messy");
     }

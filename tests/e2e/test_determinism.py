@@ -1,16 +1,20 @@
 """E2E, determinism: every filter, run by meshlabserver with OMP_NUM_THREADS=1 and =2 on the
 same input and seed (the valid inputs of the bad-input matrix, 6x finer, and the example parameters; the Nuss FE
 analysis on the coarse 8 mm cage, linear TET4 with the example's tet quality, calibrated to 10 mm; the Nuss Bar Planner likewise, quick mode,
-space 4 with one and with two bars, writing its CSV), gives byte-identical outputs: every layer saved after it,
-every file it writes, and its Log lines with timings masked."""
+space 4 with one and with two bars, writing its CSV; Prepare Patient Rib Cage on the CT phantom's messy export,
+a 5-year-old's cage on a 1.5 mm grid), gives byte-identical outputs: every layer saved after it, every file it
+writes, and its Log lines with timings masked."""
 import csv
 import glob
 import io
 import os
+import subprocess
 
 import bad_input_matrix as bim
+import harness as h
 import pectus_mlx as mlx
 from harness import check, finish
+from pectus_filters import import_ct_segmentation, prepare_patient_rib_cage
 
 runner = bim.Runner(size=6)  # 1250 and 10k triangles: enough work for the threads to share
 W = runner.dir
@@ -77,6 +81,27 @@ for key in bim.FILTERS:
     differ = sorted(k for k in set(f1) | set(f2) if f1.get(k) != f2.get(k))
     check(not differ, f"{name}: {len(f1)} outputs byte-identical with 1 and 2 threads ({', '.join(sorted(f1))})",
           f"differ: {differ}")
+    dl = [(a, b) for a, b in zip(log1, log2) if a != b]
+    check(log1 == log2, f"{name}: Log identical with 1 and 2 threads (timings masked)", f"{dl[:3]}")
+
+# Prepare Patient Rib Cage, whose matrix cell is a refusal: on a messy export of the CT phantom
+phantom = os.path.join(os.path.dirname(h.PREFIX), "filter_nuss_fea", "pectus_ct_phantom")
+P = os.path.join(W, "patient")
+g = subprocess.run([phantom, P, "--only", "messy", "--age", "5", "--spacing", "1.5"], capture_output=True, text=True)
+check(g.returncode == 0, "pectus_ct_phantom: a messy export", g.stderr[-500:])
+script = mlx.Script([import_ct_segmentation(path=os.path.join(P, "stl_messy")), prepare_patient_rib_cage()])
+runs = []
+for threads in (1, 2):
+    d = os.path.join(W, f"prepare{threads}")
+    os.makedirs(d)
+    outs = [(os.path.join(d, "cage.ply"), "fc fq", 3), (os.path.join(d, "landmarks.ply"), "vq", 4)]
+    r = mlx.run([], script, outs, prefix=h.PREFIX, timeout=900, env={"OMP_NUM_THREADS": str(threads)})
+    files = {os.path.basename(p): open(p, "rb").read() for p, _, _ in outs if os.path.exists(p)}
+    runs.append((r.rc, files, [bim.TIMING.sub("<t>", l) for l in r.log]))
+(rc1, f1, log1), (rc2, f2, log2) = runs
+name = "Prepare Patient Rib Cage"
+if check(rc1 == 0 and rc2 == 0 and len(f1) == 2, f"{name}: runs with 1 and 2 threads", f"rc {rc1}, {rc2}; {log1[-3:]}"):
+    check(f1 == f2, f"{name}: the cage and its landmarks byte-identical with 1 and 2 threads")
     dl = [(a, b) for a, b in zip(log1, log2) if a != b]
     check(log1 == log2, f"{name}: Log identical with 1 and 2 threads (timings masked)", f"{dl[:3]}")
 finish()

@@ -434,7 +434,7 @@ void partsOfCartilage(const Soup& u, const std::vector<int>& tissue, std::vector
 
 // "N connected pieces: the cage (...), right rib 11, ...": what each piece of the joined surface holds, the largest
 // first (the user sees which ribs float and what came loose)
-std::string piecesOf(const Soup& s, const FaceLabels& lab) {
+std::string describePieces(const Soup& s, const FaceLabels& lab) {
   std::vector<int> parent(s.V.size());
   std::iota(parent.begin(), parent.end(), 0);
   auto find = [&](int v) {
@@ -469,6 +469,14 @@ std::string piecesOf(const Soup& s, const FaceLabels& lab) {
   return out;
 }
 
+// The pieces of a solid (6-connected components of `mask`): their boxes and points
+struct Pieces {
+  std::vector<std::int32_t> comp;   // per point of the solid's box: 1 + piece, 0 none
+  std::vector<std::size_t> count;   // points per piece
+  std::vector<Box3i> box;           // per piece, in the solid's box
+  std::vector<char> reaches;        // per piece: it reaches the column's cut band
+};
+
 // The preparation's state, as each step hands it on to the next: the structures (in the project frame's axes
 // once the frame is found), the vertebral column's points, the frame, and the Log.
 class Preparation {
@@ -499,6 +507,8 @@ class Preparation {
   std::string whatTheScanHolds() const;         ///< 1, for a refusal: the layers' extent and anatomy
   Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
   void takeApart(std::size_t layer);         ///< 4, for one layer: its pieces kept, cut or left out
+  double cutColumn(std::size_t layer, std::vector<std::uint8_t>& mask);  ///< 4, a bone layer's column
+  Pieces piecesOf(const Solid& so, const std::vector<std::uint8_t>& mask, double band) const;  ///< 4
   void bridgeAlongTheLength(const std::string& name, const Solid& so, std::vector<std::uint8_t>& mask);  ///< 4, the sternum
   /// 4. the surface of the points of layer's solid (local box indices) for which keep() holds, in the box sub
   template <class Keep>
@@ -756,133 +766,135 @@ void Preparation::bridgeAlongTheLength(const std::string& name, const Solid& so,
                   mm(double(filled) * grid.h * grid.h * grid.h / 1000, 2) + " cm3 added");
 }
 
+
+Pieces Preparation::piecesOf(const Solid& so, const std::vector<std::uint8_t>& mask, double band) const {
+  Pieces p;
+  p.count = components6(so.box.n, mask, p.comp);
+  p.box.assign(p.count.size(), Box3i{so.box.n, {0, 0, 0}});
+  p.reaches.assign(p.count.size(), 0);
+  std::vector<std::array<int, 3>> hi(p.count.size(), {-1, -1, -1});
+  for (int c = 0; c < so.box.n[2]; ++c)
+    for (int b = 0; b < so.box.n[1]; ++b)
+      for (int a = 0; a < so.box.n[0]; ++a) {
+        const std::int32_t id = p.comp[so.box.index(a, b, c)];
+        if (!id) continue;
+        const std::size_t k = std::size_t(id - 1);
+        p.box[k].lo = {std::min(p.box[k].lo[0], a), std::min(p.box[k].lo[1], b), std::min(p.box[k].lo[2], c)};
+        hi[k] = {std::max(hi[k][0], a), std::max(hi[k][1], b), std::max(hi[k][2], c)};
+        const Vec3 q = grid.point(so.box.lo[0] + a, so.box.lo[1] + b, so.box.lo[2] + c);
+        if (band > 0 && q.y() < yMid && std::abs(q.x() - x0) < band + 1.5 * grid.h) p.reaches[k] = 1;
+      }
+  for (std::size_t k = 0; k < p.box.size(); ++k)
+    for (int a = 0; a < 3; ++a) p.box[k].n[std::size_t(a)] = hi[k][std::size_t(a)] - p.box[k].lo[std::size_t(a)] + 1;
+  return p;
+}
+
+// The vertebral column of a bone layer: found from the input's own vertices on the solid's pieces over the
+// minimum volume (specks along the midline would stretch its height; the solid's surface is denser than the
+// input, which would widen it), then its points taken out of `mask` (into a column structure when it is kept).
+// Returns the half-width of the cut band (0: no column).
+double Preparation::cutColumn(std::size_t layer, std::vector<std::uint8_t>& mask) {
+  const Structure& s = all[layer];
+  const Solid& so = solids[layer];
+  const double h3 = grid.h * grid.h * grid.h;
+  const Pieces p = piecesOf(so, mask, 0);
+  const auto large = [&](std::size_t q) { return p.comp[q] > 0 && double(p.count[std::size_t(p.comp[q] - 1)]) * h3 >= opt.minVolume; };
+  Soup onPieces;
+  for (const auto& q : s.soup.V) {
+    const Vec3 g = (q - grid.origin) / grid.h;
+    bool on = false;
+    for (int corner = 0; corner < 8 && !on; ++corner) {
+      const int a = int(std::floor(g.x())) + (corner & 1) - so.box.lo[0], b = int(std::floor(g.y())) + ((corner >> 1) & 1) - so.box.lo[1],
+                c = int(std::floor(g.z())) + ((corner >> 2) & 1) - so.box.lo[2];
+      on = a >= 0 && b >= 0 && c >= 0 && a < so.box.n[0] && b < so.box.n[1] && c < so.box.n[2] && large(so.box.index(a, b, c));
+    }
+    if (on) onPieces.V.push_back(q);
+  }
+  const double rCut = spineHalfWidth(onPieces, x0, yMid);
+  if (rCut <= 0) return 0;
+  const double band = rCut + kCutTrim;
+  const Box3i whole{{0, 0, 0}, so.box.n};
+  for (const auto& q : solidSurface(layer, whole, large).V)
+    if (q.y() < yMid && std::abs(q.x() - x0) < rCut) spine.push_back(q);
+  std::vector<std::int32_t> column(mask.size(), 0);
+  std::size_t removed = 0;
+  for (int c = 0; c < so.box.n[2]; ++c)
+    for (int b = 0; b < so.box.n[1]; ++b)
+      for (int a = 0; a < so.box.n[0]; ++a) {
+        const std::size_t q = so.box.index(a, b, c);
+        const Vec3 x = grid.point(so.box.lo[0] + a, so.box.lo[1] + b, so.box.lo[2] + c);
+        if (mask[q] && large(q) && x.y() < yMid && std::abs(x.x() - x0) < band) mask[q] = 0, column[q] = 1, ++removed;
+      }
+  const bool keepColumn = opt.spine == SpineMode::Keep;
+  log.push_back("'" + s.name + "': vertebral column found (posterior midline, " + mm(2 * rCut) + " mm wide): cut at the "
+                "costovertebral joints, the ribs' ends square at " + mm(band) + " mm from the midline (" +
+                mm(double(removed) * h3 / 1000, 1) + " cm3 removed)" + (keepColumn ? "; the column is kept as the fixed support" : ""));
+  if (keepColumn) keep({s.name + " vertebral column", {Kind::Vertebra, 0, 0}, {}, -1}, layer, whole, column, 1);
+  return band;
+}
+
+// One layer's solid taken apart: fragments dropped; a bone layer's column cut away and its pieces kept as ribs
+// or left out; any other layer's pieces kept together as its structure.
 void Preparation::takeApart(std::size_t layer) {
   Structure& s = all[layer];
   const Solid& so = solids[layer];
   const double h3 = grid.h * grid.h * grid.h;
   const Box3i whole{{0, 0, 0}, so.box.n};
-  const auto pos = [&](int a, int b, int c) { return grid.point(so.box.lo[0] + a, so.box.lo[1] + b, so.box.lo[2] + c); };
   const std::size_t pieces0 = components(s.soup).size();
   log.push_back("'" + s.name + "': " + std::to_string(pieces0) + " piece" + (pieces0 == 1 ? "" : "s") + " -> a solid of " +
                 mm(double(so.count()) * h3 / 1000, 2) + " cm3" +
                 (so.capped > 0 ? " (" + std::to_string(so.capped) + " hole" + (so.capped == 1 ? "" : "s") + " capped)" : std::string()) +
                 (so.duplicates > 0 ? " (" + std::to_string(so.duplicates) + " duplicate faces ignored)" : std::string()));
   std::vector<std::uint8_t> mask = so.in;
-  std::vector<std::int32_t> comp;
   if (s.cls.kind == Kind::Vertebra) {
     const Soup surface = solidSurface(layer, whole, [&](std::size_t p) { return so.in[p] != 0; });
     spine.insert(spine.end(), surface.V.begin(), surface.V.end());
-    if (opt.spine == SpineMode::Keep) {
-      comp.assign(mask.begin(), mask.end());
-      keep({s.name, s.cls, {}, -1}, layer, whole, comp, 1);
-    }
+    if (opt.spine == SpineMode::Keep) keep({s.name, s.cls, {}, -1}, layer, whole, std::vector<std::int32_t>(mask.begin(), mask.end()), 1);
     return;
   }
   if (s.cls.kind == Kind::Sternum) bridgeAlongTheLength(s.name, so, mask);
-  // the pieces of the solid, those under the minimum volume fragments
-  auto count = components6(so.box.n, mask, comp);
-  const auto fragment = [&](std::int32_t id) { return id > 0 && double(count[std::size_t(id - 1)]) * h3 < opt.minVolume; };
-  double band = 0;  // the vertebral column's cut: |x - x0| < band behind yMid
-  if (s.cls.kind == Kind::Bone) {
-    // the column's width from the input's own vertices on the solid's large pieces (specks along the midline
-    // would stretch its height; the solid's surface is denser than the input, which would widen it)
-    Soup onPieces;
-    for (const auto& q : s.soup.V) {
-      const Vec3 g = (q - grid.origin) / grid.h;
-      bool on = false;
-      for (int corner = 0; corner < 8 && !on; ++corner) {
-        const int a = int(std::floor(g.x())) + (corner & 1) - so.box.lo[0], b = int(std::floor(g.y())) + ((corner >> 1) & 1) - so.box.lo[1],
-                  c = int(std::floor(g.z())) + ((corner >> 2) & 1) - so.box.lo[2];
-        if (a < 0 || b < 0 || c < 0 || a >= so.box.n[0] || b >= so.box.n[1] || c >= so.box.n[2]) continue;
-        const std::int32_t id = comp[so.box.index(a, b, c)];
-        on = id > 0 && !fragment(id);
-      }
-      if (on) onPieces.V.push_back(q);
-    }
-    if (const double rCut = spineHalfWidth(onPieces, x0, yMid); rCut > 0) {
-      band = rCut + kCutTrim;
-      const Soup surface = solidSurface(layer, whole, [&](std::size_t p) { return so.in[p] && !fragment(comp[p]); });
-      for (const auto& q : surface.V)
-        if (q.y() < yMid && std::abs(q.x() - x0) < rCut) spine.push_back(q);
-      std::vector<std::int32_t> column(mask.size(), 0);
-      std::size_t removed = 0;
-      for (int c = 0; c < so.box.n[2]; ++c)
-        for (int b = 0; b < so.box.n[1]; ++b)
-          for (int a = 0; a < so.box.n[0]; ++a) {
-            const std::size_t p = so.box.index(a, b, c);
-            const Vec3 q = pos(a, b, c);
-            if (mask[p] && !fragment(comp[p]) && q.y() < yMid && std::abs(q.x() - x0) < band) mask[p] = 0, column[p] = 1, ++removed;
-          }
-      const bool keepColumn = opt.spine == SpineMode::Keep;
-      log.push_back("'" + s.name + "': vertebral column found (posterior midline, " + mm(2 * rCut) + " mm wide): cut at the "
-                    "costovertebral joints, the ribs' ends square at " + mm(band) + " mm from the midline (" +
-                    mm(double(removed) * h3 / 1000, 1) + " cm3 removed)" + (keepColumn ? "; the column is kept as the fixed support" : ""));
-      if (keepColumn) keep({s.name + " vertebral column", {Kind::Vertebra, 0, 0}, {}, -1}, layer, whole, column, 1);
-      count = components6(so.box.n, mask, comp);
-    }
-  }
-  std::vector<Box3i> boxes(count.size());
-  std::vector<std::array<int, 3>> hi(count.size(), {-1, -1, -1});
-  std::vector<char> reaches(count.size(), 0);
-  for (auto& b : boxes) b.lo = so.box.n;
-  for (int c = 0; c < so.box.n[2]; ++c)
-    for (int b = 0; b < so.box.n[1]; ++b)
-      for (int a = 0; a < so.box.n[0]; ++a) {
-        const std::int32_t id = comp[so.box.index(a, b, c)];
-        if (!id) continue;
-        Box3i& bx = boxes[std::size_t(id - 1)];
-        auto& h = hi[std::size_t(id - 1)];
-        bx.lo = {std::min(bx.lo[0], a), std::min(bx.lo[1], b), std::min(bx.lo[2], c)};
-        h = {std::max(h[0], a), std::max(h[1], b), std::max(h[2], c)};
-        const Vec3 q = pos(a, b, c);
-        if (band > 0 && q.y() < yMid && std::abs(q.x() - x0) < band + 1.5 * grid.h) reaches[std::size_t(id - 1)] = 1;
-      }
-  for (std::size_t k = 0; k < boxes.size(); ++k)
-    for (int a = 0; a < 3; ++a) boxes[k].n[std::size_t(a)] = hi[k][std::size_t(a)] - boxes[k].lo[std::size_t(a)] + 1;
+  const double band = s.cls.kind == Kind::Bone ? cutColumn(layer, mask) : 0;
+  const Pieces p = piecesOf(so, mask, band);
   int fragments = 0, loose = 0;
   double fragmentVolume = 0;
-  std::vector<std::int32_t> together(s.cls.kind == Kind::Bone ? 0 : comp.size(), 0);  // the kept pieces of a structure
-  Box3i togetherBox{so.box.n, {0, 0, 0}};
-  std::array<int, 3> togetherHi{-1, -1, -1};
-  for (std::size_t k = 0; k < count.size(); ++k) {
-    const double v = double(count[k]) * h3;
+  std::vector<char> together(p.count.size(), 0);  // the pieces kept as the layer's one structure
+  for (std::size_t k = 0; k < p.count.size(); ++k) {
+    const double v = double(p.count[k]) * h3;
     if (v < opt.minVolume) {
       ++fragments, fragmentVolume += v;
       continue;
     }
-    const Box3i& bx = boxes[k];
-    const Vec3 centre = 0.5 * (pos(bx.lo[0], bx.lo[1], bx.lo[2]) + pos(hi[k][0], hi[k][1], hi[k][2]));
-    const std::string piece = "a piece of " + mm(v / 1000, 2) + " cm3 at " + at(centre);
-    if (s.cls.kind == Kind::Bone) {
-      const double length = (pos(hi[k][0], hi[k][1], hi[k][2]) - pos(bx.lo[0], bx.lo[1], bx.lo[2])).norm();
-      const char* why = band > 0 && !reaches[k] ? "does not reach the spine (scapula, clavicle or loose bone)"
-                        : length < kMinRibShare * cageWidth ? "is too short for a rib (a fragment of a vertebra, a scapula or a cut rib)"
-                                                            : nullptr;
-      if (why) {
-        ++loose;
-        log.push_back("'" + s.name + "': left out " + piece + ", " + mm(length, 0) + " mm long, that " + why);
-        continue;
-      }
-      keep({s.name + " piece " + std::to_string(kept.size() + 1), {Kind::Rib, 0, 0}, {}, -1}, layer, bx, comp, std::int32_t(k + 1));
+    if (s.cls.kind != Kind::Bone) {
+      together[k] = 1;
       continue;
     }
-    for (int a = 0; a < 3; ++a)
-      togetherBox.lo[std::size_t(a)] = std::min(togetherBox.lo[std::size_t(a)], bx.lo[std::size_t(a)]),
-      togetherHi[std::size_t(a)] = std::max(togetherHi[std::size_t(a)], hi[k][std::size_t(a)]);
-    for (std::size_t p = 0; p < comp.size(); ++p)
-      if (comp[p] == std::int32_t(k + 1)) together[p] = 1;
+    const Box3i& bx = p.box[k];
+    const Vec3 lo = grid.point(so.box.lo[0] + bx.lo[0], so.box.lo[1] + bx.lo[1], so.box.lo[2] + bx.lo[2]);
+    const Vec3 hi = lo + grid.h * Vec3(bx.n[0] - 1, bx.n[1] - 1, bx.n[2] - 1);
+    const double length = (hi - lo).norm();
+    const char* why = band > 0 && !p.reaches[k] ? "does not reach the spine (scapula, clavicle or loose bone)"
+                      : length < kMinRibShare * cageWidth ? "is too short for a rib (a fragment of a vertebra, a scapula or a cut rib)"
+                                                          : nullptr;
+    if (why) {
+      ++loose;
+      log.push_back("'" + s.name + "': left out a piece of " + mm(v / 1000, 2) + " cm3 at " + at(0.5 * (lo + hi)) + ", " +
+                    mm(length, 0) + " mm long, that " + why);
+      continue;
+    }
+    keep({s.name + " piece " + std::to_string(kept.size() + 1), {Kind::Rib, 0, 0}, {}, -1}, layer, bx, p.comp, std::int32_t(k + 1));
   }
   if (fragments)
     log.push_back("'" + s.name + "': dropped " + std::to_string(fragments) + " fragments under " + mm(opt.minVolume, 0) + " mm3 (" +
                   mm(fragmentVolume, 0) + " mm3 in all)");
   res.dropped += fragments + loose;
   if (s.cls.kind == Kind::Bone) return;
-  if (togetherHi[0] < 0) {
+  if (std::none_of(together.begin(), together.end(), [](char t) { return t; })) {
     log.push_back("'" + s.name + "': nothing left after dropping fragments");
     return;
   }
-  for (int a = 0; a < 3; ++a) togetherBox.n[std::size_t(a)] = togetherHi[std::size_t(a)] - togetherBox.lo[std::size_t(a)] + 1;
-  keep({s.name, s.cls, {}, -1}, layer, togetherBox, together, 1);
+  std::vector<std::int32_t> mine(p.comp.size(), 0);
+  for (std::size_t q = 0; q < mine.size(); ++q) mine[q] = p.comp[q] > 0 && together[std::size_t(p.comp[q] - 1)];
+  keep({s.name, s.cls, {}, -1}, layer, whole, mine, 1);
 }
 
 Vec3 Preparation::vertebralEnd(const Soup& r) const {
@@ -1074,7 +1086,7 @@ void Preparation::join(CMeshO& cage) {
   dropUnanchored();
   unite(false, joined);
   const Soup s = surfaceOf(joined, kFiniteFaces);
-  log.push_back("joined on the grid: " + piecesOf(s, *readFaceLabels(joined)) + ", " + mm(volume(s) / 1000, 1) + " cm3, " +
+  log.push_back("joined on the grid: " + describePieces(s, *readFaceLabels(joined)) + ", " + mm(volume(s) / 1000, 1) + " cm3, " +
                 std::to_string(joined.fn) + " faces");
   if (std::none_of(kept.begin(), kept.end(), [](const Structure& st) { return st.cls.kind == Kind::Vertebra; })) {
     decimate(joined, cage);
