@@ -1203,7 +1203,13 @@ NameClass classifyName(const std::string& name) {
     if (std::isdigit(static_cast<unsigned char>(x[0])) && x.size() <= 2) c.number = std::stoi(x);
   static const char* notCage[] = {"scapul", "clavic", "humer", "femur", "hip", "skull", "lung", "heart", "liver",
                                   "aorta", "trachea", "esophag", "kidney", "spleen", "stomach", "sacrum", "pelvi",
-                                  "skin", "body", "muscle", "fat", "vein", "arter", "atrial", "ventric", "thyroid", "cord"};
+                                  "skin", "body", "muscle", "fat", "vein", "arter", "atrial", "ventric", "thyroid", "cord",
+                                  // the rest of TotalSegmentator's classes: organs, vessels, muscles (never a candidate
+                                  // sternum or cartilage by their shape when a label map holds them)
+                                  "pancrea", "colon", "bowel", "duoden", "gallbladder", "bladder", "prostat", "adrenal",
+                                  "cyst", "gland", "glute", "autochthon", "iliopsoas", "psoas", "brain", "portal",
+                                  "vena", "cava", "trunk", "carotid", "subclavian", "appendage", "pulmonar", "iliac",
+                                  "intestin", "rectum", "uterus", "spleen"};
   for (const char* n : notCage)
     if (has(n)) return {Kind::NotCage, c.side, c.number};
   if (has("cartilag") || has("chondr")) return {Kind::Cartilage, c.side, c.number};
@@ -1212,17 +1218,7 @@ NameClass classifyName(const std::string& name) {
   const bool rib = has("rib") || has("costa");
   if (rib && c.number >= 1 && c.number <= 12) return {Kind::Rib, c.side, c.number};
   if (rib || has("bone") || has("skelet") || has("thorax") || has("cage")) return {Kind::Bone, c.side, 0};
-  // Only a name that says nothing ('Segment_1', 'label 3', '7') leaves the layer to its shape: any other name
-  // (an organ, a muscle, a vessel) is a structure that is not the rib cage, and never a candidate sternum.
-  static const char* generic[] = {"segment", "seg", "label", "structure", "object", "mesh", "model", "layer", "part",
-                                  "region", "mask", "roi", "untitled", "unnamed", "new", "surface", "export", "stl",
-                                  "obj", "ply", "off", "nii", "gz", "piece", "component", "item", "solid", "shape", "l", "r",
-                                  "left", "right"};
-  const bool saysNothing = std::all_of(w.begin(), w.end(), [&](const std::string& x) {
-    return std::isdigit(static_cast<unsigned char>(x[0])) ||
-           std::any_of(std::begin(generic), std::end(generic), [&](const char* g) { return x == g; });
-  });
-  return {saysNothing ? Kind::Unknown : Kind::NotCage, c.side, c.number};
+  return {Kind::Unknown, c.side, c.number};
 }
 
 std::vector<Landmark> readPickedPoints(const std::string& path, int* skipped) {

@@ -89,9 +89,9 @@ TEST(PatientNames, TotalSegmentatorSlicerAndGenericNames) {
   EXPECT_EQ(classifyName("clavicula_right").kind, Kind::NotCage);
   EXPECT_EQ(classifyName("liver").kind, Kind::NotCage);
   EXPECT_EQ(classifyName("Segment_7").kind, Kind::Unknown);
-  EXPECT_EQ(classifyName("label 3").kind, Kind::Unknown);
-  EXPECT_EQ(classifyName("12").kind, Kind::Unknown);
-  // the organs of a TotalSegmentator label map are named: never left to their shape (never a candidate sternum)
+  EXPECT_EQ(classifyName("closed_valid").kind, Kind::Unknown);
+  // every other class of a TotalSegmentator label map is named as such: never left to its shape (never a
+  // candidate sternum)
   for (const char* organ : {"colon", "pancreas", "small_bowel", "duodenum", "gallbladder", "urinary_bladder", "spinal_cord",
                             "autochthon_left", "iliopsoas_right", "portal_vein_and_splenic_vein", "inferior_vena_cava"})
     EXPECT_EQ(classifyName(organ).kind, Kind::NotCage) << organ;

@@ -74,8 +74,9 @@ struct NameClass {
 /// Classifies a structure name (case-insensitive; '_', '-', ' ' and '.' separate words): 'rib_left_3',
 /// 'Rib R 3', 'left rib 3' -> rib; 'costal_cartilages', 'cartilage_left_5' -> cartilage; 'sternum',
 /// 'manubrium', 'xiphoid' -> sternum; 'vertebrae_T5', 'spine' -> vertebra; 'bone', 'ribs', 'skeleton' ->
-/// bone; 'scapula_left', 'clavicula_*', 'humerus_*', organs and any other name that says something -> not cage;
-/// a name that says nothing ('Segment_1', 'label 3', '7', '') -> unknown (the layer is classified by its shape).
+/// bone; 'scapula_left', 'clavicula_*', 'humerus_*' and every other class TotalSegmentator writes (organs,
+/// vessels, muscles: 'colon', 'pancreas', 'spinal_cord', ...) -> not cage; other names ('Segment_1') -> unknown
+/// (the layer is classified by its shape).
 NameClass classifyName(const std::string& name);
 
 struct InputLayer {
