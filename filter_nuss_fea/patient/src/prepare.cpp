@@ -502,6 +502,8 @@ class Preparation {
 
  private:
   void prog(int pc, const char* what) const { if (progress_) progress_(pc, what); }
+  /// a point of the grid's frame (mm, the frame's axes before `flip`) in the input layers' frame and units
+  Vec3 toInput(const Vec3& p) const { return fr.R.transpose() * (flip * p) / scale; }
   void classifyUnknownByShape(std::vector<Structure>& unknown);  ///< 1, for the layers whose names say nothing
   void checkTheCage(std::size_t layers) const;  ///< 1, finished: a sternum, cartilage and ribs are there
   std::string whatTheScanHolds() const;         ///< 1, for a refusal: the layers' extent and anatomy
@@ -877,7 +879,7 @@ void Preparation::takeApart(std::size_t layer) {
                                                           : nullptr;
     if (why) {
       ++loose;
-      log.push_back("'" + s.name + "': left out a piece of " + mm(v / 1000, 2) + " cm3 at " + at(0.5 * (lo + hi)) + ", " +
+      log.push_back("'" + s.name + "': left out a piece of " + mm(v / 1000, 2) + " cm3 at " + at(toInput(0.5 * (lo + hi))) + " (input frame), " +
                     mm(length, 0) + " mm long, that " + why);
       continue;
     }
@@ -1074,7 +1076,7 @@ void Preparation::dropUnanchored() {
     std::string names;
     for (const auto& n : what[k]) names += (names.empty() ? "" : " and ") + n;
     log.push_back("left out a piece of " + names + " of " + mm(double(count[k]) * h3 / 1000, 2) + " cm3 at " +
-                  at(flip * where[k].center()) + " that joins no rib (cut off by the field of view, or apart from the rest)");
+                  at(toInput(where[k].center())) + " (input frame) that joins no rib (cut off by the field of view, or apart from the rest)");
     ++res.dropped;
   }
   for (std::size_t p = 0; p < owner.size(); ++p)
