@@ -70,9 +70,10 @@ std::vector<std::string> words(const std::string& name) {
 
 // ---------------------------------------------------------------------------------------------------
 // 4. the solids on one grid
-// A piece of a fused bone layer shorter than this share of the cage's width is no rib: a fragment of a vertebra,
-// of a scapula or of a rib cut by the field of view (a child's 12th rib is still a quarter of the width)
-constexpr double kMinRibShare = 0.15;
+// A piece of a fused bone layer shorter than this share of its longest piece (the length of a piece: its box's
+// diagonal) is no rib: a fragment of a vertebra, of a scapula or of a rib cut by the field of view. A 12th rib is
+// about half as long as the longest; a split-off process, a tenth.
+constexpr double kMinRibShare = 0.25;
 // The ribs are cut off the vertebral column this far (mm) beyond the column's band, square: a rib running along
 // the cut (the 1st rib beside its vertebra) would otherwise keep a sheet of bone in the cut's plane, which the tet
 // mesh fills with sub-millimetre tets
@@ -176,36 +177,11 @@ Frame findFrame(const std::vector<Structure>& all, const PrepareOptions& opt, do
 
 // ---------------------------------------------------------------------------------------------------
 // 4. the vertebral column inside a bone layer
-// The column: the posterior midline bone that runs the whole height.
-// Returns the half-width of the cut band around the midline (0: no column found).
-double spineHalfWidth(const Soup& bone, double x0, double yMid) {
-  double z0 = 1e300, z1 = -1e300;
-  for (const auto& p : bone.V)
-    if (p.y() < yMid && std::abs(p.x() - x0) < 4) z0 = std::min(z0, p.z()), z1 = std::max(z1, p.z());
-  if (!(z1 - z0 > 40)) return 0;
-  constexpr double bin = 2.0;
-  const int nz = int((z1 - z0) / bin) + 1, nx = 40;
-  std::vector<std::vector<char>> hit(std::size_t(nx), std::vector<char>(std::size_t(nz), 0));
-  for (const auto& p : bone.V) {
-    if (p.y() >= yMid || p.z() < z0 || p.z() > z1) continue;
-    const int ix = int(std::abs(p.x() - x0) / bin);
-    if (ix < nx) hit[std::size_t(ix)][std::size_t(int((p.z() - z0) / bin))] = 1;
-  }
-  auto coverage = [&](int ix) {
-    // a column's front/back walls cover every height; a vertebra's own surface may miss a bin or two
-    int c = 0;
-    for (int k = 0; k < nz; ++k) c += hit[std::size_t(ix)][std::size_t(k)] || (k > 0 && hit[std::size_t(ix)][std::size_t(k - 1)]) ||
-                                      (k + 1 < nz && hit[std::size_t(ix)][std::size_t(k + 1)]);
-    return double(c) / nz;
-  };
-  // the column's bins are covered all the way (1.0 on a voxel export); beside it the ribs, sloping and close
-  // together near the spine, still leave some heights empty (0.84-0.94 there)
-  constexpr double kColumn = 0.97;
-  if (coverage(0) < kColumn) return 0;
-  int ix = 0;
-  while (ix + 1 < nx && coverage(ix + 1) >= kColumn) ++ix;
-  return (ix + 1) * bin + 1.0;
-}
+// The column: the bone thicker than a rib (what stays of a bone layer's large pieces where a ball of kColumnCore mm
+// fits inside: ribs, scapulae and processes are thinner) on the midline behind the cage's middle, running at least
+// kColumnHeight mm. It needs no other part of the anatomy: whatever the scan's field of view, the ribs beside the
+// column and the specks around it, the thick bone on the midline is the vertebral bodies.
+constexpr double kColumnCore = 4.0, kColumnHeight = 40.0;
 
 // ---------------------------------------------------------------------------------------------------
 // 8. landmarks
@@ -510,6 +486,8 @@ class Preparation {
   Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
   void takeApart(std::size_t layer);         ///< 4, for one layer: its pieces kept, cut or left out
   double cutColumn(std::size_t layer, std::vector<std::uint8_t>& mask);  ///< 4, a bone layer's column
+  template <class Large>
+  double columnHalfWidth(const Solid& so, const Pieces& p, const Large& large) const;  ///< 4
   Pieces piecesOf(const Solid& so, const std::vector<std::uint8_t>& mask, double band) const;  ///< 4
   void bridgeAlongTheLength(const std::string& name, const Solid& so, std::vector<std::uint8_t>& mask);  ///< 4, the sternum
   /// 4. the surface of the points of layer's solid (local box indices) for which keep() holds, in the box sub
@@ -530,7 +508,6 @@ class Preparation {
   Frame fr;
   Mat3 flip = Mat3::Identity(); // the turns of settleSuperiorAndLeft, after the grid was laid
   double x0 = 0, yMid = 0;      // the sternum's midline; halfway between the back of the cage and the sternum
-  double cageWidth = 0;         // the structures' extent across (mm)
   Grid grid;                    // one grid for every structure, in the frame's axes (before `flip`)
   std::vector<Solid> solids;    // per layer of `all`
   std::vector<std::uint16_t> owner;  // per grid point: 1 + the index in `kept` of the structure it belongs to
@@ -586,8 +563,8 @@ void Preparation::classifyUnknownByShape(std::vector<Structure>& unknown) {
   }
 }
 
-// What the recognised layers hold and where, for the refusals of a partial scan: "The layers span z = -180.0 to
-// -93.0 (file units) and hold left ribs 7-12, right ribs 7-12, costal cartilage, vertebrae T11-T12."
+// What the recognised layers hold and where, for the refusals of a partial scan: "The layers span z = 92.8 to
+// 182.8 (file units) and hold right ribs 7-12, left ribs 7-12, costal cartilage, 'vertebrae_T11' and 'vertebrae_T12'."
 std::string Preparation::whatTheScanHolds() const {
   Eigen::AlignedBox3d box;
   std::map<int, std::set<int>> ribs;
@@ -685,7 +662,6 @@ void Preparation::separate() {
   Eigen::AlignedBox3d box;
   for (const auto& s : all)
     for (const auto& p : s.soup.V) box.extend(p);
-  cageWidth = box.sizes().x();
   grid.h = opt.gridStep;
   grid.origin = box.min();
   for (int a = 0; a < 3; ++a) grid.box.n[std::size_t(a)] = int(std::ceil(box.sizes()[a] / grid.h)) + 1;
@@ -791,28 +767,52 @@ Pieces Preparation::piecesOf(const Solid& so, const std::vector<std::uint8_t>& m
   return p;
 }
 
-// The vertebral column of a bone layer: found from the input's own vertices on the solid's pieces over the
-// minimum volume (specks along the midline would stretch its height; the solid's surface is denser than the
-// input, which would widen it), then its points taken out of `mask` (into a column structure when it is kept).
-// Returns the half-width of the cut band (0: no column).
+// The half-width of a bone layer's vertebral column (0: none): the opening of its large pieces by a ball of
+// kColumnCore mm (the points within that radius of a point at least that deep inside), the opened pieces that
+// lie on the midline behind the cage's middle, and the median over their heights of their extent from the
+// midline (the rib heads widen them at their own levels only).
+template <class Large>
+double Preparation::columnHalfWidth(const Solid& so, const Pieces& p, const Large& large) const {
+  const auto& n = so.box.n;
+  std::vector<std::uint8_t> outside(p.comp.size()), core(p.comp.size()), opened(p.comp.size());
+  for (std::size_t q = 0; q < outside.size(); ++q) outside[q] = !large(q);
+  const double r2 = (kColumnCore / grid.h) * (kColumnCore / grid.h);
+  const std::vector<float> depth = squaredDistance(n, outside);
+  for (std::size_t q = 0; q < core.size(); ++q) core[q] = depth[q] > r2;
+  const std::vector<float> toCore = squaredDistance(n, core);
+  for (std::size_t q = 0; q < opened.size(); ++q) opened[q] = large(q) && toCore[q] <= r2;
+  std::vector<std::int32_t> comp;
+  const auto count = components6(n, opened, comp);
+  std::vector<char> onMidline(count.size(), 0);
+  const auto at = [&](int a, int b, int c) { return grid.point(so.box.lo[0] + a, so.box.lo[1] + b, so.box.lo[2] + c); };
+  for (int c = 0; c < n[2]; ++c)
+    for (int b = 0; b < n[1]; ++b)
+      for (int a = 0; a < n[0]; ++a)
+        if (const std::int32_t id = comp[so.box.index(a, b, c)]; id && at(a, b, c).y() < yMid && std::abs(at(a, b, c).x() - x0) < grid.h)
+          onMidline[std::size_t(id - 1)] = 1;
+  std::vector<double> widest;  // per height the column reaches: its extent from the midline
+  for (int c = 0; c < n[2]; ++c) {
+    double w = -1;
+    for (int b = 0; b < n[1]; ++b)
+      for (int a = 0; a < n[0]; ++a)
+        if (const std::int32_t id = comp[so.box.index(a, b, c)]; id && onMidline[std::size_t(id - 1)] && at(a, b, c).y() < yMid)
+          w = std::max(w, std::abs(at(a, b, c).x() - x0));
+    if (w >= 0) widest.push_back(w);
+  }
+  if (double(widest.size()) * grid.h < kColumnHeight) return 0;
+  std::nth_element(widest.begin(), widest.begin() + long(widest.size() / 2), widest.end());
+  return widest[widest.size() / 2] + 0.5 * grid.h;
+}
+
+// The vertebral column of a bone layer (columnHalfWidth) taken out of `mask`, into a column structure when it is
+// kept. Returns the half-width of the cut band (0: no column).
 double Preparation::cutColumn(std::size_t layer, std::vector<std::uint8_t>& mask) {
   const Structure& s = all[layer];
   const Solid& so = solids[layer];
   const double h3 = grid.h * grid.h * grid.h;
   const Pieces p = piecesOf(so, mask, 0);
   const auto large = [&](std::size_t q) { return p.comp[q] > 0 && double(p.count[std::size_t(p.comp[q] - 1)]) * h3 >= opt.minVolume; };
-  Soup onPieces;
-  for (const auto& q : s.soup.V) {
-    const Vec3 g = (q - grid.origin) / grid.h;
-    bool on = false;
-    for (int corner = 0; corner < 8 && !on; ++corner) {
-      const int a = int(std::floor(g.x())) + (corner & 1) - so.box.lo[0], b = int(std::floor(g.y())) + ((corner >> 1) & 1) - so.box.lo[1],
-                c = int(std::floor(g.z())) + ((corner >> 2) & 1) - so.box.lo[2];
-      on = a >= 0 && b >= 0 && c >= 0 && a < so.box.n[0] && b < so.box.n[1] && c < so.box.n[2] && large(so.box.index(a, b, c));
-    }
-    if (on) onPieces.V.push_back(q);
-  }
-  const double rCut = spineHalfWidth(onPieces, x0, yMid);
+  const double rCut = columnHalfWidth(so, p, large);
   if (rCut <= 0) return 0;
   const double band = rCut + kCutTrim;
   const Box3i whole{{0, 0, 0}, so.box.n};
@@ -857,6 +857,10 @@ void Preparation::takeApart(std::size_t layer) {
   if (s.cls.kind == Kind::Sternum) bridgeAlongTheLength(s.name, so, mask);
   const double band = s.cls.kind == Kind::Bone ? cutColumn(layer, mask) : 0;
   const Pieces p = piecesOf(so, mask, band);
+  const auto lengthOf = [&](std::size_t k) { return grid.h * Vec3(p.box[k].n[0] - 1, p.box[k].n[1] - 1, p.box[k].n[2] - 1).norm(); };
+  double longest = 0;  // of the bone layer's pieces that may be ribs
+  for (std::size_t k = 0; k < p.count.size(); ++k)
+    if (double(p.count[k]) * h3 >= opt.minVolume && (band <= 0 || p.reaches[k])) longest = std::max(longest, lengthOf(k));
   int fragments = 0, loose = 0;
   double fragmentVolume = 0;
   std::vector<char> together(p.count.size(), 0);  // the pieces kept as the layer's one structure
@@ -873,10 +877,10 @@ void Preparation::takeApart(std::size_t layer) {
     const Box3i& bx = p.box[k];
     const Vec3 lo = grid.point(so.box.lo[0] + bx.lo[0], so.box.lo[1] + bx.lo[1], so.box.lo[2] + bx.lo[2]);
     const Vec3 hi = lo + grid.h * Vec3(bx.n[0] - 1, bx.n[1] - 1, bx.n[2] - 1);
-    const double length = (hi - lo).norm();
+    const double length = lengthOf(k);
     const char* why = band > 0 && !p.reaches[k] ? "does not reach the spine (scapula, clavicle or loose bone)"
-                      : length < kMinRibShare * cageWidth ? "is too short for a rib (a fragment of a vertebra, a scapula or a cut rib)"
-                                                          : nullptr;
+                      : length < kMinRibShare * longest ? "is too short for a rib (a fragment of a vertebra, a scapula or a cut rib)"
+                                                        : nullptr;
     if (why) {
       ++loose;
       log.push_back("'" + s.name + "': left out a piece of " + mm(v / 1000, 2) + " cm3 at " + at(toInput(0.5 * (lo + hi))) + " (input frame), " +

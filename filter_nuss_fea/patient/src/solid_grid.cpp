@@ -201,4 +201,46 @@ std::vector<std::size_t> components6(const std::array<int, 3>& n, const std::vec
   return count;
 }
 
+// Felzenszwalb and Huttenlocher's lower envelope of parabolas, along each axis in turn
+std::vector<float> squaredDistance(const std::array<int, 3>& n, const std::vector<std::uint8_t>& set) {
+  constexpr double kFar = 1e20;
+  std::vector<float> d(set.size());
+  for (std::size_t p = 0; p < set.size(); ++p) d[p] = set[p] ? 0.f : float(kFar);
+  const std::array<std::size_t, 3> stride{1, std::size_t(n[0]), std::size_t(n[0]) * std::size_t(n[1])};
+  const int longest = std::max({n[0], n[1], n[2]});
+  std::vector<double> f(std::size_t(longest) + 1), z(std::size_t(longest) + 1);
+  std::vector<int> v(std::size_t(longest) + 1);
+  for (int axis = 0; axis < 3; ++axis) {
+    const int u = (axis + 1) % 3, w = (axis + 2) % 3, m = n[std::size_t(axis)];
+    for (int jw = 0; jw < n[std::size_t(w)]; ++jw)
+      for (int ju = 0; ju < n[std::size_t(u)]; ++ju) {
+        const std::size_t base = std::size_t(ju) * stride[std::size_t(u)] + std::size_t(jw) * stride[std::size_t(w)];
+        const std::size_t step = stride[std::size_t(axis)];
+        int k = -1;  // the envelope of the finite parabolas only
+        for (int q = 0; q < m; ++q) {
+          f[std::size_t(q)] = d[base + std::size_t(q) * step];
+          if (f[std::size_t(q)] >= kFar) continue;
+          double s = -1e300;
+          while (k >= 0) {
+            const int p = v[std::size_t(k)];
+            s = ((f[std::size_t(q)] + double(q) * q) - (f[std::size_t(p)] + double(p) * p)) / (2.0 * (q - p));
+            if (s > z[std::size_t(k)]) break;
+            --k;
+          }
+          ++k;
+          v[std::size_t(k)] = q;
+          z[std::size_t(k)] = k == 0 ? -1e300 : s;
+        }
+        if (k < 0) continue;
+        int e = 0;
+        for (int q = 0; q < m; ++q) {
+          while (e < k && z[std::size_t(e + 1)] < q) ++e;
+          const int p = v[std::size_t(e)];
+          d[base + std::size_t(q) * step] = float(double(q - p) * (q - p) + f[std::size_t(p)]);
+        }
+      }
+  }
+  return d;
+}
+
 }  // namespace pectus::patient

@@ -26,7 +26,7 @@
 //     under the minimum volume are fragments, dropped; a bone layer's vertebral column (the posterior midline
 //     bone that runs the whole height) is cut away at the costovertebral joints, the ribs' ends square 1.5 mm
 //     beyond it; of the rest, pieces that do not reach the cut (scapulae, clavicles, loose bone) and pieces
-//     shorter than 15 % of the cage's width (split-off processes, cut fragments) are left out, each Logged.
+//     shorter than a quarter of the longest piece (split-off processes, cut fragments) are left out, each Logged.
 //     The column (the cut-away bone and the vertebra layers) is left out of the model, as the thesis does, or
 //     kept as the fixed support (PrepareOptions::spine): tissue bone, part kVertebralColumn (400);
 //  5. ribs are numbered per side from the top by the height of their vertebral end (or from their names);

@@ -64,4 +64,8 @@ Solid solidify(const Soup& s, const Grid& g);
 std::vector<std::size_t> components6(const std::array<int, 3>& n, const std::vector<std::uint8_t>& mask,
                                      std::vector<std::int32_t>& comp);
 
+/// The squared distance (in grid steps) from each point of a box of n points to the nearest point with
+/// set != 0 (the exact Euclidean distance transform; 1e20 where the set is empty)
+std::vector<float> squaredDistance(const std::array<int, 3>& n, const std::vector<std::uint8_t>& set);
+
 }  // namespace pectus::patient
