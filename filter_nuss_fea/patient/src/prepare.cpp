@@ -486,6 +486,7 @@ class Preparation {
   Vec3 vertebralEnd(const Soup& rib) const;  ///< the rib's point nearest the midline, behind the cage's middle
   void takeApart(std::size_t layer);         ///< 4, for one layer: its pieces kept, cut or left out
   double cutColumn(std::size_t layer, std::vector<std::uint8_t>& mask);  ///< 4, a bone layer's column
+  std::size_t trimAtTheCut(const Solid& so, double band, std::vector<std::uint8_t>& mask, std::vector<std::int32_t>& column) const;
   template <class Large>
   double columnHalfWidth(const Solid& so, const Pieces& p, const Large& large) const;  ///< 4
   Pieces piecesOf(const Solid& so, const std::vector<std::uint8_t>& mask, double band) const;  ///< 4
@@ -804,6 +805,35 @@ double Preparation::columnHalfWidth(const Solid& so, const Pieces& p, const Larg
   return widest[widest.size() / 2] + 0.5 * grid.h;
 }
 
+// Where a rib runs along the cut's plane (the 1st rib, beside its vertebra), the cut leaves a sheet of bone one or
+// two grid steps thick: the tet mesh would fill it with slivers, and the joint fixed on it would carry a stress
+// ten times the posterior ribs'. Within kCutTrim beyond the cut, the bone thinner than kSheet is opened away
+// (the points not within kSheet / 2 of a point at least that deep inside) and goes with the column. Returns how
+// many points.
+constexpr double kSheet = 2.4;
+
+std::size_t Preparation::trimAtTheCut(const Solid& so, double band, std::vector<std::uint8_t>& mask,
+                                      std::vector<std::int32_t>& column) const {
+  const auto& n = so.box.n;
+  std::vector<std::uint8_t> outside(mask.size());
+  for (std::size_t q = 0; q < mask.size(); ++q) outside[q] = !mask[q];
+  const double r = 0.5 * kSheet / grid.h;
+  const std::vector<float> depth = squaredDistance(n, outside);
+  std::vector<std::uint8_t> core(mask.size());
+  for (std::size_t q = 0; q < mask.size(); ++q) core[q] = depth[q] > r * r;
+  const std::vector<float> toCore = squaredDistance(n, core);
+  std::size_t trimmed = 0;
+  for (int c = 0; c < n[2]; ++c)
+    for (int b = 0; b < n[1]; ++b)
+      for (int a = 0; a < n[0]; ++a) {
+        const std::size_t q = so.box.index(a, b, c);
+        if (!mask[q] || toCore[q] <= r * r) continue;
+        const Vec3 x = grid.point(so.box.lo[0] + a, so.box.lo[1] + b, so.box.lo[2] + c);
+        if (x.y() < yMid && std::abs(x.x() - x0) < band + kCutTrim) mask[q] = 0, column[q] = 1, ++trimmed;
+      }
+  return trimmed;
+}
+
 // The vertebral column of a bone layer (columnHalfWidth) taken out of `mask`, into a column structure when it is
 // kept. Returns the half-width of the cut band (0: no column).
 double Preparation::cutColumn(std::size_t layer, std::vector<std::uint8_t>& mask) {
@@ -827,6 +857,7 @@ double Preparation::cutColumn(std::size_t layer, std::vector<std::uint8_t>& mask
         const Vec3 x = grid.point(so.box.lo[0] + a, so.box.lo[1] + b, so.box.lo[2] + c);
         if (mask[q] && large(q) && x.y() < yMid && std::abs(x.x() - x0) < band) mask[q] = 0, column[q] = 1, ++removed;
       }
+  removed += trimAtTheCut(so, band, mask, column);
   const bool keepColumn = opt.spine == SpineMode::Keep;
   log.push_back("'" + s.name + "': vertebral column found (posterior midline, " + mm(2 * rCut) + " mm wide): cut at the "
                 "costovertebral joints, the ribs' ends square at " + mm(band) + " mm from the midline (" +
