@@ -23,10 +23,12 @@
 //     first (a fan over each rim) and faces written twice ignored; self-intersections, nested (marrow) shells,
 //     slivers and fused neighbours then change nothing, and no structure is refused for its geometry. In the
 //     grid: the sternum's gaps along its length (up to 4 mm: manubrium and body apart) are bridged; pieces
-//     under the minimum volume are fragments, dropped; a bone layer's vertebral column (the bone thicker than a
-//     rib, where a 4 mm ball fits, on the posterior midline) is cut away at the costovertebral joints, the ribs' ends square 1.5 mm
-//     beyond it; of the rest, pieces that do not reach the cut (scapulae, clavicles, loose bone) and pieces
-//     shorter than a quarter of the longest piece (split-off processes, cut fragments) are left out, each Logged.
+//     under the minimum volume are fragments, dropped; a bone layer's vertebral column (the bone thicker than
+//     a rib, where a 4 mm ball fits, on the posterior midline) is cut away at the costovertebral joints, the
+//     ribs' ends square 1.5 mm beyond it (a sheet thinner than 2.4 mm that a rib running along the cut leaves
+//     there goes with it); of the rest, pieces that do not reach the cut (scapulae, clavicles, loose bone) and
+//     pieces shorter than a quarter of the longest (split-off processes, cut fragments) are left out, each
+//     Logged.
 //     The column (the cut-away bone and the vertebra layers) is left out of the model, as the thesis does, or
 //     kept as the fixed support (PrepareOptions::spine): tissue bone, part kVertebralColumn (400);
 //  5. ribs are numbered per side from the top by the height of their vertebral end (or from their names);
