@@ -411,21 +411,13 @@ void partsOfCartilage(const Soup& u, const std::vector<int>& tissue, std::vector
 // "N connected pieces: the cage (...), right rib 11, ...": what each piece of the joined surface holds, the largest
 // first (the user sees which ribs float and what came loose)
 std::string describePieces(const Soup& s, const FaceLabels& lab) {
-  std::vector<int> parent(s.V.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int v) {
-    while (parent[std::size_t(v)] != v) v = parent[std::size_t(v)] = parent[std::size_t(parent[std::size_t(v)])];
-    return v;
-  };
-  for (const auto& f : s.F) parent[std::size_t(find(f[1]))] = find(f[0]), parent[std::size_t(find(f[2]))] = find(f[0]);
-  std::map<int, std::pair<std::size_t, std::set<int>>> pieces;  // root -> faces, parts (tissue * 1000 + part)
-  for (std::size_t f = 0; f < s.F.size(); ++f) {
-    auto& p = pieces[find(s.F[f][0])];
+  std::vector<int> faceComponent;
+  std::vector<std::pair<std::size_t, std::set<int>>> list(std::size_t(Topology(s).components(faceComponent)));
+  for (std::size_t f = 0; f < s.F.size(); ++f) {  // per piece: faces, parts (tissue * 1000 + part)
+    auto& p = list[std::size_t(faceComponent[f])];
     ++p.first;
     p.second.insert(lab.tissue[f] * 1000 + lab.part[f]);
   }
-  std::vector<std::pair<std::size_t, std::set<int>>> list;
-  for (auto& [root, p] : pieces) list.push_back(std::move(p));
   std::stable_sort(list.begin(), list.end(), [](const auto& a, const auto& b) { return a.first > b.first; });
   std::string out = std::to_string(list.size()) + " connected piece" + (list.size() == 1 ? "" : "s");
   for (std::size_t i = 0; i < list.size(); ++i) {
@@ -674,9 +666,9 @@ void Preparation::separate() {
   std::vector<std::size_t> order(all.size());
   std::iota(order.begin(), order.end(), std::size_t(0));
   std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return rank(all[a].cls.kind) < rank(all[b].cls.kind); });
-  for (std::size_t i : order) {
-    prog(10 + int(15 * (&i - order.data()) / std::max<std::ptrdiff_t>(1, std::ptrdiff_t(order.size()))), "separating the structures");
-    takeApart(i);
+  for (std::size_t k = 0; k < order.size(); ++k) {
+    prog(10 + int(15 * k / order.size()), "separating the structures");
+    takeApart(order[k]);
   }
   log.push_back("grid: " + mm(grid.h, 2) + " mm steps, " + std::to_string(grid.box.n[0]) + " x " + std::to_string(grid.box.n[1]) +
                 " x " + std::to_string(grid.box.n[2]) + " points");
@@ -873,7 +865,8 @@ void Preparation::takeApart(std::size_t layer) {
   const Solid& so = solids[layer];
   const double h3 = grid.h * grid.h * grid.h;
   const Box3i whole{{0, 0, 0}, so.box.n};
-  const std::size_t pieces0 = components(s.soup).size();
+  std::vector<int> faceComponent;
+  const int pieces0 = Topology(s.soup).components(faceComponent);
   log.push_back("'" + s.name + "': " + std::to_string(pieces0) + " piece" + (pieces0 == 1 ? "" : "s") + " -> a solid of " +
                 mm(double(so.count()) * h3 / 1000, 2) + " cm3" +
                 (so.capped > 0 ? " (" + std::to_string(so.capped) + " hole" + (so.capped == 1 ? "" : "s") + " capped)" : std::string()) +
