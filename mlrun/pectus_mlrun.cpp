@@ -17,6 +17,10 @@
 // current layer by a click and pymeshlab by MeshSet.set_current_mesh) is carried out by the runner: a
 // script that switches layers runs on every host.
 //
+// The filters' return values (pymeshlab's dict: a pectus filter's figures, pectus/results.h) are appended, when
+// $PECTUS_RESULTS_FILE names a file, as one JSON line per filter applied: {"filter": "<name>", "results": {...}},
+// as the plugins themselves write on 2020.09, so that scripts read the same file on every host.
+//
 // The filters' log lines reach standard error as "LOG: <level> <text>" (MeshLab's log prints them, as it
 // did in meshlabserver). Exit status: 0 on
 // success, 255 when a filter fails (its reason is in the log; every layer is left as it was), 2 for a bad
@@ -34,6 +38,9 @@
 #include <common/mlexception.h>
 #include <common/plugins/plugin_manager.h>
 #include <common/utilities/load_save.h>
+
+#include "filter_plugin.h"  // the results' JSON line and the return values' conversion
+#include "pectus/errors.h"
 
 #include <cstdio>
 #include <cstdlib>
@@ -311,6 +318,7 @@ int main(int argc, char** argv) {
       return 2;
     }
     const RawParams raw = rawParameters(args.script);
+    const std::string resultsFile = pectus::ml::resultsFileFromEnvironment();
     int stepIndex = 0;
     for (const auto& step : script) {
       static const std::map<QString, std::pair<QString, QString>> none;
@@ -346,7 +354,17 @@ int main(int argc, char** argv) {
       if (md.mm() != nullptr) md.mm()->updateDataMask(fp->getRequirements(action));
       unsigned int postCondition = fp->postCondition(action);
       try {
-        fp->applyFilter(action, par, md, postCondition, quietProgress);
+        const std::map<std::string, QVariant> values = fp->applyFilter(action, par, md, postCondition, quietProgress);
+        if (!resultsFile.empty()) {
+          const std::string line =
+              pectus::ml::resultsJsonLine(name.toStdString(), pectus::ml::fromVariantMap(values));
+          try {
+            pectus::ml::appendLine(resultsFile, line);
+          } catch (const pectus::IOError& e) {
+            std::cerr << "pectus-mlrun: " << e.what() << "\n";
+            return 2;
+          }
+        }
       } catch (const MLException& e) {
         std::cout << "Problem with filter: " << name.toStdString() << ": " << e.what() << "\n";
         return 255;

@@ -7,8 +7,10 @@
 # 2022.02: the same in the Debian trixie userland (.hosts/trixie, build-2022.02/). On first use it makes
 #   the userland and the build with scripts/host.sh (about 10 min) and says so;
 #   PECTUS_MLRUN_NO_SETUP=1 refuses instead. The repository, /tmp, the current folder and the folders of
-#   the files named by -i, -o and -s appear inside the userland at their own paths (bind mounts in a
-#   private mount namespace, gone when the command ends), so paths mean the same on both hosts.
+#   the files named by -i, -o and -s and of $PECTUS_RESULTS_FILE appear inside the userland at their own paths
+#   (bind mounts in a private mount namespace, gone when the command ends), so paths mean the same on both hosts.
+# $PECTUS_RESULTS_FILE: the file each filter's results are appended to, one JSON line per filter (on 2020.09 the
+#   plugins write it, on the newer releases pectus-mlrun from the filters' return values).
 # Run as root (chroot, mount namespaces).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
@@ -61,6 +63,9 @@ for a in "$@"; do
   esac
   prev="$a"
 done
+if [ -n "${PECTUS_RESULTS_FILE:-}" ]; then
+  binds+=("$(dirname "$(readlink -m -- "$PECTUS_RESULTS_FILE")")")
+fi
 uniq=()
 for d in "${binds[@]}"; do
   [ -d "$d" ] || continue
@@ -72,7 +77,7 @@ done
 
 # the environment the runner sees: a clean one, plus the variables that steer the filters
 envs=(PATH=/usr/sbin:/usr/bin:/sbin:/bin HOME=/root LANG=C.UTF-8)
-for v in OMP_NUM_THREADS OMP_WAIT_POLICY PECTUS_MLRUN_PLUGINS PECTUS_MLRUN_VERBOSE; do
+for v in OMP_NUM_THREADS OMP_WAIT_POLICY PECTUS_MLRUN_PLUGINS PECTUS_MLRUN_VERBOSE PECTUS_RESULTS_FILE; do
   [ -n "${!v:-}" ] && envs+=("$v=${!v}")
 done
 

@@ -4,7 +4,10 @@
 #include <vcg/complex/append.h>
 
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
+#include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 
@@ -295,14 +298,18 @@ QString FilterPluginBase::pythonName(int id) const {
   return n;
 }
 
-// Runs filter `id`; on failure rolls every layer back and returns the logged message.
-std::string FilterPluginBase::runFilter(int id, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) {
+// Runs filter `id`; on success `results` holds its figures, written where the run asks (FilterContext::
+// writeResultsTo) and, on 2020.09, to $PECTUS_RESULTS_FILE and the Log; on failure rolls every layer back and
+// returns the logged message.
+std::string FilterPluginBase::runFilter(int id, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb,
+                                        pectus::Results& results) {
   const QString name = filterName(id);
 #if PECTUS_MESHLAB_API >= 2021
   auto logger = [this](const std::string& s) { log(GLLogStream::FILTER, s); };
 #else
   auto logger = [this](const std::string& s) { Log(GLLogStream::FILTER, s.c_str()); };
 #endif
+  results.clear();
   std::string failure;
   {
     FilterContext ctx(md, par, cb, logger, name, &ranges_[id]);
@@ -313,7 +320,22 @@ std::string FilterPluginBase::runFilter(int id, MeshDocument& md, const RichPara
       }
       if (spec(id).needsCurrentMesh) ctx.current();
       run(id, ctx);
+      const std::string line = resultsJsonLine(name.toStdString(), ctx.results());
+      if (!ctx.resultsPath().empty()) {
+        std::ofstream f(ctx.resultsPath(), std::ios::binary | std::ios::trunc);
+        f << line << "\n";
+        f.close();
+        if (!f) throw IOError("cannot write the results file " + ctx.resultsPath());
+      }
+#if PECTUS_MESHLAB_API < 2021
+      // 2020.09 has no return values: the results file scripts read, and the Log (pectus-mlrun writes the
+      // file from the return values on the newer hosts)
+      const std::string file = resultsFileFromEnvironment();
+      if (!file.empty()) appendLine(file, line);
+      if (!ctx.results().empty()) ctx.log("Results: " + ctx.results().toText());
+#endif
       ctx.commit();
+      results = std::move(ctx.results());
       ctx.progress(100, "done");
       return {};
     } catch (const InputError& e) {  // and its kinds TopologyError, SolverFailure, IOError (pectus/errors.h)
@@ -327,6 +349,7 @@ std::string FilterPluginBase::runFilter(int id, MeshDocument& md, const RichPara
     }
     ctx.rollback();
   }
+  results.clear();
   const std::string msg = name.toStdString() + " failed: " + failure + " (the layers are unchanged)";
 #if PECTUS_MESHLAB_API >= 2021
   log(GLLogStream::WARNING, msg);
@@ -354,9 +377,10 @@ RichParameterList FilterPluginBase::initParameterList(const QAction* a, const Me
 std::map<std::string, QVariant> FilterPluginBase::applyFilter(const QAction* a, const RichParameterList& par,
                                                               MeshDocument& md, unsigned int&,
                                                               vcg::CallBackPos* cb) {
-  const std::string failure = runFilter(ID(a), md, par, cb);
+  pectus::Results results;
+  const std::string failure = runFilter(ID(a), md, par, cb, results);
   if (!failure.empty()) throw MLException(QString::fromStdString(failure));
-  return {};
+  return toVariantMap(results);
 }
 
 #else
@@ -374,7 +398,8 @@ void FilterPluginBase::initParameterSet(QAction* a, MeshDocument& md, RichParame
 }
 
 bool FilterPluginBase::applyFilter(QAction* a, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb) {
-  const std::string failure = runFilter(ID(a), md, par, cb);
+  pectus::Results results;
+  const std::string failure = runFilter(ID(a), md, par, cb, results);
   if (failure.empty()) return true;
   errorMessage = QString::fromStdString(failure);
   return false;
@@ -418,6 +443,68 @@ RichMesh richMesh(const QString& name, MeshModel* def, const MeshDocument& md, c
 }
 MeshModel* meshParam(const RichParameterList& par, MeshDocument&, const QString& name) { return par.getMesh(name); }
 void updateBoxAndNormals(MeshModel& m) { m.UpdateBoxAndNormals(); }
+#endif
+
+// ---------------------------------------------------------------------------------------------
+// results
+
+std::string resultsJsonLine(const std::string& filter, const pectus::Results& results) {
+  return "{\"filter\": " + pectus::Results::jsonString(filter) + ", \"results\": " + results.toJson() + "}";
+}
+
+void appendLine(const std::string& path, const std::string& line) {
+  std::ofstream f(path, std::ios::binary | std::ios::app);
+  f << line << "\n";
+  f.close();
+  if (!f) throw IOError("cannot append to the results file " + path + " ($PECTUS_RESULTS_FILE)");
+}
+
+std::string resultsFileFromEnvironment() {
+  const char* p = std::getenv("PECTUS_RESULTS_FILE");
+  return p ? std::string(p) : std::string();
+}
+
+#if PECTUS_MESHLAB_API >= 2021
+std::map<std::string, QVariant> toVariantMap(const pectus::Results& results) {
+  std::map<std::string, QVariant> out;
+  for (const auto& e : results.entries()) {
+    QVariant v;
+    if (const auto* d = std::get_if<double>(&e.value)) {
+      v = QVariant(*d);
+    } else if (const auto* i = std::get_if<long long>(&e.value)) {
+      // pymeshlab converts int, double, float, bool and vcg's types, not qlonglong
+      if (*i >= std::numeric_limits<int>::min() && *i <= std::numeric_limits<int>::max()) v = QVariant(int(*i));
+      else v = QVariant(double(*i));
+    } else if (const auto* s = std::get_if<std::string>(&e.value)) {
+      v = QVariant(QString::fromStdString(*s));
+    } else {
+      const auto& p = std::get<pectus::Results::Vec3>(e.value);
+      v = QVariant::fromValue(Point3m(Scalarm(p[0]), Scalarm(p[1]), Scalarm(p[2])));
+    }
+    out[e.key] = v;
+  }
+  return out;
+}
+
+pectus::Results fromVariantMap(const std::map<std::string, QVariant>& values) {
+  pectus::Results r;
+  for (const auto& [key, v] : values) {
+    const int t = v.userType();
+    if (t == qMetaTypeId<Point3m>()) {
+      const Point3m p = v.value<Point3m>();
+      r.set(key, pectus::Results::Vec3{double(p[0]), double(p[1]), double(p[2])});
+    } else if (t == QMetaType::Double || t == QMetaType::Float) {
+      r.set(key, v.toDouble());
+    } else if (t == QMetaType::Int || t == QMetaType::LongLong || t == QMetaType::UInt || t == QMetaType::ULongLong) {
+      r.set(key, v.toLongLong());
+    } else if (t == QMetaType::Bool) {
+      r.set(key, v.toBool() ? 1 : 0);
+    } else if (t == QMetaType::QString) {
+      r.set(key, v.toString().toStdString());
+    }
+  }
+  return r;
+}
 #endif
 
 std::string formatHistogram(const std::vector<std::size_t>& h) {

@@ -5,6 +5,11 @@
 //    filter" on its own, hence the log line), and in 2021.05 and later it throws MLException, the one
 //    exception MeshLab's GUI, pymeshlab and pectus-mlrun report as a filter failure;
 //  - progress goes through MeshLab's callback;
+//  - the figures a filter puts into ctx.results() (pectus/results.h) reach the host after a successful run:
+//    in 2021.05 and later as applyFilter's return values (what pymeshlab's apply_filter returns; pectus-mlrun
+//    writes them to $PECTUS_RESULTS_FILE); in 2020.09 as a JSON line appended to $PECTUS_RESULTS_FILE when it is
+//    set, and one Log line "Results: key = value, ..."; on every host as a JSON file where the filter names
+//    one (FilterContext::writeResultsTo). A failed run returns and writes none;
 //  - a numeric parameter is declared once, with its valid range (addFloat, addInt): the tool-tip ends with
 //    that range, and run() reads the value through a checked accessor that enforces the same range and
 //    names the parameter and the range when the value lies outside.
@@ -22,6 +27,7 @@
 #include <vector>
 
 #include "pectus/param_range.h"
+#include "pectus/results.h"
 
 namespace pectus::ml {
 
@@ -74,6 +80,17 @@ class FilterContext {
   MeshModel& current();
 
   void log(const std::string& line) const;
+  /// The figures this run returns (force_N, elevation_mm, ...; keys in snake_case with the unit as suffix).
+  /// The plugin base hands them to the host when the run succeeds, and drops them when it fails.
+  pectus::Results& results() { return results_; }
+  const pectus::Results& results() const { return results_; }
+  /// After a successful run, also write the results as one JSON object (with the filter's name) to `path`,
+  /// beside the filter's other outputs (e.g. "<output base>_results.json"); a file that cannot be written
+  /// fails the run. Empty: none.
+  void writeResultsTo(const std::string& path) { resultsPath_ = path; }
+  const std::string& resultsPath() const { return resultsPath_; }
+  const QString& filterName() const { return filterName_; }
+
   /// progress in percent [0,100] with a short label; safe to call with no callback
   void progress(int percent, const char* what) const;
   vcg::CallBackPos* callback() const { return cb_; }
@@ -110,6 +127,8 @@ class FilterContext {
   std::function<void(const std::string&)> logger_;
   QString filterName_;
   const DeclaredRanges* ranges_;
+  pectus::Results results_;
+  std::string resultsPath_;
   const DeclaredRange& declared(const QString& name, bool integer) const;
   float checkedFloat(const QString& name, const ParamRange& r) const;
   int checkedInt(const QString& name, const ParamRange& r) const;
@@ -163,13 +182,30 @@ class FilterPluginBase : public HostFilter {
   std::set<int> declared_;
   /// initParameters(id, ...) with the ranges its addFloat/addInt calls declare recorded for filter id
   void declare(int id, const MeshDocument& md, RichParameterList& par);
-  /// the outcome of a run: empty on success, else the message (already logged)
-  std::string runFilter(int id, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb);
+  /// the outcome of a run: empty on success (the filter's figures in `results`), else the message (already
+  /// logged; `results` empty)
+  std::string runFilter(int id, MeshDocument& md, const RichParameterList& par, vcg::CallBackPos* cb,
+                        pectus::Results& results);
 };
 
 /// The first layer whose label (without extension) ends in "landmarks" (labels.h), else the current one:
 /// the default of every "Landmark layer" parameter.
 MeshModel* defaultLandmarkLayer(const MeshDocument& md);
+
+/// The JSON line a filter's results take in a results file: {"filter": "<name>", "results": {...}}
+std::string resultsJsonLine(const std::string& filter, const pectus::Results& results);
+/// Appends `line` and a newline to `path`; throws pectus::IOError naming the file when it cannot.
+void appendLine(const std::string& path, const std::string& line);
+/// The results file scripts read ($PECTUS_RESULTS_FILE), or "" when not set.
+std::string resultsFileFromEnvironment();
+#if PECTUS_MESHLAB_API >= 2021
+/// The results as MeshLab's return values (what pymeshlab converts to a dict): a number as double, a count as
+/// int (a double beyond int's range), a text as QString, a place as Point3m.
+std::map<std::string, QVariant> toVariantMap(const pectus::Results& results);
+/// The converse, for a runner that gets a filter's return values (any filter's: bool as a count 0/1, float as
+/// a number, Point3m as a place; a type with none of these is skipped).
+pectus::Results fromVariantMap(const std::map<std::string, QVariant>& values);
+#endif
 
 /// "a b c" for a histogram, and a fixed-format number, for Log lines
 std::string formatHistogram(const std::vector<std::size_t>& h);

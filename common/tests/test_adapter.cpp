@@ -3,7 +3,12 @@
 // failure the host's way (2020.09: false + errorMessage; 2021.05+: MLException).
 #include <gtest/gtest.h>
 
+#include <cstdio>
+#include <cstdlib>
+#include <fstream>
+#include <iterator>
 #include <map>
+#include <string>
 
 #include <vcg/complex/algorithms/create/platonic.h>
 
@@ -231,4 +236,79 @@ TEST(Adapter, NoCurrentLayerIsAMessage) {
   par.addParam(RichFloat("x", 1.0f, "x", "x"));
   par.addParam(RichInt("n", 3, "n", "n"));
   EXPECT_NE(apply(p, 1, md, par).indexOf("no current layer"), -1);
+}
+
+// The figures a filter puts into ctx.results() reach the host after a successful run: on 2021.05+ as
+// applyFilter's return values; on 2020.09 as a JSON line in $PECTUS_RESULTS_FILE and a Log line; on every host
+// as the JSON file the run names. A failed run returns, writes and logs none.
+TEST(Adapter, ResultsReachTheHostAfterSuccessOnly) {
+  const std::string dir = ::testing::TempDir();
+  const std::string envFile = dir + "pectus_adapter_results.jsonl", beside = dir + "pectus_adapter_beside.json";
+  std::remove(envFile.c_str());
+  std::remove(beside.c_str());
+  ASSERT_EQ(setenv("PECTUS_RESULTS_FILE", envFile.c_str(), 1), 0);
+  auto read = [](const std::string& path) {
+    std::ifstream f(path);
+    return std::string(std::istreambuf_iterator<char>(f), std::istreambuf_iterator<char>());
+  };
+
+  MeshDocument md;
+  MeshModel* a = md.addNewMesh("", "a");
+  vcg::tri::Tetrahedron(a->cm);
+  FakePlugin p;
+  p.setLog(&md.Log);
+  const RichParameterList par = params(p, 1, md);
+  p.body = [&](pectus::ml::FilterContext& ctx) {
+    ctx.results().set("force_N", 14.5);
+    ctx.results().set("solves", 7);
+    ctx.results().set("max_stress_where", "sternum");
+    ctx.results().set("max_stress_at_mm", pectus::Results::Vec3{1, 2, 3});
+    ctx.writeResultsTo(beside);
+  };
+  const std::string line =
+      R"({"filter": "Ok", "results": {"force_N": 14.5, "solves": 7, "max_stress_where": "sternum", "max_stress_at_mm": [1.0, 2.0, 3.0]}})";
+#if PECTUS_MESHLAB_API >= 2021
+  unsigned int mask = 0;
+  const auto values = p.applyFilter(action(p, 1), par, md, mask, nullptr);
+  ASSERT_EQ(values.size(), 4u);
+  EXPECT_EQ(values.at("force_N").userType(), int(QMetaType::Double));
+  EXPECT_DOUBLE_EQ(values.at("force_N").toDouble(), 14.5);
+  EXPECT_EQ(values.at("solves").userType(), int(QMetaType::Int));
+  EXPECT_EQ(values.at("solves").toInt(), 7);
+  EXPECT_EQ(values.at("max_stress_where").toString(), QString("sternum"));
+  ASSERT_EQ(values.at("max_stress_at_mm").userType(), qMetaTypeId<Point3m>());
+  EXPECT_EQ(values.at("max_stress_at_mm").value<Point3m>(), Point3m(1, 2, 3));
+  // the runner's converse gives the same JSON back (in the map's order of keys)
+  EXPECT_EQ(pectus::ml::fromVariantMap(values).toJson(),
+            R"({"force_N": 14.5, "max_stress_at_mm": [1.0, 2.0, 3.0], "max_stress_where": "sternum", "solves": 7})");
+  EXPECT_EQ(read(envFile), "");  // pectus-mlrun writes the file from the return values
+#else
+  ASSERT_TRUE(apply(p, 1, md, par).isEmpty());
+  EXPECT_EQ(read(envFile), line + "\n");
+  QStringList log;
+  md.Log.print(log);
+  EXPECT_TRUE(log.join("\n").contains(R"(Results: force_N = 14.5, solves = 7, max_stress_where = "sternum", max_stress_at_mm = (1, 2, 3))"))
+      << log.join("\n").toStdString();
+#endif
+  EXPECT_EQ(read(beside), line + "\n");
+
+  // a failed run: nothing returned, nothing written
+  std::remove(envFile.c_str());
+  std::remove(beside.c_str());
+  p.body = [&](pectus::ml::FilterContext& ctx) {
+    ctx.results().set("force_N", 1.0);
+    ctx.writeResultsTo(beside);
+    throw pectus::SolverFailure("no convergence");
+  };
+  EXPECT_FALSE(apply(p, 1, md, par).isEmpty());
+  EXPECT_FALSE(std::ifstream(envFile).good());
+  EXPECT_FALSE(std::ifstream(beside).good());
+
+  // a results file that cannot be written fails the run
+  p.body = [&](pectus::ml::FilterContext& ctx) {
+    ctx.results().set("force_N", 1.0);
+    ctx.writeResultsTo(dir + "no/such/folder/results.json");
+  };
+  EXPECT_NE(apply(p, 1, md, par).indexOf("cannot write the results file"), -1);
+  unsetenv("PECTUS_RESULTS_FILE");
 }
