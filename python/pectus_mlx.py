@@ -12,12 +12,16 @@ meshlabserver aborts when a parameter is missing or mistyped, so every parameter
                        elementType=Enum(0, ["Auto", "Triangles (alpha)", "Quads (beta)"]),
                        colorize=Bool(True))])
     res = run(["in.ply"], s, outputs=[("out.ply", "fq fc")])
-    print(res.rc, res.log)
+    print(res.rc, res.value("quality_mean"), res.log)
+
+Each filter's figures (force, elevation, volumes, counts, timings...) come back as values, one dict per filter
+applied (Result.results, Result.value): the plugins append them to the file named by $PECTUS_RESULTS_FILE on
+2020.09, pectus-mlrun writes the filters' return values there on the newer releases, and run() reads it.
 """
 from __future__ import annotations
 
+import json
 import os
-import re
 import shutil
 import signal
 import subprocess
@@ -183,6 +187,8 @@ def load_script(path: str) -> list:
 class Result:
     rc: int
     stdout: str
+    #: one entry per filter applied, in order: {"filter": <filter name>, "results": {key: value}}
+    results: list = field(default_factory=list)
 
     @property
     def log(self) -> list[str]:
@@ -196,19 +202,29 @@ class Result:
                 out.append(parts[1] if len(parts) == 2 and parts[0].isdigit() else line[5:])
         return out
 
+    def values(self, key: str, filter: str | None = None) -> list:
+        """Every value of `key` the filters returned, in the order they ran (only those of the filter named
+        `filter`, if given); [] if none."""
+        return [r["results"][key] for r in self.results
+                if key in r["results"] and (filter is None or r["filter"] == filter)]
 
-def grab(log: Iterable[str], pattern: str, cast=float):
-    """cast(group 1) of the first Log line matching the regular expression, or None"""
-    for line in log:
-        m = re.search(pattern, line)
-        if m:
-            return cast(m.group(1))
-    return None
+    def value(self, key: str, filter: str | None = None):
+        """The last value of `key` the filters returned (of the filter named `filter`, if given); KeyError
+        naming the key and the filters that ran when none returned it."""
+        found = self.values(key, filter)
+        if not found:
+            ran = ", ".join(repr(r["filter"]) for r in self.results) or "none"
+            where = f" by {filter!r}" if filter else ""
+            raise KeyError(f"no result {key!r} returned{where} (filters that returned results: {ran}; exit code {self.rc})")
+        return found[-1]
 
 
-def grab_all(log: Iterable[str], pattern: str) -> list:
-    """float(group 1) of every Log line matching the regular expression"""
-    return [float(m.group(1)) for m in (re.search(pattern, l) for l in log) if m]
+def read_results(path: str) -> list:
+    """The JSON lines of a results file ($PECTUS_RESULTS_FILE), in order; [] if it is missing or empty."""
+    if not os.path.exists(path):
+        return []
+    with open(path, encoding="utf-8") as fh:
+        return [json.loads(line) for line in fh if line.strip()]
 
 
 def find_meshlabserver(prefix: str | None = None) -> str:
@@ -259,7 +275,8 @@ def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tu
     """Run a script headless: meshlabserver under xvfb-run (host 2020.09) or pectus-mlrun in the trixie or
     forky userland (host 2022.02 or 2025.07; see default_host). outputs: (path, "vc fq ...", layer_index or None); env:
     variables to set on top of the current environment (e.g. OMP_NUM_THREADS).
-    Returns the exit code and everything printed (stdout + stderr); subprocess.TimeoutExpired on a timeout."""
+    Returns the exit code, everything printed (stdout + stderr) and each filter's results (read from the
+    temporary file $PECTUS_RESULTS_FILE names during the run); subprocess.TimeoutExpired on a timeout."""
     host = host or default_host()
     if host in MLRUN_HOSTS:
         cmd = [mlrun_script(), "--host", host]
@@ -288,11 +305,16 @@ def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tu
             cmd += ["-m"] + mask.split()
     if script:
         cmd += ["-s", script]
+    # under /tmp: scripts/mlrun.sh shows it inside the userland at the same path
+    fd, results_file = tempfile.mkstemp(prefix="pectus-results-", suffix=".jsonl", dir="/tmp")
+    os.close(fd)
+    run_env = dict(os.environ, **(env or {}), PECTUS_RESULTS_FILE=results_file)
     try:
         for attempt in range(3):
+            open(results_file, "w").close()  # a repeated run starts from an empty file
             # own process group: on a timeout meshlabserver (a grandchild under xvfb-run) is killed too
             with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, cwd=cwd, text=True,
-                                  errors="replace", env=dict(os.environ, **env) if env else None,
+                                  errors="replace", env=run_env,
                                   start_new_session=True) as p:
                 try:
                     out, _ = p.communicate(timeout=timeout)
@@ -304,7 +326,8 @@ def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tu
             # meshlabserver's exit code is then lost, so run again (the filters are deterministic)
             if not (p.returncode == 5 and XVFB_CLEANUP_ERROR in out):
                 break
-        return Result(p.returncode, out)
+        return Result(p.returncode, out, read_results(results_file))
     finally:
+        os.unlink(results_file)
         if tmp:
             os.unlink(tmp)
