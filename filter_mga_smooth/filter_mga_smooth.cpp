@@ -237,6 +237,17 @@ void FilterMgaSmoothPlugin::runElementQuality(FilterContext& ctx) {
   ctx.log(head + "; min " + fmt(q.stats.min) + " mean " + fmt(q.stats.mean) + " max " + fmt(q.stats.max) +
           "; invalid (not positive): " + std::to_string(q.stats.invalid));
   ctx.log("Element quality histogram, 10 bins on [0,1]: " + pectus::ml::formatHistogram(q.stats.histogram));
+  auto& res = ctx.results();
+  res.set("element_kind", quads ? "quads" : "triangles");
+  res.set("elements", q.mesh.elements.size());
+  res.set("quads", quads ? q.mesh.quads() : 0);
+  res.set("triangles", quads ? q.mesh.triangles() : q.mesh.elements.size());
+  res.set("quality_min", q.stats.min);
+  res.set("quality_mean", q.stats.mean);
+  res.set("quality_max", q.stats.max);
+  res.set("invalid_elements", q.stats.invalid);
+  for (std::size_t i = 0; i < q.stats.histogram.size(); ++i)  // elements with quality in [i/10, (i+1)/10)
+    res.set("histogram_" + std::to_string(i), q.stats.histogram[i]);
 }
 
 void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
@@ -330,6 +341,27 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
           std::to_string(r.evaluations) + " fitness evaluations; elements folded against a node's surface normal " +
           std::to_string(r.foldedBefore) + " -> " + std::to_string(r.foldedAfter));
   if (o.features == pectus::smooth::FeatureDetection::Creases) ctx.log(what + ": features: " + r.featureSummary);
+  auto& res = ctx.results();
+  res.set("element_kind", quads ? "quads" : "triangles");
+  res.set("elements", r.elements);
+  res.set("quality_min_before", r.before.min);
+  res.set("quality_min_after", r.after.min);
+  res.set("quality_mean_before", r.before.mean);
+  res.set("quality_mean_after", r.after.mean);
+  res.set("nodes_moved", r.nodesMoved);
+  res.set("free_nodes", r.freeNodes);
+  res.set("nodes_put_back", r.nodesPutBack);
+  res.set("sweeps", r.sweeps);
+  res.set("worst_element_sweeps", r.minPassSweeps);
+  res.set("boundary_nodes", r.boundaryNodes);
+  res.set("feature_nodes", r.featureNodes);
+  res.set("singular_nodes", r.singularNodes);
+  res.set("selection_fixed_nodes", r.userFixedNodes);
+  res.set("colours", r.colours);
+  res.set("fitness_evaluations", r.evaluations);
+  res.set("folded_before", r.foldedBefore);
+  res.set("folded_after", r.foldedAfter);
+  res.set("seconds", r.seconds);
 }
 
 MESHLAB_PLUGIN_NAME_EXPORTER(FilterMgaSmoothPlugin)

@@ -119,8 +119,11 @@ Common readCommon(FilterContext& ctx, bool needRange = true) {
 
 std::string cm3(double mm3) { return fmt(mm3 / 1000.0, 3) + " cm3"; }
 
+/// the Log line of a before/after change, and its values volume_change_cm3 and volume_change_pct
 void logChange(FilterContext& ctx, const std::string& what, double before, double after) {
   const double d = after - before;
+  ctx.results().set("volume_change_cm3", d / 1000.0);
+  ctx.results().set("volume_change_pct", 100.0 * d / before);
   ctx.log(what + " change: " + (d >= 0 ? "+" : "") + cm3(d) + " (" + (d >= 0 ? "+" : "") + fmt(100.0 * d / before, 2) +
           " %), before " + cm3(before) + ", after " + cm3(after));
 }
@@ -289,6 +292,21 @@ void FilterThoracicVolumePlugin::runSlice(FilterContext& ctx) {
             " at the ends counted as zero, min ray coverage " +
             fmt(100 * r.minCoverage, 1) + " %, " + fmt(seconds(t0), 3) + " s)");
     requireEnclosure(r, lab(mm), c.range);
+    // the measured layer's figures; the before layer's with the prefix before_
+    const std::string k = &mm == c.before ? "before_" : "";
+    auto& res = ctx.results();
+    res.set(k + "volume_cm3", r.volume / 1000.0);
+    res.set(k + "slices", r.slices);
+    res.set(k + "spacing_mm", r.spacingUsed);
+    res.set(k + "pixel_mm", r.pixel);
+    res.set(k + "polygon_volume_cm3", r.polygonVolume / 1000.0);
+    res.set(k + "empty_slices", r.emptySlices);
+    res.set(k + "bridged_slices", r.bridgedSlices);
+    res.set(k + "end_empty_slices", r.endEmptySlices);
+    res.set(k + "min_ray_coverage_pct", 100 * r.minCoverage);
+    res.set(k + "seconds", seconds(t0));
+    res.set("z_low_mm", c.range.zLo);
+    res.set("z_high_mm", c.range.zHi);
     return r.volume;
   };
   if (c.before) {
@@ -333,6 +351,18 @@ void FilterThoracicVolumePlugin::runEnvelope(FilterContext& ctx) {
             std::to_string(r.samples) + " samples, " + fmt(dt, 3) + " s)");
     ctx.log("Envelope layer '" + o.label.toStdString() + "' (" + std::to_string(o.mesh.F.size()) +
             " triangles, closed): mesh volume " + fmt(meshVol, 6) + " mm3");
+    const std::string k = &mm == c.before ? "before_" : "";
+    auto& res = ctx.results();
+    res.set(k + "volume_cm3", r.volume / 1000.0);
+    res.set(k + "key_points_touching", r.touching);
+    res.set(k + "key_points_singular", r.singular);
+    res.set(k + "step_levels", r.levels);
+    res.set(k + "samples", r.samples);
+    res.set(k + "seconds", dt);
+    res.set(k + "envelope_triangles", o.mesh.F.size());
+    res.set(k + "envelope_mesh_volume_mm3", meshVol);
+    res.set("z_low_mm", c.range.zLo);
+    res.set("z_high_mm", c.range.zHi);
     outs.push_back(std::move(o));
     return r.volume;
   };
@@ -351,8 +381,11 @@ void FilterThoracicVolumePlugin::runEnvelope(FilterContext& ctx) {
         topo.badFace < 0 &&
         std::none_of(s.F.begin(), s.F.end(), [](const auto& f) { return f[0] == f[1] || f[1] == f[2] || f[2] == f[0]; }) &&
         std::all_of(topo.edges.begin(), topo.edges.end(), [](const pectus::Topology::Edge& e) { return e.faces == 2; });
-    if (closed)
-      ctx.log("Layer '" + lab(*mm) + "' is closed: divergence volume " + fmt(vol::divergenceVolume(s), 6) + " mm3");
+    if (closed) {
+      const double v = vol::divergenceVolume(s);
+      ctx.log("Layer '" + lab(*mm) + "' is closed: divergence volume " + fmt(v, 6) + " mm3");
+      ctx.results().set(std::string(mm == c.before ? "before_" : "") + "layer_divergence_volume_mm3", v);
+    }
   }
   for (const auto& o : outs) addSoupLayer(ctx, o.label, o.mesh);
 }
@@ -390,6 +423,14 @@ void FilterThoracicVolumePlugin::runIndex(FilterContext& ctx) {
     ctx.log("Pectus index, layer '" + lab(mm) + "' at z = " + fmt(r.z, 2) + " mm: Haller index " + fmt(r.haller, 3) +
             ", correction index " + fmt(r.correction, 2) + " % (inner transverse diameter " + fmt(r.transverse, 2) +
             " mm, sternum-vertebra " + fmt(r.apMin, 2) + " mm, chest wall-vertebra " + fmt(r.apMax, 2) + " mm)");
+    const std::string k = &mm == before ? "before_" : "";
+    auto& res = ctx.results();
+    res.set(k + "haller_index", r.haller);
+    res.set(k + "correction_index_pct", r.correction);
+    res.set(k + "level_z_mm", r.z);
+    res.set(k + "transverse_mm", r.transverse);
+    res.set(k + "sternum_vertebra_mm", r.apMin);
+    res.set(k + "chest_wall_vertebra_mm", r.apMax);
     return r;
   };
   ctx.progress(10, "pectus index");

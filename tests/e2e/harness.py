@@ -61,6 +61,26 @@ def run(inputs, script, outputs=(), timeout=1800):
     return r
 
 
+def log_figure(log, pattern: str, cast=float):
+    """cast(group 1) of the first Log line matching the regular expression, or None: for tests of the Log text
+    itself (the figures come back as values: Result.value)"""
+    for line in log:
+        m = re.search(pattern, line)
+        if m:
+            return cast(m.group(1))
+    return None
+
+
+def log_figures(log, pattern: str) -> list:
+    """float(group 1) of every Log line matching the regular expression (tests of the Log text)"""
+    return [float(m.group(1)) for m in (re.search(pattern, l) for l in log) if m]
+
+
+def as_printed(value, printed, decimals: int) -> bool:
+    """a returned value is the Log's figure printed with `decimals` decimals"""
+    return value is not None and printed is not None and abs(value - printed) <= 0.5 * 10.0 ** -decimals * (1 + 1e-9)
+
+
 def check(cond: bool, what: str, detail: str = "") -> bool:
     global _passed
     if cond:

@@ -1,7 +1,9 @@
 """E2E: the thoracic volume filters through meshlabserver on analytic cages built here.
 Slice method within 0.2 % and Ferguson envelope within 1 % of the exact volumes; the divergence
 volumes of closed meshes equal MeshLab's 'Compute Geometric Measures' to 1e-6; ranges from a
-landmark layer (labels.h codes); before/after change; bad input refused with a message and rollback."""
+landmark layer (labels.h codes); before/after change; bad input refused with a message and rollback.
+The figures are read from the values the filters return (2020.09: the results file the plugins write;
+newer hosts: pectus-mlrun's, from the return values), and each agrees with the Log line's printed figure."""
 import math
 import os
 
@@ -9,8 +11,8 @@ import numpy as np
 
 import harness as h
 import pectus_mlx as mlx
-from pectus_mlx import grab_all as grab
-from harness import check
+from harness import as_printed, check
+from harness import log_figures as grab
 from pectus_meshes import closed_ellipsoid
 
 W = h.workdir("thoracic")
@@ -96,9 +98,24 @@ lms = write_landmarks(os.path.join(W, "cage_landmarks.ply"),
                       [(700, (0, -50, 20.0)), (500, (0, B, 40.0)), (701, (0, 0, 220.0)), (501, (0, B, 120.0)),
                        (503, (0, -B, 120.0))])
 
+SLICE, ENVELOPE, INDEX = "Thoracic Volume (Slice Method)", "Thoracic Volume (Ferguson Envelope)", "Pectus Index"
+
+
+def agree(r, key, filter, pattern, decimals):
+    """the values of `key` the runs of `filter` returned are the Log's figures (printed with `decimals`)"""
+    values, printed = r.values(key, filter), grab(r.log, pattern)
+    ok = len(values) == len(printed) > 0 and all(as_printed(v, p, decimals) for v, p in zip(values, printed))
+    check(ok, f"{filter}: {key} returned {values}, the Log's figures {printed}")
+
+
 # 1. slice method, given heights, exact inner volume
 r = h.run([cage], mlx.Script([slice_filter(source=1, z0=20.0, z1=220.0)]))
-v = grab(r.log, r"Slice method, layer .*intrathoracic volume ([0-9.]+) cm3")
+v = r.values("volume_cm3", SLICE)
+agree(r, "volume_cm3", SLICE, r"Slice method, layer .*intrathoracic volume ([0-9.]+) cm3", 3)
+agree(r, "slices", SLICE, r"Slice method, layer .*cm3 \((\d+) slices", 0)
+agree(r, "pixel_mm", SLICE, r"Slice method, layer .*pixel ([0-9.]+) mm", 3)
+check(r.value("z_low_mm") == 20.0 and r.value("z_high_mm") == 220.0 and r.value("seconds") >= 0,
+      "slice method: the range and the time returned", str(r.results))
 exact_inner = math.pi * A * B * 200.0 / 1000.0
 check(r.rc == 0 and len(v) == 1, "slice method runs", r.stdout[-800:])
 if v:
@@ -108,7 +125,7 @@ if v:
 # 2. ranges from the landmark layer (700 .. 701): same range as above; 500 .. 701 is smaller
 r = h.run([lms, cage], mlx.Script([slice_filter(source=0, landmarks=0, lower=0),
                                    slice_filter(source=0, landmarks=0, lower=1)]))
-v = grab(r.log, r"Slice method, layer .*intrathoracic volume ([0-9.]+) cm3")
+v = r.values("volume_cm3", SLICE)
 check(r.rc == 0 and len(v) == 2, "slice method with landmark ranges runs", r.stdout[-800:])
 if len(v) == 2:
     check(rel(v[0], exact_inner) < 2e-3, f"landmarks 700..701: {v[0]:.3f} cm3 within 0.2 %")
@@ -121,20 +138,40 @@ r = h.run([cage, lms, after], mlx.Script([
     index_filter(compare=True, before=0, level=0, landmarks=1)]),
     outputs=[(os.path.join(W, "envelope.ply"), "", 4)])
 check(r.rc == 0, "envelope + slice + index before/after run", r.stdout[-1500:])
-env = grab(r.log, r"Ferguson envelope, layer .*thoracic volume ([0-9.]+) cm3")
+env = r.values("before_volume_cm3", ENVELOPE) + r.values("volume_cm3", ENVELOPE)
+for key, pattern, decimals in [
+        ("volume_cm3", r"Ferguson envelope, layer 'cage_after.*thoracic volume ([0-9.]+) cm3", 3),
+        ("before_volume_cm3", r"Ferguson envelope, layer 'cage\.ply.*thoracic volume ([0-9.]+) cm3", 3),
+        ("volume_change_cm3", r"Ferguson envelope thoracic volume change: \+?(-?[0-9.]+) cm3", 3),
+        ("volume_change_pct", r"Ferguson envelope thoracic volume change: \S+ cm3 \(\+?(-?[0-9.]+) %", 2),
+        ("envelope_mesh_volume_mm3", r"Envelope layer 'cage_after.*mesh volume ([0-9.]+) mm3", 6)]:
+    agree(r, key, ENVELOPE, pattern, decimals)
+for key, pattern, decimals in [
+        ("volume_cm3", r"Slice method, layer 'cage_after.*intrathoracic volume ([0-9.]+) cm3", 3),
+        ("before_volume_cm3", r"Slice method, layer 'cage\.ply.*intrathoracic volume ([0-9.]+) cm3", 3),
+        ("volume_change_cm3", r"Slice method intrathoracic volume change: \+?(-?[0-9.]+) cm3", 3),
+        ("volume_change_pct", r"Slice method intrathoracic volume change: \S+ cm3 \(\+?(-?[0-9.]+) %", 2)]:
+    agree(r, key, SLICE, pattern, decimals)
+for key, pattern, decimals in [
+        ("haller_index", r"Pectus index, layer 'cage_after.*Haller index ([0-9.]+)", 3),
+        ("before_haller_index", r"Pectus index, layer 'cage\.ply.*Haller index ([0-9.]+)", 3),
+        ("correction_index_pct", r"Pectus index, layer 'cage_after.*correction index ([0-9.]+) %", 2),
+        ("level_z_mm", r"Pectus index, layer 'cage_after.* at z = (-?[0-9.]+) mm", 2),
+        ("sternum_vertebra_mm", r"Pectus index, layer 'cage_after.*sternum-vertebra ([0-9.]+) mm", 2)]:
+    agree(r, key, INDEX, pattern, decimals)
 exact_outer = math.pi * (A + T) * (B + T) * 200.0 / 1000.0
 if len(env) == 2:
     check(rel(env[0], exact_outer) < 1e-2, f"envelope volume {env[0]:.3f} cm3 within 1 % of {exact_outer:.3f}",
           f"rel {rel(env[0], exact_outer):.5f}")
     check(env[1] > env[0], "envelope volume grows after the anterior wall moves out")
-sl_change = grab(r.log, r"Slice method intrathoracic volume change: \+?(-?[0-9.]+) cm3 \(\+?(?:-?[0-9.]+) %")
-sl_pct = grab(r.log, r"Slice method intrathoracic volume change: \S+ cm3 \(\+?(-?[0-9.]+) %")
+sl_change = r.values("volume_change_cm3", SLICE)
+sl_pct = r.values("volume_change_pct", SLICE)
 # exact: the anterior half of the inner ellipse stretched by 10 % -> +5 %
 check(len(sl_pct) == 1 and abs(sl_pct[0] - 5.0) < 0.2, f"slice change {sl_pct} % is +5 % (exact)")
 check(len(sl_change) == 1 and rel(sl_change[0], 0.05 * exact_inner) < 0.05, f"slice change {sl_change} cm3")
-env_pct = grab(r.log, r"Ferguson envelope thoracic volume change: \S+ cm3 \(\+?(-?[0-9.]+) %")
+env_pct = r.values("volume_change_pct", ENVELOPE)
 check(len(env_pct) == 1 and env_pct[0] > 0, f"envelope change {env_pct} % positive")
-haller = grab(r.log, r"Pectus index, layer .*Haller index ([0-9.]+)")
+haller = r.values("before_haller_index", INDEX) + r.values("haller_index", INDEX)
 check(len(haller) == 2 and abs(haller[0] - 2 * A / (2 * B)) < 0.02, f"Haller index before {haller} = 2a/2b")
 check(len(haller) == 2 and haller[1] < haller[0], "Haller index falls after the correction")
 if os.path.exists(os.path.join(W, "envelope.ply")):
@@ -152,9 +189,10 @@ r = h.run([ell], mlx.Script([mlx.Filter("Compute Geometric Measures"),
                              envelope_filter(source=1, z0=-90.0, z1=90.0)]), outputs=[(envfile, "", 1)])
 check(r.rc == 0, "envelope on a closed ellipsoid runs", r.stdout[-800:])
 ml = grab(r.log, r"Mesh Volume\s+is\s+([0-9.]+)")
-ours_in = grab(r.log, r"is closed: divergence volume ([0-9.]+) mm3")
-ours_env = grab(r.log, r"Envelope layer .*mesh volume ([0-9.]+) mm3")
-envv = grab(r.log, r"Ferguson envelope, layer .*thoracic volume ([0-9.]+) cm3")
+ours_in = r.values("layer_divergence_volume_mm3", ENVELOPE)
+ours_env = r.values("envelope_mesh_volume_mm3", ENVELOPE)
+envv = r.values("volume_cm3", ENVELOPE)
+agree(r, "layer_divergence_volume_mm3", ENVELOPE, r"is closed: divergence volume ([0-9.]+) mm3", 6)
 r2 = h.run([envfile], mlx.Script([mlx.Filter("Compute Geometric Measures")]))
 ml += grab(r2.log, r"Mesh Volume\s+is\s+([0-9.]+)")
 if len(ml) == 2 and ours_in and ours_env:
