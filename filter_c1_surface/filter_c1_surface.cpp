@@ -145,6 +145,8 @@ void FilterC1SurfacePlugin::runRefine(FilterContext& ctx) {
           " gradients, " + (opt.frame == c1::Frame::HeightField ? "height field" : "3D") + "): layer '" + label + "' " +
           describe(surf) + "; split " + std::to_string(k) + "x" + std::to_string(k) + " -> " + std::to_string(out.V.size()) +
           " vertices, " + std::to_string(out.F.size()) + " faces" + (newLayer ? " in a new layer" : ""));
+  ctx.results().set("vertices", out.V.size());
+  ctx.results().set("faces", out.F.size());
 }
 
 void FilterC1SurfacePlugin::runProject(FilterContext& ctx) {
@@ -193,6 +195,9 @@ void FilterC1SurfacePlugin::runProject(FilterContext& ctx) {
   ctx.log("C1 project: " + std::to_string(n) + " vertices of layer '" + target.label().toStdString() +
           "' moved onto the C1 surface of layer '" + src.label().toStdString() + "' (" + describe(surf) +
           "); displacement mean " + fmt(n ? sumD / n : 0.0, 6) + " max " + fmt(maxD, 6));
+  ctx.results().set("vertices_moved", n);
+  ctx.results().set("displacement_mean_mm", n ? sumD / n : 0.0);
+  ctx.results().set("displacement_max_mm", maxD);
 }
 
 MESHLAB_PLUGIN_NAME_EXPORTER(FilterC1SurfacePlugin)

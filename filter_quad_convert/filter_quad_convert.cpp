@@ -200,6 +200,19 @@ void FilterQuadConvertPlugin::runConvert(FilterContext& ctx) {
   ctx.log("Quads: " + fmt(s.quadPercent, 1) + "% quads (" + std::to_string(s.quads) + " quads, " +
           std::to_string(s.triangles) + " triangles); invalid quads (beta <= 0): " + std::to_string(s.invalidQuads) +
           "; beta min " + fmt(s.beta.min) + " mean " + fmt(s.beta.mean) + "; time " + fmt(r.seconds, 3) + " s");
+  auto& res = ctx.results();
+  res.set("input_triangles", tri.F.size());
+  res.set("candidate_pairs", r.candidates);
+  res.set("merged_pairs", r.merged);
+  res.set("leftover_triangles", r.leftoverTriangles);
+  res.set("new_nodes", r.newNodes);
+  res.set("quads", s.quads);
+  res.set("triangles", s.triangles);
+  res.set("quad_pct", s.quadPercent);
+  res.set("invalid_quads", s.invalidQuads);
+  res.set("quality_min", s.beta.min);
+  res.set("quality_mean", s.beta.mean);
+  res.set("seconds", r.seconds);
 }
 
 void FilterQuadConvertPlugin::runStructure(FilterContext& ctx) {
@@ -235,6 +248,19 @@ void FilterQuadConvertPlugin::runStructure(FilterContext& ctx) {
           fmt(r.seconds, 3) + " s");
   ctx.log("Valence of interior nodes before: " + valenceLine(b.valence));
   ctx.log("Valence of interior nodes after: " + valenceLine(a.valence));
+  auto& res = ctx.results();
+  res.set("element_kind", quads ? "quads" : "triangles");
+  res.set("edge_swaps", r.swaps);
+  res.set("node_eliminations", r.eliminations);
+  res.set("edge_divisions", r.divisions);
+  res.set("passes", r.passes);
+  res.set("elements_before", pm.F.size());
+  res.set("elements_after", r.mesh.F.size());
+  res.set("quality_min_before", qb.min);
+  res.set("quality_min_after", qa.min);
+  res.set("quality_mean_before", qb.mean);
+  res.set("quality_mean_after", qa.mean);
+  res.set("seconds", r.seconds);
 }
 
 void FilterQuadConvertPlugin::runSave(FilterContext& ctx) {
@@ -246,6 +272,10 @@ void FilterQuadConvertPlugin::runSave(FilterContext& ctx) {
   pq::writePolyMesh(path, pm, f == 0 ? pq::PolyFormat::OBJ : f == 1 ? pq::PolyFormat::OFF : pq::PolyFormat::VTK);
   ctx.log("Save Polygonal Mesh: wrote " + std::to_string(pm.V.size()) + " vertices, " + std::to_string(pm.quads()) +
           " quads, " + std::to_string(pm.triangles()) + " triangles to " + path);
+  ctx.results().set("vertices", pm.V.size());
+  ctx.results().set("quads", pm.quads());
+  ctx.results().set("triangles", pm.triangles());
+  ctx.results().set("file", path);
 }
 
 MESHLAB_PLUGIN_NAME_EXPORTER(FilterQuadConvertPlugin)
