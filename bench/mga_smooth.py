@@ -106,7 +106,7 @@ class Bench:
         self.work = work
 
     def meshlab(self, inp, out, filters):
-        """wall time of meshlabserver with the filters minus a no-op run on the same file; and the log"""
+        """wall time of meshlabserver with the filters minus a no-op run on the same file; and the run's Result"""
         t0 = time.perf_counter()
         r = mlx.run([inp], mlx.Script(filters), [(out, "sa")], prefix=self.prefix)
         wall = time.perf_counter() - t0
@@ -116,7 +116,7 @@ class Bench:
         noop = os.path.join(self.work, "noop.off")
         mlx.run([inp], None, [(noop, "sa")], prefix=self.prefix)
         base = time.perf_counter() - t0
-        return max(wall - base, 0.0), r.log
+        return max(wall - base, 0.0), r
 
     def tool_out(self, *args):
         p = subprocess.run([self.tool, *args], stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True)
@@ -199,13 +199,12 @@ def run_row(b, how, out):
     """one run of a row: its time in seconds, and for our rows the elements folded in the input and in the
     result (from the Log; else None)"""
     if how[0] == "ml":
-        secs, log = b.meshlab(how[1], out, how[2])
-        text = "\n".join(log)
-        own = re.search(r"; time (\S+) s", text)  # our filters time their own call, as the CGAL driver does
-        if own:
-            secs = float(own.group(1))
-        m = re.search(r"folded against a node's surface normal (\d+) -> (\d+)", text)
-        return secs, (m.group(1), m.group(2)) if m else None
+        secs, r = b.meshlab(how[1], out, how[2])
+        own = r.get("seconds")  # our filters time their own call, as the CGAL driver does
+        if own is not None:
+            secs = own
+        folded = r.get("folded_before"), r.get("folded_after")
+        return secs, (str(folded[0]), str(folded[1])) if None not in folded else None
     if how[0] == "om":
         t0 = time.perf_counter()
         p = subprocess.run(["OpenMesh-Smoothing", "-t", "10", how[1], out], stdout=subprocess.PIPE,

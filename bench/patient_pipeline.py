@@ -36,10 +36,12 @@ SERVER = os.path.join(BUILD, "prefix", "bin", "meshlabserver")
 
 
 def timed(inputs, script, outputs=()):
-    """meshlabserver under /usr/bin/time: (log lines, wall s, peak MB, rc)"""
+    """meshlabserver under /usr/bin/time: (mlx.Result with the filters' results, wall s, peak MB, rc)"""
     fd, path = tempfile.mkstemp(suffix=".mlx")
     os.close(fd)
     script.write(path)
+    fd, results = tempfile.mkstemp(prefix="pectus-results-", suffix=".jsonl")
+    os.close(fd)
     cmd = ["xvfb-run", "-a", "/usr/bin/time", "-v", SERVER]
     for i in inputs:
         cmd += ["-i", i]
@@ -47,13 +49,15 @@ def timed(inputs, script, outputs=()):
         cmd += ["-o", p, "-l", str(layer), "-m", *mask.split()]
     cmd += ["-s", path]
     t0 = time.time()
-    r = subprocess.run(cmd, capture_output=True, text=True, errors="replace")
+    r = subprocess.run(cmd, capture_output=True, text=True, errors="replace",
+                       env=dict(os.environ, PECTUS_RESULTS_FILE=results))
     wall = time.time() - t0
     os.remove(path)
     out = r.stdout + r.stderr
+    res = mlx.Result(r.returncode, out, mlx.read_results(results))
+    os.remove(results)
     rss = re.search(r"Maximum resident set size \(kbytes\): (\d+)", out)
-    log = [l.split(" ", 2)[2] for l in out.splitlines() if l.startswith("LOG: ") and len(l.split(" ", 2)) > 2]
-    return log, wall, (int(rss.group(1)) / 1024 if rss else float("nan")), r.returncode
+    return res, wall, (int(rss.group(1)) / 1024 if rss else float("nan")), r.returncode
 
 
 def main() -> int:
@@ -75,38 +79,38 @@ def main() -> int:
     cages = {}
     for name, folder in (("messy STL export", "stl_messy"), ("NIfTI masks", "masks")):
         src = os.path.join(P, folder)
-        n = mlx.grab(mlx.run([], mlx.Script([import_ct_segmentation(path=src)])).log, r"Imported (\d+) structures", int)
+        n = mlx.run([], mlx.Script([import_ct_segmentation(path=src)])).get("structures")
         cage, lms = os.path.join(a.out, folder + "_cage.ply"), os.path.join(a.out, folder + "_landmarks.ply")
-        log, wall, rss, rc = timed([], mlx.Script([import_ct_segmentation(path=src), prepare_patient_rib_cage()]),
+        res, wall, rss, rc = timed([], mlx.Script([import_ct_segmentation(path=src), prepare_patient_rib_cage()]),
                                    [(cage, n, "fc fq"), (lms, n + 1, "vq")])
-        step = mlx.grab(log, r"Patient rib cage: .*; ([0-9.]+) s")
-        faces = mlx.grab(log, r"Patient rib cage: (\d+) faces", int)
-        inputs = mlx.grab(log, r"Imported \d+ structures from .*?: (\d+) faces", int)
+        step = res.get("seconds", "Prepare Patient Rib Cage")
+        faces = res.get("faces", "Prepare Patient Rib Cage")
+        inputs = res.get("faces", "Import CT Segmentation")
         rows.append((f"prepare: {name} ({n} layers, {inputs} faces)", f"{faces} faces",
                      f"{step:.1f} s step" if step else "failed", wall, rss))
         cages[name] = (cage, lms)
     gen = os.path.join(a.out, "generated.ply"), os.path.join(a.out, "generated_landmarks.ply")
     edge = prepare_patient_rib_cage().params["edgeLength"].value  # both cages meshed alike
-    log, wall, rss, rc = timed([], mlx.Script([create_ribcage(age=7.0, hallerIndex=4.0, edgeLength=edge)]),
+    res, wall, rss, rc = timed([], mlx.Script([create_ribcage(age=7.0, hallerIndex=4.0, edgeLength=edge)]),
                                [(gen[0], 0, "fc fq"), (gen[1], 1, "vq")])
-    gen_faces = mlx.grab(log, r"Rib cage: (\d+) faces", int)
+    gen_faces = res.get("faces")
     rows.append(("generator: the same child's cage", f"{gen_faces} faces", "", wall, rss))
     cages["generated cage"] = gen
     kind = f"{'large displacement' if a.analysis == 'large' else 'small strain'} TET{10 if a.order == 2 else 4}"
     keys = {"messy": "messy STL export", "masks": "NIfTI masks", "generated": "generated cage"}
     for name in (keys[k] for k in a.fe.split(",") if k):
         cage, lms = cages[name]
-        log, wall, rss, rc = timed([lms, cage], mlx.Script([nuss_fea(landmarkLayer=0, **fe)]))
-        force = mlx.grab(log, r"Fe = ([0-9.]+) N")
-        tets = mlx.grab(log, r"Nuss FE model: (\d+) TET", int)
+        res, wall, rss, rc = timed([lms, cage], mlx.Script([nuss_fea(landmarkLayer=0, **fe)]))
+        force = res.get("force_N")
+        tets = res.get("tets")
         rows.append((f"FE {kind}: {name}", f"{tets} tets", f"Fe {force:.2f} N" if force else "failed", wall, rss))
 
     print(f"\nPatient pipeline benchmark: {platform.node()}, {os.cpu_count()} cores, {time.strftime('%Y-%m-%d')}; "
           f"phantom 1 mm written in {phantom_s:.1f} s")
     print(f"| {'step':52s} | {'size':14s} | {'result':14s} | wall (s) | peak (MB) |")
     print(f"|{'-' * 54}|{'-' * 16}|{'-' * 16}|---------:|----------:|")
-    for step, size, res, wall, rss in rows:
-        print(f"| {step:52s} | {size:14s} | {res:14s} | {wall:8.1f} | {rss:9.0f} |")
+    for step, size, result, wall, rss in rows:
+        print(f"| {step:52s} | {size:14s} | {result:14s} | {wall:8.1f} | {rss:9.0f} |")
     return 0
 
 

@@ -45,7 +45,6 @@ sys.path.insert(0, os.path.join(ROOT, "python"))
 import pectus_filters as pf  # noqa: E402
 import pectus_mlx as mlx  # noqa: E402
 import pipeline  # noqa: E402
-from pectus_mlx import grab, grab_all  # noqa: E402
 
 CAGE, LANDMARKS = pipeline.CAGE, pipeline.LANDMARKS
 CORNERS = dict(ages="5,17", indices="3,7", edges="2,8")
@@ -85,16 +84,15 @@ def run_cell(age: float, index: float, edge: float, order: str, out: str, timeou
     wall = time.time() - t0
     with open(os.path.join(out, name + ".log"), "w") as fh:
         fh.write(res.stdout)
-    log = res.log
-    r = pipeline.parse(log)
-    slice_s = grab_all(log, r"Slice method, layer .* ([0-9.]+) s\)$")
-    env_s = grab_all(log, r"Ferguson envelope, layer .* ([0-9.]+) s\)?$")
+    r = pipeline.parse(res)
+    slice_s, env_s = ([v for k in ("before_seconds", "seconds") for v in res.values(k, pipeline.MEASURES[m])]
+                      for m in ("slice", "envelope"))
     row = dict(age=age, index=index, edge=edge, wall=wall, rc=res.rc, force=r["force"], elevation=r["elevation"],
-               target=grab(log, r"Target elevation ([0-9.]+) mm"),
-               target_from=grab(log, r"Target elevation [0-9.]+ mm, (from the model|as given)", str), tets=r["tets"], element=r["element"],
+               target=res.get("target_elevation_mm", pipeline.FE),
+               target_from=res.get("target_from", pipeline.FE), tets=r["tets"], element=r["element"],
                slice=r["slice_change_cm3"], slice_pct=r["slice_change_pct"], envelope=r["envelope_change_cm3"],
                envelope_pct=r["envelope_change_pct"], haller=r["haller"],
-               t_cage=grab(log, r"^Rib cage: .*; ([0-9.]+) s$"), t_mga=grab(log, r"^MGA smoothing .*time ([0-9.]+) s"),
+               t_cage=res.get("seconds", pipeline.RIBCAGE), t_mga=res.get("seconds", pipeline.MGA),
                t_fe=r["fe_seconds"], t_volumes=sum(slice_s + env_s) if slice_s or env_s else None, why="")
     figures = (row["force"], row["elevation"], row["slice"], row["envelope"]) + tuple((r["haller"] + [None, None])[:2])
     if res.rc == 0 and None not in figures:

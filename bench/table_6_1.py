@@ -50,7 +50,6 @@ sys.path.insert(0, os.path.join(ROOT, "python"))
 import pectus_filters as pf  # noqa: E402
 import pectus_mlx as mlx  # noqa: E402
 import pipeline  # noqa: E402
-from pectus_mlx import grab_all  # noqa: E402
 from cohort import THESIS  # noqa: E402  (case, sex, age, index, elevation mm)
 
 # Table 6-1's simulation rows: force N, max stress MPa, max strain, volume gain %
@@ -77,7 +76,7 @@ def cage_filters(case, age, index, edge, source, out, spine, generator):
     subprocess.run([PHANTOM, folder, "--age", str(age), "--haller", str(index), "--only", "messy"]
                    + [x for k, v in generator.items() for x in flags[k](v)], check=True, capture_output=True)
     imp = pf.import_ct_segmentation(path=os.path.join(folder, "stl_messy"))
-    n = mlx.grab(mlx.run([], mlx.Script([imp])).log, r"Imported (\d+) structures", int)
+    n = mlx.run([], mlx.Script([imp])).get("structures")
     return [imp, pf.prepare_patient_rib_cage(spine=SPINE.index(spine))], n, n + 1  # the prepared cage and its landmarks follow the imports
 
 
@@ -95,10 +94,10 @@ def run_case(case, sex, age, index, elevation, method, edge, out, source, cartil
     wall = time.time() - t0
     with open(base + ".log", "w") as fh:
         fh.write(res.stdout)
-    r = pipeline.parse(res.log)
-    sternum = grab_all(res.log, r"Slice method intrathoracic volume change: .*?\(\+?(-?[0-9.]+) ?%")[1:]
+    r = pipeline.parse(res)
+    sternum = res.values("volume_change_pct", pipeline.MEASURES["slice"])[1:]
     r["slice_sternum_pct"] = sternum[0] if sternum else None
-    r["newton"] = mlx.grab(res.log, r"([0-9]+) Newton iterations", int)
+    r["newton"] = res.get("newton_iterations", pipeline.FE)
     r["rc"], r["wall"] = res.rc, wall
     r["error"] = next((l for l in res.log if "failed" in l.lower() or "no converged" in l.lower()), "")
     return r
@@ -142,7 +141,7 @@ def main():
         m = (method + ("" if e == THESIS_CARTILAGE_E else f", E {e:g}") + (", spine kept" if spine == "keep" else "")
              + (", CT cartilage" if sec == "ct" else ""))
         rows.append((case, sex, age, index, elevation, m, r))
-        print(f"{case} {m}: rc {r['rc']}, Fe {r['force']} N, {r['newton']} Newton iterations, {r['wall']:.0f} s"
+        print(f"{case} {m}: rc {r['rc']}, Fe {r['force'] if r['force'] is None else round(r['force'], 2)} N, {r['newton']} Newton iterations, {r['wall']:.0f} s"
               + (f"; {r['error']}" if r["rc"] else ""), flush=True)
 
     what = f"generated cages ({a.edge:g} mm edges)" if a.input == "generated" else "their CT-like exports, prepared (4 mm edges)"

@@ -17,7 +17,6 @@ Needs the plugins and meshlabserver of build/prefix (scripts/setup.sh), and nump
 import argparse
 import os
 import platform
-import re
 import sys
 import time
 
@@ -33,7 +32,6 @@ from stress_near import read_vtu  # noqa: E402
 
 CAGE, LANDMARKS = 0, 1
 STERNUM = 3  # the .vtu's tissue id of the sternum (the FE filter's Tissue::Sternum)
-CHANGE = r"Slice method intrathoracic volume change: \+?(-?[0-9.]+) cm3 \(\+?(-?[0-9.]+) ?%\), before ([0-9.]+) cm3"
 
 
 def slice_method(**range_):
@@ -66,8 +64,8 @@ def main():
     make = [pf.create_ribcage(age=age, hallerIndex=index, edgeLength=a.edge)]
     # the range: the slice method over the envelope's, on the cage alone (seconds)
     probe = mlx.run([], mlx.Script(make + [slice_method(lowerLimit=1).set(compare=False)]))
-    lo = mlx.grab(probe.log, r"from z = (-?[0-9.]+) to")
-    hi = mlx.grab(probe.log, r"from z = -?[0-9.]+ to (-?[0-9.]+) mm")
+    # the range to the hundredth of a mm, as the Log gives it
+    lo, hi = (None if v is None else round(v, 2) for v in (probe.get("z_low_mm"), probe.get("z_high_mm")))
     if probe.rc or lo is None or hi is None:
         sys.exit(f"the slice method did not measure the cage (exit {probe.rc})")
     edges = list(np.arange(lo, hi, a.band)) + [hi]
@@ -83,8 +81,10 @@ def main():
         fh.write(res.stdout)
     if res.rc:
         sys.exit(f"{case}: the script stopped (exit {res.rc}); its output is in {base}.log")
-    force = mlx.grab(res.log, r"Fe = ([0-9.]+) N \(Fs")
-    slices = [m for m in (re.search(CHANGE, l) for l in res.log) if m]
+    force = round(res.value("force_N", "Nuss Procedure FE Analysis"), 2)
+    # each band's change (cm3, %) and its volume before (cm3)
+    slices = [(r["results"]["volume_change_cm3"], r["results"]["volume_change_pct"], r["results"]["before_volume_cm3"])
+              for r in res.results if r["filter"] == "Thoracic Volume (Slice Method)"]
     motion = sternum_motion(base + ".vtu", bands)
 
     print(f"{case} ({sex}/{age}, index {index}), lifted {elevation} mm by Fe = {force} N; generated cage, {a.edge:g} mm edges; "
@@ -93,7 +93,7 @@ def main():
     print("|---|---:|---:|---|")
     before = change = 0.0
     for (b0, b1), s, m in zip(bands, slices, motion):
-        d, pct, v = (float(x) for x in s.groups())
+        d, pct, v = s
         before, change = before + v, change + d
         mv = "—" if m is None else f"{m[1]:+.1f}, {m[2]:+.1f}"
         print(f"| {b0:.1f}, {b1:.1f} | {v:.1f} | {d:+.1f} ({pct:+.2f}) | {mv} |")

@@ -67,7 +67,7 @@ def run_one(folder: str, case: str, outdir: str, quick: bool = False) -> int:
                   [(os.path.join(out, "nuss_result.ply"), "vq vc fc fq", 2)])
     with open(os.path.join(out, "meshlabserver.log"), "w") as fh:
         fh.write(res.stdout)
-    r = pipeline.parse(res.log)
+    r = pipeline.parse(res)
     summary = os.path.join(out, "summary.csv")
     if res.rc == 0:
         pipeline.write_summary(summary, r, row["sex"], float(row["age"]), elev, case)
@@ -77,8 +77,10 @@ def run_one(folder: str, case: str, outdir: str, quick: bool = False) -> int:
         for line in res.log:
             if "failed" in line:
                 print(f"{case}: {line}", file=sys.stderr)
-    print(f"{case}: rc {res.rc}, Fe {r['force']} N, elevation {r['elevation']} mm, slice {r['slice_change_pct']} %, "
-          f"envelope {r['envelope_change_pct']} %", flush=True)
+    p = {k: None if r[k] is None else round(r[k], 2)  # as the Log prints them
+         for k in ("force", "elevation", "slice_change_pct", "envelope_change_pct")}
+    print(f"{case}: rc {res.rc}, Fe {p['force']} N, elevation {p['elevation']} mm, slice {p['slice_change_pct']} %, "
+          f"envelope {p['envelope_change_pct']} %", flush=True)
     return 0 if res.rc == 0 else 1
 
 

@@ -27,7 +27,6 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import pectus_mlx as mlx  # noqa: E402
 from pectus_filters import import_ct_segmentation, prepare_patient_rib_cage  # noqa: E402
-from pectus_mlx import grab  # noqa: E402
 
 
 def example(plugin: str, name: str) -> mlx.Filter:
@@ -52,7 +51,7 @@ def main() -> int:
     t0 = time.time()
     imp = import_ct_segmentation(path=os.path.abspath(a.segmentation))
     # the prepared cage and its landmarks come after the imported structures: count those first
-    n = grab(mlx.run([], mlx.Script([imp])).log, r"Imported (\d+) structures", int)
+    n = mlx.run([], mlx.Script([imp])).get("structures")
     if n is None:
         print(f"nothing imported from {a.segmentation}")
         return 1
@@ -81,16 +80,17 @@ def main() -> int:
         print("the analysis failed (the reason is in the Log above)")
         return 1
 
-    log = r.log + r2.log
-    rows = [("calibrated elevating force Fe (N)", grab(log, r"Fe = ([0-9.]+) N")),
-            ("elevation of the lower sternum end (mm)", grab(log, r"sternum end displacement ([0-9.]+) mm")),
-            ("max von Mises stress (MPa)", grab(log, r"Max von Mises stress ([0-9.]+) MPa")),
-            ("  away from the tissue junctions (MPa)", grab(log, r"Max von Mises stress away from the tissue junctions ([0-9.]+) MPa")),
-            ("max equivalent strain", grab(log, r"Max equivalent strain ([0-9.]+)")),
-            ("pectus (Haller) index before", grab(log, r"Pectus index change: Haller ([0-9.]+) ->")),
-            ("pectus (Haller) index after", grab(log, r"Pectus index change: Haller [0-9.]+ -> ([0-9.]+)")),
-            ("slice method volume gain (cm3)", grab(log, r"Slice method intrathoracic volume change: ([-+0-9.]+) cm3")),
-            ("Ferguson envelope volume gain (cm3)", grab(log, r"Ferguson envelope thoracic volume change: ([-+0-9.]+) cm3"))]
+    FE, SLICE, ENVELOPE, INDEX = ("Nuss Procedure FE Analysis", "Thoracic Volume (Slice Method)",
+                                  "Thoracic Volume (Ferguson Envelope)", "Pectus Index")
+    rows = [("calibrated elevating force Fe (N)", r2.get("force_N", FE)),
+            ("elevation of the lower sternum end (mm)", r2.get("elevation_mm", FE)),
+            ("max von Mises stress (MPa)", r2.get("max_stress_MPa", FE)),
+            ("  away from the tissue junctions (MPa)", r2.get("max_stress_body_MPa", FE)),
+            ("max equivalent strain", r2.get("max_strain", FE)),
+            ("pectus (Haller) index before", r2.get("before_haller_index", INDEX)),
+            ("pectus (Haller) index after", r2.get("haller_index", INDEX)),
+            ("slice method volume gain (cm3)", r2.get("volume_change_cm3", SLICE)),
+            ("Ferguson envelope volume gain (cm3)", r2.get("volume_change_cm3", ENVELOPE))]
     print(f"\n{'Table 6-1 quantity':45s} value")
     for k, v in rows:
         print(f"{k:45s} {'n/a' if v is None else f'{v:.2f}'}")

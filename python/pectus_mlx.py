@@ -208,6 +208,12 @@ class Result:
         return [r["results"][key] for r in self.results
                 if key in r["results"] and (filter is None or r["filter"] == filter)]
 
+    def get(self, key: str, filter: str | None = None, default=None):
+        """The last value of `key` (of the filter named `filter`, if given), or `default` when none returned it
+        (e.g. after a filter failed: a failed filter returns nothing)."""
+        found = self.values(key, filter)
+        return found[-1] if found else default
+
     def value(self, key: str, filter: str | None = None):
         """The last value of `key` the filters returned (of the filter named `filter`, if given); KeyError
         naming the key and the filters that ran when none returned it."""

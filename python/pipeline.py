@@ -20,7 +20,6 @@ import argparse
 import csv
 import datetime
 import os
-import re
 import sys
 import time
 
@@ -28,7 +27,6 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import pectus_mlx as mlx  # noqa: E402
-from pectus_mlx import grab, grab_all  # noqa: E402
 
 EX = {
     "ribcage": os.path.join(ROOT, "filter_nuss_fea", "examples", "create_ribcage.mlx"),
@@ -101,43 +99,62 @@ def build_script(outdir: str, age: float, haller: float, elevation: float, quick
     return mlx.Script([gen, quality, mga, quality_after] + analysis_filters(outdir, elevation, quick, CAGE, LANDMARKS) + extra)
 
 
-def parse(log: list[str]) -> dict:
-    q = [l for l in log if l.startswith("Element quality (")]
-    hist = [[int(x) for x in l.split(":", 1)[1].split()] for l in log if l.startswith("Element quality histogram")]
+RIBCAGE = "Create Pectus Excavatum Rib Cage"
+QUALITY = "Compute Element Quality (Triangle Alpha / Quad Beta)"
+MGA = "MGA Surface Mesh Smoothing"
+FE = "Nuss Procedure FE Analysis"
+
+
+def parse(res: mlx.Result) -> dict:
+    """The pipeline's figures from the values its filters returned (None where a filter did not run or failed;
+    a filter's first run where it ran more than once); the MGA and planner lines are the Log's own text."""
+    log = res.log
+
+    def get(key: str, filter: str):
+        """the value of the filter's first run (a script may measure again later, e.g. bench/table_6_1.py)"""
+        return (res.values(key, filter) + [None])[0]
+
+    def pair(key: str, filter: str) -> list:
+        """[before, after] of a measure run in compare mode ([] when it did not run)"""
+        return [v for v in (get("before_" + key, filter), get(key, filter)) if v is not None]
+
+    quality = res.values("quality_mean", QUALITY), res.values("quality_min", QUALITY)
+    tets = get("tets", FE)
     r = {
-        "haller_generator": grab(log, r"measured on mesh ([0-9.]+)"),
-        "faces": grab(log, r"Rib cage: ([0-9]+) faces", int),
-        "quality_mean_before": grab(q, r"mean ([0-9.]+)"),
-        "quality_min_before": grab(q, r"min ([0-9.]+)"),
-        "quality_mean_after": grab(q[1:], r"mean ([0-9.]+)"),
-        "quality_min_after": grab(q[1:], r"min ([0-9.]+)"),
-        "histograms": hist,
+        "haller_generator": get("haller_index_measured", RIBCAGE),
+        "faces": get("faces", RIBCAGE),
+        "quality_mean_before": (quality[0] + [None])[0],
+        "quality_min_before": (quality[1] + [None])[0],
+        "quality_mean_after": (quality[0][1:] + [None])[0],
+        "quality_min_after": (quality[1][1:] + [None])[0],
+        "histograms": [[q["results"][f"histogram_{i}"] for i in range(10)]
+                       for q in res.results if q["filter"] == QUALITY and "histogram_0" in q["results"]],
         "mga": next((l for l in log if l.startswith("MGA smoothing")), ""),
-        "tets": grab(log, r"Nuss FE model: ([0-9]+) TET"),
-        "element": grab(log, r"Nuss FE model: [0-9]+ (TET[0-9]+)", str),
-        "force": grab(log, r"Fe = ([0-9.]+) N \(Fs"),
-        "elevation": grab(log, r"sternum end displacement ([0-9.]+) mm"),
-        "solves": grab(log, r"in ([0-9]+) solves", int),
-        "max_stress": grab(log, r"Max von Mises stress ([0-9.]+) MPa"),
-        "max_stress_where": grab(log, r"Max von Mises stress [0-9.]+ MPa at the (.*?) at \(", str),
-        "max_stress_body": grab(log, r"Max von Mises stress away from the tissue junctions ([0-9.]+) MPa"),
-        "max_stress_body_where": grab(log, r"Max von Mises stress away from the tissue junctions [0-9.]+ MPa at the (.*?) at \(", str),
-        "max_strain": grab(log, r"Max equivalent strain ([0-9.]+)"),
-        "max_strain_where": grab(log, r"Max equivalent strain [0-9.]+ at the (.*?) at \(", str),
-        "slice_change_cm3": grab(log, r"Slice method intrathoracic volume change: \+?(-?[0-9.]+) cm3"),
-        "slice_change_pct": grab(log, r"Slice method intrathoracic volume change: .*?\(\+?(-?[0-9.]+) ?%"),
-        "envelope_change_cm3": grab(log, r"Ferguson envelope thoracic volume change: \+?(-?[0-9.]+) cm3"),
-        "envelope_change_pct": grab(log, r"Ferguson envelope thoracic volume change: .*?\(\+?(-?[0-9.]+) ?%"),
-        "slice_volumes": grab_all(log, r"Slice method, layer .*intrathoracic volume ([0-9.]+) cm3"),
-        "envelope_volumes": grab_all(log, r"Ferguson envelope, layer .*thoracic volume ([0-9.]+) cm3"),
-        "haller": grab_all(log, r"Pectus index, layer .*Haller index ([0-9.]+)"),
-        "fe_seconds": grab(log, r"solve [0-9.]+ s, total ([0-9.]+) s"),
+        "tets": None if tets is None else float(tets),  # as summary.csv has always had it
+        "element": get("element", FE),
+        "force": get("force_N", FE),
+        "elevation": get("elevation_mm", FE),
+        "solves": get("solves", FE),
+        "max_stress": get("max_stress_MPa", FE),
+        "max_stress_where": get("max_stress_where", FE),
+        "max_stress_body": get("max_stress_body_MPa", FE),
+        "max_stress_body_where": get("max_stress_body_where", FE),
+        "max_strain": get("max_strain", FE),
+        "max_strain_where": get("max_strain_where", FE),
+        "slice_change_cm3": get("volume_change_cm3", MEASURES["slice"]),
+        "slice_change_pct": get("volume_change_pct", MEASURES["slice"]),
+        "envelope_change_cm3": get("volume_change_cm3", MEASURES["envelope"]),
+        "envelope_change_pct": get("volume_change_pct", MEASURES["envelope"]),
+        "slice_volumes": pair("volume_cm3", MEASURES["slice"]),
+        "envelope_volumes": pair("volume_cm3", MEASURES["envelope"]),
+        "haller": pair("haller_index", MEASURES["index"]),
+        "fe_seconds": get("seconds", FE),
         "planner_table": [l.split("|", 1)[1][1:] for l in log if l.startswith("Planner |")],
         "planner_header": next((l for l in log if l.startswith("Nuss bar planner:")), ""),
         "planner_best": next((l for l in log if l.startswith("Planner best")), ""),
     }
-    m = re.search(r"mean alpha ([0-9.]+) -> ([0-9.]+)", r["mga"] or "")
-    r["mga_mean"] = (float(m.group(1)), float(m.group(2))) if m else None
+    before, after = get("quality_mean_before", MGA), get("quality_mean_after", MGA)
+    r["mga_mean"] = (before, after) if before is not None and after is not None else None
     return r
 
 
@@ -189,7 +206,7 @@ def run_pipeline(outdir: str, age=8.0, haller=5.3, elevation=44.7, sex="M", quic
     t0 = time.time()
     # the planner repeats the calibrated FE per option (full mode: ~4 min each on an idle machine): a longer limit
     res = mlx.run([], script_path, outputs, prefix=prefix, timeout=4 * 3600 if planner else 3600)
-    r = parse(res.log)
+    r = parse(res)
     r["seconds"] = time.time() - t0
     with open(os.path.join(outdir, "meshlabserver.log"), "w") as fh:
         fh.write(res.stdout)
@@ -214,7 +231,7 @@ def main(argv=None) -> int:
         return 1
     print(table(r, a.age, a.sex, a.elevation))
     print(f"\nMGA smoothing: {r['mga']}")
-    print(f"FE: {r['tets']} {r['element']} elements, calibrated in {r['solves']} solves, {r['fe_seconds']} s; "
+    print(f"FE: {r['tets']} {r['element']} elements, calibrated in {r['solves']} solves, {round(r['fe_seconds'], 1)} s; "
           f"whole pipeline {r['seconds']:.0f} s")
     print(f"Output folder: {out}")
     return 0

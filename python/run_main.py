@@ -80,9 +80,10 @@ def main(argv: list[str]) -> int:
         print(f"pipeline failed (MeshLab {pipeline.mlx.default_host()} exit {rc}); log in {out}/meshlabserver.log", file=sys.stderr)
         return 1
     print(pipeline.table(r, 8, "M", 44.7))
-    print(f"\nElement quality (alpha) of the cage: mean {r['quality_mean_before']} -> {r['quality_mean_after']}, "
-          f"min {r['quality_min_before']} -> {r['quality_min_after']} ({r['mga']})")
-    print(f"FE: {r['tets']:.0f} {r['element']} elements, force calibrated in {r['solves']} solves, {r['fe_seconds']} s; "
+    q = {k: round(r[k], 4) for k in ("quality_mean_before", "quality_mean_after", "quality_min_before", "quality_min_after")}
+    print(f"\nElement quality (alpha) of the cage: mean {q['quality_mean_before']} -> {q['quality_mean_after']}, "
+          f"min {q['quality_min_before']} -> {q['quality_min_after']} ({r['mga']})")
+    print(f"FE: {r['tets']:.0f} {r['element']} elements, force calibrated in {r['solves']} solves, {round(r['fe_seconds'], 1)} s; "
           f"whole pipeline {r['seconds']:.0f} s")
     if with_planner:
         print_planner(r, out)
