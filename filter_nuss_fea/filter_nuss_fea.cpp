@@ -255,6 +255,28 @@ void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
           fmt(d.ribThickness) + " mm, costal cartilage section " + fmt(cartilage[0]) + " x " + fmt(cartilage[1]) +
           " mm; " + std::to_string(lms.size()) +
           " landmarks; " + fmt(secs, 3) + " s");
+  auto& values = ctx.results();
+  values.set("faces", faces);
+  values.set("vertices", vertices);
+  values.set("rib_pairs", p.ribPairs);
+  values.set("haller_index_requested", p.hallerIndex);
+  values.set("haller_index_model", st.hallerModel);
+  if (measured) {  // the single-layer cage, measured on its mesh
+    values.set("haller_index_measured", measured->index);
+    values.set("transverse_mm", measured->transverse);
+    values.set("ap_mm", measured->ap);
+  }
+  values.set("funnel_depth_mm", st.funnelDepth);
+  values.set("chest_width_mm", d.chestWidth);
+  values.set("chest_depth_mm", d.chestDepth);
+  values.set("spine_height_mm", d.spineHeight);
+  values.set("sternum_length_mm", d.sternumLength);
+  values.set("rib_height_mm", d.ribHeight);
+  values.set("rib_thickness_mm", d.ribThickness);
+  values.set("cartilage_width_mm", cartilage[0]);
+  values.set("cartilage_thickness_mm", cartilage[1]);
+  values.set("landmarks", lms.size());
+  values.set("seconds", secs);
 }
 
 
@@ -545,6 +567,44 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   ctx.log("Force-displacement (N:mm)" + curve + "; " + std::to_string(a.nonlinearSolves) + " nonlinear solves, " +
           std::to_string(a.newtonIterations) + " Newton iterations; mesh " + fmt(a.secondsMesh, 1) + " s, solve " +
           fmt(a.secondsSolve, 1) + " s, total " + fmt(secs, 1) + " s" + files);
+
+  auto& values = ctx.results();
+  values.set("tets", a.mesh.numTets());
+  values.set("element", a.mesh.order == 2 ? "TET10" : "TET4");
+  values.set("nodes", a.mesh.numNodes());
+  values.set("analysis", o.nonlinear ? "large displacement" : "small strain");
+  values.set("fixed_nodes_joints", a.fixedAtJoints);
+  values.set("fixed_nodes_column", a.fixedOnColumn);
+  values.set("sternum_nodes", a.sternumNodes.size());
+  values.set("joints_widened", a.jointsWidened);
+  if (calibrate) {
+    values.set("target_elevation_mm", a.target.elevation);
+    values.set("target_from", a.target.fromChestLine ? "from the model" : "as given");
+    if (a.target.chest) values.set("chest_line_depth_mm", a.target.chest->depth);
+    values.set("solves", a.calibration->evaluations);
+  }
+  values.set("force_N", a.force);
+  values.set("elevation_mm", a.elevation);
+  values.set("linear_compliance_mm_per_N", a.linearCompliance);
+  auto place = [&](const std::string& key, double value, const nuss::Location& at) {
+    values.set(key, value);
+    values.set(key.substr(0, key.rfind('_')) + "_where", at.describe());
+    values.set(key.substr(0, key.rfind('_')) + "_at_mm", pectus::Results::Vec3{at.p.x(), at.p.y(), at.p.z()});
+  };
+  place("max_stress_MPa", a.maxStress, a.maxStressAt);
+  values.set("max_stress_all_MPa", a.maxStressAll);
+  place("max_stress_body_MPa", a.maxStressBody, a.maxStressBodyAt);
+  values.set("max_strain", a.maxStrain);
+  values.set("max_strain_where", a.maxStrainAt.describe());
+  values.set("max_strain_at_mm", pectus::Results::Vec3{a.maxStrainAt.p.x(), a.maxStrainAt.p.y(), a.maxStrainAt.p.z()});
+  values.set("max_strain_cartilage", a.maxStrainCartilage);
+  values.set("max_strain_bone", a.maxStrainBone);
+  values.set("nonlinear_solves", a.nonlinearSolves);
+  values.set("newton_iterations", a.newtonIterations);
+  values.set("mesh_seconds", a.secondsMesh);
+  values.set("solve_seconds", a.secondsSolve);
+  values.set("seconds", secs);
+  if (!base.empty()) ctx.writeResultsTo(base + "_results.json");  // beside the analysis' other files
 }
 
 namespace {
@@ -620,6 +680,38 @@ void FilterNussFeaPlugin::runBarPlanner(FilterContext& ctx) {
   ctx.log("Planner best (" + std::string(o.best == nuss::PlanOptions::Best::LowestForce ? "lowest force" : "lowest max stress") +
           "): '" + best.option + "', layer '" + res.label().toStdString() + "'; total " + fmt(plan.secondsTotal, 1) + " s" +
           (csv.empty() ? "" : "; table " + csv));
+
+  auto& values = ctx.results();
+  values.set("options", n);
+  values.set("target_elevation_mm", plan.target.elevation);
+  values.set("tets", plan.tets);
+  values.set("element", plan.order == 2 ? "TET10" : "TET4");
+  values.set("mesh_seconds", plan.secondsMesh);
+  values.set("before_slice_volume_cm3", plan.sliceBefore / 1000);
+  values.set("before_envelope_volume_cm3", plan.envelopeBefore / 1000);
+  values.set("before_haller_index", plan.hallerBefore);
+  for (std::size_t i = 0; i < n; ++i) {  // option_1_... in the table's order
+    const auto& r = plan.rows[i];
+    const std::string k = "option_" + std::to_string(i + 1) + "_";
+    values.set(k + "name", r.option);
+    values.set(k + "bars", r.bars);
+    values.set(k + "force_N", r.force);
+    values.set(k + "elevation_mm", r.elevation);
+    values.set(k + "max_stress_MPa", r.maxStress);
+    values.set(k + "max_stress_where", r.maxStressAt);
+    values.set(k + "max_strain", r.maxStrain);
+    values.set(k + "max_strain_where", r.maxStrainAt);
+    values.set(k + "slice_volume_change_cm3", r.sliceGain / 1000);
+    values.set(k + "slice_volume_change_pct", r.slicePercent);
+    values.set(k + "envelope_volume_change_cm3", r.envelopeGain / 1000);
+    values.set(k + "envelope_volume_change_pct", r.envelopePercent);
+    values.set(k + "haller_index_after", r.hallerAfter);
+    values.set(k + "solves", r.solves);
+    values.set(k + "seconds", r.seconds);
+  }
+  values.set("best_option", plan.best + 1);
+  values.set("best_name", best.option);
+  values.set("seconds", plan.secondsTotal);
 }
 
 

@@ -203,6 +203,14 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
   ctx.log("Patient rib cage: " + std::to_string(mm.cm.fn) + " faces, " + std::to_string(r.ribsRight) + " right and " +
           std::to_string(r.ribsLeft) + " left ribs, " + std::to_string(r.dropped) + " pieces left out, " + std::to_string(r.landmarks.size()) + " landmarks; " +
           fmt(r.seconds, 3) + " s");
+  auto& res = ctx.results();
+  res.set("faces", mm.cm.fn);
+  res.set("vertices", mm.cm.vn);
+  res.set("ribs_right", r.ribsRight);
+  res.set("ribs_left", r.ribsLeft);
+  res.set("pieces_left_out", r.dropped);
+  res.set("landmarks", r.landmarks.size());
+  res.set("seconds", r.seconds);
 }
 
 void FilterNussFeaPlugin::initImportCt(RichParameterList& par) {
@@ -244,4 +252,8 @@ void FilterNussFeaPlugin::runImportCt(FilterContext& ctx) {
           " from " + path + ": " + std::to_string(faces) + " faces, " + std::to_string(vertices) +
           " vertices in all; frame and units as in the files; " + fmt(secs, 3) + " s");
   for (const auto& l : report.lines) ctx.log(l);
+  ctx.results().set("structures", structures.size());
+  ctx.results().set("faces", faces);
+  ctx.results().set("vertices", vertices);
+  ctx.results().set("seconds", secs);
 }
