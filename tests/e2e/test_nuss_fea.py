@@ -3,7 +3,9 @@
 Checks: the result layer is the cage displaced (same vertex count, the sternum end moved by the logged
 elevation along +y, the costovertebral joints still), vertex quality = von Mises stress >= 0; the files
 (.vtu with the tets, .inp deck, force-displacement CSV/PNG, rib strain CSV) exist and agree with the Log;
-calibration to a target lands within the tolerance; bad input (unlabelled layer, no landmarks) fails
+calibration to a target lands within the tolerance; the figures the filter returns (the results file on
+2020.09, pectus-mlrun's from the return values on the newer hosts, and BASE_results.json beside the files)
+are the Log's, to its printed digits; bad input (unlabelled layer, no landmarks) fails
 with a message and a non-zero exit, and the cage layer saved after the failure is unchanged."""
 import csv
 import os
@@ -13,8 +15,8 @@ import numpy as np
 
 import harness as h
 import pectus_mlx as mlx
-from pectus_mlx import grab_all as grab
-from harness import check
+from harness import as_printed, check
+from harness import log_figures as grab
 from pectus_filters import create_ribcage, nuss_fea
 
 W = h.workdir("nuss-fea")
@@ -36,8 +38,44 @@ r = h.run([lms, cage], mlx.Script([nuss_fea(landmarkLayer=0, targetElevation=20.
           [(os.path.join(W, "result.ply"), "vq", 2)])
 print("\n".join(l for l in r.log if "Nuss" in l or "Max" in l or "Force" in l))
 check(r.rc == 0, "Nuss FE analysis runs (calibrate to 20 mm, linear TET4)", r.stdout[-1500:])
-force = grab(r.log, r"Fe = ([0-9.]+) N \(Fs")
-elev = grab(r.log, r"sternum end displacement ([0-9.]+) mm")
+FE = "Nuss Procedure FE Analysis"
+force = r.values("force_N", FE)
+elev = r.values("elevation_mm", FE)
+# every figure the filter returns is the Log's, to its printed digits
+for key, pattern, decimals in [
+        ("force_N", r"Fe = ([0-9.]+) N \(Fs", 2),
+        ("elevation_mm", r"sternum end displacement ([0-9.]+) mm", 2),
+        ("target_elevation_mm", r"Target elevation ([0-9.]+) mm", 2),
+        ("solves", r"in ([0-9]+) solves", 0),
+        ("tets", r"Nuss FE model: ([0-9]+) TET4", 0),
+        ("nodes", r"Nuss FE model: [0-9]+ TET4 elements, ([0-9]+) nodes", 0),
+        ("linear_compliance_mm_per_N", r"linear compliance ([0-9.]+) mm/N", 4),
+        ("max_stress_MPa", r"Max von Mises stress ([0-9.]+) MPa at", 2),
+        ("max_stress_all_MPa", r"; ([0-9.]+) MPa including them", 2),
+        ("max_stress_body_MPa", r"Max von Mises stress away from the tissue junctions ([0-9.]+) MPa", 2),
+        ("max_strain", r"Max equivalent strain ([0-9.]+) at", 4),
+        ("max_strain_cartilage", r"max in cartilage ([0-9.]+),", 4),
+        ("newton_iterations", r"([0-9]+) Newton iterations", 0),
+        ("seconds", r"total ([0-9.]+) s", 1)]:
+    v, printed = r.get(key, FE), grab(r.log, pattern)
+    check(len(printed) == 1 and as_printed(v, printed[0], decimals), f"returned {key} = {v}: the Log's {printed}")
+for where, pattern in [("max_stress_where", r"Max von Mises stress [0-9.]+ MPa at the (.*?) at \("),
+                       ("max_stress_body_where", r"away from the tissue junctions [0-9.]+ MPa at the (.*?) at \("),
+                       ("max_strain_where", r"Max equivalent strain [0-9.]+ at the (.*?) at \(")]:
+    m = [re.search(pattern, l) for l in r.log]
+    m = [x.group(1) for x in m if x]
+    check(m == [r.get(where, FE)], f"returned {where} {r.get(where, FE)!r}: the Log's {m}")
+at = r.get("max_stress_at_mm", FE)
+check(isinstance(at, list) and len(at) == 3 and all(isinstance(x, float) for x in at), f"max_stress_at_mm is a place: {at}")
+check(r.get("element", FE) == "TET4" and r.get("target_from", FE) == "as given", "element TET4, the target as given")
+# the same values beside the files
+if os.path.exists(base + "_results.json"):
+    beside = mlx.read_results(base + "_results.json")
+    check(len(beside) == 1 and beside[0]["filter"] == FE and beside[0]["results"] == r.results[-1]["results"]
+          if mlx.default_host() == "2020.09" else beside[0]["results"]["force_N"] == force[0],
+          f"{base}_results.json: the values the filter returned", str(beside)[:400])
+else:
+    check(False, f"{base}_results.json written")
 check(len(elev) == 1 and abs(elev[0] - 20.0) <= 0.1, f"calibrated elevation {elev} within 0.1 mm of 20")
 check(len(force) == 1 and force[0] > 0, f"calibrated force {force} N")
 peak = grab(r.log, r"Max von Mises stress ([0-9.]+) MPa at")
@@ -67,8 +105,8 @@ for ext in (".vtu", ".inp", "_force_displacement.csv", "_force_displacement.png"
 if os.path.exists(base + ".vtu"):
     head = open(base + ".vtu").read(4000)
     m = re.search(r'NumberOfPoints="(\d+)" NumberOfCells="(\d+)"', head)
-    tets = grab(r.log, r"FE model: ([0-9]+) TET4")
-    check(m is not None and tets and int(m.group(2)) == int(tets[0]), f"vtu cells {m and m.group(2)} = logged tets {tets}")
+    tets = r.values("tets", FE)
+    check(m is not None and tets and int(m.group(2)) == tets[0], f"vtu cells {m and m.group(2)} = returned tets {tets}")
 if os.path.exists(base + ".inp"):
     inp = open(base + ".inp").read()
     check("*ELEMENT, TYPE=C3D4" in inp and "*CLOAD" in inp and "*BOUNDARY" in inp, "CalculiX deck has elements, loads, BCs")
