@@ -13,7 +13,6 @@ import numpy as np
 
 import harness as h
 import pectus_mlx as mlx
-from pectus_mlx import grab_all as grab
 from harness import check
 from pectus_filters import create_ribcage, nuss_bar_planner, nuss_fea
 
@@ -57,7 +56,7 @@ else:
 
 # the single FE analysis at level 4 needs the same force as the planner's one-bar row
 r = h.run([lms, cage], mlx.Script([nuss_fea(landmarkLayer=0, intercostalSpace=4, **FAST)]))
-single = grab(r.log, r"Fe = ([0-9.]+) N \(Fs")
+single = r.values("force_N", "Nuss Procedure FE Analysis")
 check(r.rc == 0 and len(single) == 1 and rows and abs(F["1 bar, space 4"] - single[0]) <= 0.01 * single[0],
       f"one bar at level 4: planner {rows and F['1 bar, space 4']} N, single FE analysis {single} N (within 1 %)")
 

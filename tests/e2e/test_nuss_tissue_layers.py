@@ -12,7 +12,6 @@ import numpy as np
 
 import harness as h
 import pectus_mlx as mlx
-from pectus_mlx import grab_all as grab
 from harness import check
 from pectus_filters import create_ribcage, nuss_fea
 from pectus_meshes import write_ply
@@ -36,7 +35,7 @@ joined = [m.groups() for m in (re.search(r"joined (\d+) tissue layers: ([0-9.]+)
                                for l in r.log) if m]
 check(len(joined) == 1 and int(joined[0][0]) == 3 and float(joined[0][2]) < float(joined[0][1]),
       f"3 layers joined, the union smaller than the layers' sum (they overlap): {joined}")
-elev = grab(r.log, r"sternum end displacement ([0-9.]+) mm")
+elev = r.values("elevation_mm", "Nuss Procedure FE Analysis")
 if os.path.exists(res) and elev:
     R = h.read_ply(res)
     L = h.read_ply(lms)

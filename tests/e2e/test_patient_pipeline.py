@@ -24,7 +24,7 @@ import numpy as np
 
 import harness as h
 import pectus_mlx as mlx
-from harness import check, check_refused
+from harness import check, check_refused, log_figure
 from pectus_filters import create_ribcage, import_ct_segmentation, nuss_fea, prepare_patient_rib_cage
 
 PHANTOM = os.path.join(os.path.dirname(h.PREFIX), "filter_nuss_fea", "pectus_ct_phantom")
@@ -107,24 +107,24 @@ left_out = [float(v) for v in re.findall(r"'bone': left out a piece of ([0-9.]+)
 check(sorted(v > 5 for v in left_out) == [False, False, True, True],
       f"the scapulae (over 5 cm3) and the two blocks beside the spine are left out: {left_out} cm3")
 check(any("12 right and 12 left ribs" in l for l in log), "12 ribs numbered on each side")
-pieces = mlx.grab(log, r"joined on the grid: (\d+) connected pieces", int)
+pieces = log_figure(log, r"joined on the grid: (\d+) connected pieces", int)
 check(pieces == 5, f"the joined cage is one piece and the four floating ribs, as the generator's: {pieces} pieces")
 check_landmarks(log, truth, "messy STL export", joints=16.0, first=20.0)
-force = mlx.grab(log, r"Fe = ([0-9.]+) N")
+force = r.get("force_N", "Nuss Procedure FE Analysis")
 
 # the generator at the prepared cage's edge length, so that both are meshed alike
 edge = prepare_patient_rib_cage().params["edgeLength"].value
 g = h.run([], mlx.Script([create_ribcage(age=truth["generator"]["age"], hallerIndex=truth["generator"]["hallerIndex"],
                                          edgeLength=edge),
                           nuss_fea(landmarkLayer=1, **FE)]), timeout=1800)
-ref = mlx.grab(g.log, r"Fe = ([0-9.]+) N")
+ref = g.get("force_N", "Nuss Procedure FE Analysis")
 print(f"calibrated force: prepared export {force} N, generated cage {ref} N")
 check(force is not None and ref is not None and abs(force - ref) <= 0.10 * ref,
       f"calibrated force on the prepared export within 10 % of the generated cage's ({force} N vs {ref} N)")
-for what, pattern in (("slice method", r"Slice method intrathoracic volume change: \+([0-9.]+) cm3"),
-                      ("envelope", r"Ferguson envelope thoracic volume change: \+([0-9.]+) cm3"),
-                      ("pectus index", r"Pectus index change: Haller [0-9.]+ -> ([0-9.]+)")):
-    v = mlx.grab(log, pattern)
+for what, key, filter in (("slice method", "volume_change_cm3", "Thoracic Volume (Slice Method)"),
+                          ("envelope", "volume_change_cm3", "Thoracic Volume (Ferguson Envelope)"),
+                          ("pectus index", "haller_index", "Pectus Index")):
+    v = r.get(key, filter)
     check(v is not None and v > 0, f"{what} before and after on the prepared cage: {v}", "\n".join(log[-12:]))
 
 # --- the same export in metres and LPS axes: units and frame found, the same landmarks --------------------------
@@ -135,8 +135,8 @@ check(r.rc == 0, "metres, LPS: prepared", r.stdout[-2000:])
 check(any("units: metres" in l for l in r.log), "metres detected and scaled to mm")
 check_landmarks(r.log, truth_m, "metres, LPS", joints=16.0, first=20.0)
 column = r"vertebral column found \(posterior midline, ([0-9.]+) mm wide\)"
-check(mlx.grab(r.log, column) == mlx.grab(log, column) is not None,
-      f"metres, LPS: the same column as in RAS ({mlx.grab(log, column)} mm)", "\n".join(l for l in r.log if "column" in l))
+check(log_figure(r.log, column) == log_figure(log, column) is not None,
+      f"metres, LPS: the same column as in RAS ({log_figure(log, column)} mm)", "\n".join(l for l in r.log if "column" in l))
 
 # --- TotalSegmentator's output: one NIfTI mask per structure --------------------------------------------------
 masks = os.path.join(P, "masks")

@@ -35,7 +35,7 @@ def prepare(path):
 
 # --- the label map with its organs ----------------------------------------------------------------------------
 r = prepare(os.path.join(DATA, "labelmap.nii.gz"))
-imported = mlx.grab(r.log, r"Imported (\d+) structures", int)
+imported = r.get("structures", "Import CT Segmentation")
 check(imported == labels_in(os.path.join(DATA, "labelmap.nii.gz")),
       f"label map: one layer per label it holds ({imported})", "\n".join(r.log[:5]))
 organs = [l for l in r.log if "': not part of the rib cage, left out" in l]

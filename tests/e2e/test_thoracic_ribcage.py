@@ -9,7 +9,6 @@ import numpy as np
 import harness as h
 import pectus_mlx as mlx
 from pectus_filters import create_ribcage
-from pectus_mlx import grab_all as grab
 from harness import check
 
 W = h.workdir("thoracic-ribcage")
@@ -42,10 +41,10 @@ def filters(compare=False, before=0, landmarks=1):
 cage, lms = os.path.join(W, "cage.ply"), os.path.join(W, "cage_landmarks.ply")
 r = h.run([], mlx.Script([GEN] + filters()), [(cage, "", 0), (lms, "vq", 1)])
 check(r.rc == 0, "generator + thoracic volume filters run", r.stdout[-1500:])
-gen_h = grab(r.log, r"measured on mesh ([0-9.]+)")
-sl = grab(r.log, r"Slice method, layer .*intrathoracic volume ([0-9.]+) cm3")
-en = grab(r.log, r"Ferguson envelope, layer .*thoracic volume ([0-9.]+) cm3")
-hi = grab(r.log, r"Pectus index, layer .*Haller index ([0-9.]+)")
+gen_h = r.values("haller_index_measured", "Create Pectus Excavatum Rib Cage")
+sl = r.values("volume_cm3", "Thoracic Volume (Slice Method)")
+en = r.values("volume_cm3", "Thoracic Volume (Ferguson Envelope)")
+hi = r.values("haller_index", "Pectus Index")
 print("\n".join(l for l in r.log if "volume" in l or "index" in l))
 check(len(sl) == 1 and len(en) == 1 and 0.4 * en[0] < sl[0] < en[0],
       f"same range (500..701): intrathoracic {sl} cm3 inside the envelope {en} cm3")
@@ -65,9 +64,9 @@ if os.path.exists(cage) and os.path.exists(lms):
     r = h.run([cage, lms, after], mlx.Script(filters(compare=True, before=0, landmarks=1)))
     check(r.rc == 0, "before/after comparison runs", r.stdout[-1500:])
     print("\n".join(l for l in r.log if "change" in l))
-    d_sl = grab(r.log, r"Slice method intrathoracic volume change: \+?(-?[0-9.]+) cm3")
-    d_en = grab(r.log, r"Ferguson envelope thoracic volume change: \+?(-?[0-9.]+) cm3")
-    hh = grab(r.log, r"Pectus index, layer .*Haller index ([0-9.]+)")
+    d_sl = r.values("volume_change_cm3", "Thoracic Volume (Slice Method)")
+    d_en = r.values("volume_change_cm3", "Thoracic Volume (Ferguson Envelope)")
+    hh = r.values("before_haller_index", "Pectus Index") + r.values("haller_index", "Pectus Index")
     check(len(d_sl) == 1 and d_sl[0] > 0, f"slice method: positive volume change {d_sl} cm3")
     check(len(d_en) == 1 and d_en[0] > 0, f"envelope: positive volume change {d_en} cm3")
     check(len(hh) == 2 and hh[1] < hh[0], f"Haller index before/after {hh} falls")
