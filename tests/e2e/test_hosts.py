@@ -14,7 +14,7 @@ import re
 
 import numpy as np
 
-from harness import SOURCE, check, finish, grid, need_host, read_ply, workdir, write_ply
+from harness import SOURCE, as_printed, check, finish, grid, log_figure, need_host, read_ply, workdir, write_ply
 import pectus_mlx as mlx
 
 OTHER = os.environ.get("PECTUS_OTHER_HOST", "2025.07")
@@ -60,6 +60,14 @@ for h, r in res.items():
 check(figures(res["2020.09"].log, "alpha") == figures(res[OTHER].log, "alpha") and figures(res[OTHER].log, "alpha"),
       "element quality: the same Log figures on both hosts", "\n".join(res["2020.09"].log + res[OTHER].log))
 compare_layers("quality", tol_rel=0, quality_tol=0)
+# the figures come back as values on both hosts (2020.09: the plugin writes them; the newer: pectus-mlrun from the
+# filter's return values), the same
+vals = {h: {k: r.get(k) for k in ("elements", "quality_min", "quality_mean", "quality_max", "element_kind")}
+        for h, r in res.items()}
+check(vals["2020.09"]["elements"] is not None and vals["2020.09"]["element_kind"] == vals[OTHER]["element_kind"]
+      and vals["2020.09"]["elements"] == vals[OTHER]["elements"]
+      and all(abs(vals["2020.09"][k] - vals[OTHER][k]) <= 1e-9 for k in ("quality_min", "quality_mean", "quality_max")),
+      "element quality: the same values returned on both hosts", str(vals))
 
 # 2. MGA smoothing (the fast example) of the same grid: node moves by a seeded micro-genetic search
 res = {h: mlx.run([grid_ply], EX("filter_mga_smooth", "examples", "mga_smooth_fast.mlx"),
@@ -118,6 +126,8 @@ for h in HOSTS:
     r = mlx.run([], script, [], host=h, cwd=cwd, timeout=1200)
     line = next((l for l in r.log if l.startswith("Nuss FE result") or " failed: " in l), "no Log line")
     check(r.rc == 0 and line.startswith("Nuss FE result"), f"FE on the {h} cage: a result", f"rc {r.rc}: {line}")
+    force, printed = r.get("force_N", "Nuss Procedure FE Analysis"), log_figure(r.log, r"Fe = ([0-9.]+) N \(Fs")
+    check(as_printed(force, printed, 2), f"FE on the {h} cage: the force returned ({force} N) is the Log's ({printed} N)")
     check(not os.listdir(cwd), f"FE on the {h} cage: nothing left in the working folder", str(os.listdir(cwd)))
     print(f"     FE on the {h} cage: rc {r.rc}: {line[:150]}")
 
