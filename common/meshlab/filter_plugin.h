@@ -171,8 +171,11 @@ class FilterPluginBase : public HostFilter {
 /// the default of every "Landmark layer" parameter.
 MeshModel* defaultLandmarkLayer(const MeshDocument& md);
 
-/// "a b c" for a histogram, and a fixed-format number, for Log lines
+/// "a b c" for a histogram, for Log lines
 std::string formatHistogram(const std::vector<std::size_t>& h);
+/// a number for Log lines with `precision` decimals (pectus::fixedText)
 std::string fmt(double v, int precision = 4);
+/// a number for tool-tips, with at most 6 significant digits (pectus::significantText)
+QString num(double v);
 
 }  // namespace pectus::ml
