@@ -1,5 +1,7 @@
 #include "pectus/surface.h"
 
+#include "pectus/union_find.h"
+
 #include <algorithm>
 #include <cstdint>
 #include <numeric>
@@ -8,10 +10,6 @@
 namespace pectus {
 
 namespace {
-int findRoot(std::vector<int>& p, int i) {
-  while (p[std::size_t(i)] != i) i = p[std::size_t(i)] = p[std::size_t(p[std::size_t(i)])];
-  return i;
-}
 /// the first face with a vertex index out of range and that index (badFace stays -1 if none)
 void findBadIndex(const Surface& m, int& badFace, int& badIndex) {
   const int nv = int(m.V.size()), nf = int(m.F.size());
@@ -134,12 +132,13 @@ void Topology::countFans(const Surface& m) {
   const std::size_t nv = vfStart.size() - 1;
   fans.assign(nv, 0);
   // per vertex: its faces get local slots, joined (union-find) across every edge at the vertex
-  std::vector<int> slot(m.F.size(), -1), parent;
+  std::vector<int> slot(m.F.size(), -1);
+  UnionFind sets;
   for (std::size_t v = 0; v < nv; ++v) {
-    parent.clear();
+    sets.clear();
     for (int q = vfStart[v]; q < vfStart[v + 1]; ++q) {
       int& s = slot[std::size_t(vf[std::size_t(q)])];
-      if (s < 0) s = int(parent.size()), parent.push_back(s);  // a face with a repeated vertex: one slot
+      if (s < 0) s = sets.add();  // a face with a repeated vertex: one slot
     }
     for (int q = vfStart[v]; q < vfStart[v + 1]; ++q) {
       const int f = vf[std::size_t(q)];
@@ -147,10 +146,10 @@ void Topology::countFans(const Surface& m) {
         const int e = faceEdge[std::size_t(f)][std::size_t(l)];
         if (e < 0 || (edges[std::size_t(e)].a != int(v) && edges[std::size_t(e)].b != int(v))) continue;
         for (const int* g = edgeFacesBegin(e); g != edgeFacesEnd(e); ++g)
-          parent[std::size_t(findRoot(parent, slot[std::size_t(*g / 3)]))] = findRoot(parent, slot[std::size_t(f)]);
+          sets.unite(slot[std::size_t(*g / 3)], slot[std::size_t(f)]);
       }
     }
-    for (std::size_t i = 0; i < parent.size(); ++i) fans[v] += findRoot(parent, int(i)) == int(i);
+    for (std::size_t i = 0; i < sets.size(); ++i) fans[v] += sets.isRoot(int(i));
     for (int q = vfStart[v]; q < vfStart[v + 1]; ++q) slot[std::size_t(vf[std::size_t(q)])] = -1;
   }
 }
@@ -179,8 +178,7 @@ bool Topology::closedManifold() const {
 
 int Topology::components(std::vector<int>& faceComponent) const {
   const int nf = int(faceEdge.size()), nv = int(boundary.size());
-  std::vector<int> parent(boundary.size());
-  std::iota(parent.begin(), parent.end(), 0);
+  UnionFind sets(boundary.size());
   // faces sharing a vertex are connected: union the vertices of each face
   std::vector<int> firstVertex(std::size_t(nf), -1);
   for (int v = 0; v < nv; ++v)
@@ -188,13 +186,13 @@ int Topology::components(std::vector<int>& faceComponent) const {
       const int f = vf[std::size_t(q)];
       int& r = firstVertex[std::size_t(f)];
       if (r < 0) r = v;
-      else parent[std::size_t(findRoot(parent, v))] = findRoot(parent, r);
+      else sets.unite(v, r);
     }
   faceComponent.assign(std::size_t(nf), -1);
   std::vector<int> id(std::size_t(nv), -1);
   int n = 0;
   for (int f = 0; f < nf; ++f) {
-    const int r = findRoot(parent, firstVertex[std::size_t(f)]);
+    const int r = sets.find(firstVertex[std::size_t(f)]);
     if (id[std::size_t(r)] < 0) id[std::size_t(r)] = n++;
     faceComponent[std::size_t(f)] = id[std::size_t(r)];
   }

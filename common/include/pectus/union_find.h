@@ -17,6 +17,8 @@ class UnionFind {
     return parent_.back();
   }
   std::size_t size() const { return parent_.size(); }
+  /// no elements (the storage is kept for the next use)
+  void clear() { parent_.clear(); }
   /// the root of a's set
   int find(int a) {
     while (parent_[std::size_t(a)] != a) a = parent_[std::size_t(a)] = parent_[std::size_t(parent_[std::size_t(a)])];
