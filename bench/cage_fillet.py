@@ -4,7 +4,7 @@ compliance, for the one-surface (labelled) cage and the per-tissue layers joined
 pectus_nuss_cli run per blend radius and input (default: 6 mm edges, TET10, small strain, Fe = 10 N);
 prints faces, tets, sternal elevation and tet volume per tissue.
 
-    python3 bench/cage_fillet.py [--tool build/filter_nuss_fea/pectus_nuss_cli] [--blends auto,0,1,3]
+    python3 bench/cage_fillet.py [--tool build/tools/pectus_nuss_cli] [--blends auto,0,1,3]
                                  [--edge 6] [--quality 1.6] [--force 10]
 """
 import argparse
@@ -12,7 +12,7 @@ import re
 import subprocess
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--tool", default="build/filter_nuss_fea/pectus_nuss_cli")
+ap.add_argument("--tool", default="build/tools/pectus_nuss_cli")
 ap.add_argument("--blends", default="auto,0,1,3", help="comma-separated radii in mm; 'auto' = the generator's default")
 ap.add_argument("--edge", default="6")
 ap.add_argument("--quality", default="1.6")

@@ -2,8 +2,8 @@
 """pectus_fe vs CalculiX (ccx) on the same tetrahedral mesh: the 10 x 10 x 100 mm cantilever
 (clamped at z = 0, tip shear load along y), TET4/TET10 (C3D4/C3D10), linear and NLGEOM.
 
-  bench/fe_vs_ccx.py --tool build/filter_nuss_fea/fe/pectus_fe_cantilever [--cases small|bench|cage|all] [--check]
-                     [--cage-tool build/filter_nuss_fea/pectus_nuss_cli] [--solve-tool build/filter_nuss_fea/fe/pectus_fe_solve]
+  bench/fe_vs_ccx.py --tool build/tools/pectus_fe_cantilever [--cases small|bench|cage|all] [--check]
+                     [--cage-tool build/tools/pectus_nuss_cli] [--solve-tool build/tools/pectus_fe_solve]
                      [--cage-maxvol 2.5]
 
 small: accuracy on small meshes (tip-centre displacement within 0.5%, --check makes it an exit code): linear,

@@ -5,7 +5,7 @@ force, the sternum-end displacement per mesh and its change from the previous me
 < 1 %). Prints one table, with each run's peak memory (maximum resident set size from wait4; the FE
 analysis' memory budget: 3 GB for a ~300k-tet model).
 
-    python3 bench/nuss_convergence.py [--tool build/filter_nuss_fea/pectus_nuss_cli] [--order 2] [--force 10] [--nonlinear]
+    python3 bench/nuss_convergence.py [--tool build/tools/pectus_nuss_cli] [--order 2] [--force 10] [--nonlinear]
                                       [--maxvol none,default,40,15,6,2.5]
 
 --maxvol lists the meshes: "none" is TetGen without refinement (tet quality 0, the quick main job's), "default"
@@ -18,7 +18,7 @@ import subprocess
 import time
 
 ap = argparse.ArgumentParser()
-ap.add_argument("--tool", default="build/filter_nuss_fea/pectus_nuss_cli")
+ap.add_argument("--tool", default="build/tools/pectus_nuss_cli")
 ap.add_argument("--order", type=int, default=2)
 ap.add_argument("--force", type=float, default=10.0)
 ap.add_argument("--nonlinear", action="store_true")

@@ -72,7 +72,7 @@ def main() -> int:
               resultBase="")
     P = os.path.join(a.out, "patient")
     t0 = time.time()
-    subprocess.run([os.path.join(BUILD, "filter_nuss_fea", "pectus_ct_phantom"), P, "--only", "messy,masks"],
+    subprocess.run([os.path.join(BUILD, "tools", "pectus_ct_phantom"), P, "--only", "messy,masks"],
                    check=True, capture_output=True)
     phantom_s = time.time() - t0
     rows = []

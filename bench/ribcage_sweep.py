@@ -20,7 +20,7 @@ def main() -> int:
     ap.add_argument("--indices", default="3,4,5,6,7")
     ap.add_argument("--edges", default="2,6,8")
     a = ap.parse_args()
-    cli = os.path.join(a.build, "filter_nuss_fea", "pectus_ribcage_cli")
+    cli = os.path.join(a.build, "tools", "pectus_ribcage_cli")
     print(f"{'age':>4} {'index':>5} {'edge':>4} {'faces':>7} {'passes':>6} {'time s':>7} {'index mesh':>10} {'self-int':>8} "
           f"{'nm edges':>8} {'comps':>5}")
     bad = 0

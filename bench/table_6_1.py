@@ -63,7 +63,7 @@ SECTIONS = ("rib", "ct")  # the generator's cartilageSection
 SLICE_FROM = ("dome", "sternum")  # the slice method's lowerLimit: 700 the dome of the diaphragm, 500 the lower sternum end
 SPINE = ("cut", "keep")  # 'Prepare Patient Rib Cage': the vertebral column cut at the joints or kept, fixed
 CAGE, LANDMARKS = 0, 1
-PHANTOM = os.path.join(ROOT, "build", "filter_nuss_fea", "pectus_ct_phantom")
+PHANTOM = os.path.join(ROOT, "build", "tools", "pectus_ct_phantom")
 
 
 def cage_filters(case, age, index, edge, source, out, spine, generator):

@@ -1,3 +1,5 @@
+// MeshLab adapter of the Nuss FE analysis (core/: pectus/nuss; the FE library pectus_fe): 'Nuss Procedure FE
+// Analysis' and 'Nuss Bar Planner'. Maps parameters, layers, progress, errors and results; no algorithm here.
 #include "filter_nuss_fea.h"
 
 #include <algorithm>
@@ -8,61 +10,20 @@
 #include "pectus/errors.h"
 #include "pectus/fe/solver.h"
 #include "pectus/labels.h"
-#include "pectus/ribcage/haller.h"
 #include "pectus/nuss/bar_planner.h"
 #include "pectus/nuss/nuss_analysis.h"
 #include "pectus/nuss/nuss_output.h"
 #include "pectus/nuss/tissue_join.h"
 #include "plot.h"
-#include "pectus/ribcage/ribcage.h"
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
+using pectus::ml::num;
 using pectus::ml::addFloat;
 using pectus::ml::addInt;
-using pectus::ParamRange;
-namespace rc = pectus::ribcage;
-
-namespace {
-// The rib cage's ranges that depend on other parameters (validate() checks them exactly): the declared
-// range is what the bounds allow for any chest, from the same constants.
-constexpr ParamRange kChestDepthEnvelope{rc::kChestDepthShare.lo * rc::kChestWidthRange.lo,
-                                         rc::kChestDepthShare.hi * rc::kChestWidthRange.hi};
-constexpr ParamRange kFunnelWidthEnvelope{rc::kFunnelMinSize, rc::kChestWidthRange.hi};
-constexpr ParamRange kFunnelHeightEnvelope{rc::kFunnelMinSize, rc::kFunnelHeightShare * rc::kSpineHeightRange.hi};
-constexpr ParamRange kFunnelCenterXEnvelope{-rc::kFunnelCenterXShare * rc::kChestWidthRange.hi,
-                                            rc::kFunnelCenterXShare * rc::kChestWidthRange.hi};
-QString num(double v) { return QString::number(v); }
-}  // namespace
 
 FilterNussFeaPlugin::FilterNussFeaPlugin() {
   pectus::fe::restBlasThreads();  // loaded with this plugin, OpenBLAS's idle threads would spin at start-up
-  pectus::ml::FilterSpec s;
-  s.id = FP_CREATE_RIBCAGE;
-  s.name = "Create Pectus Excavatum Rib Cage";
-  s.pythonName = "create_pectus_excavatum_rib_cage";
-  s.info =
-      "A parametric child's rib cage with pectus excavatum (thesis ch. 6, Table 6-1): 10-12 rib pairs "
-      "(elliptic sections, sloping down from the costovertebral joints, widest at ribs 6-8), costal "
-      "cartilages (ribs 1-7 to the sternum, 8-10 to the cartilage above) and a sternum (manubrium, body, "
-      "xiphoid) depressed into a funnel whose depth reproduces the requested pectus (Haller) index "
-      "= widest inner transverse diameter / smallest sternum-to-vertebra distance.<br>"
-      "One watertight, manifold, self-intersection-free surface (implicit smooth union extracted by "
-      "marching tetrahedra, decimated to the target edge length); ribs 11-12 float (own components).<br>"
-      "Frame: mm, +x patient's left, +y anterior, +z superior, vertebral bodies' anterior surface at "
-      "x = y = 0. Every face: tissue (face colour: bone / cartilage / sternum) and anatomical part "
-      "(face quality = tissue*1000 + part; rib part = 100*side + rib, side 1 right, 2 left; "
-      "301 manubrium, 302 body, 303 xiphoid). A second layer 'ribcage landmarks' holds one vertex "
-      "per landmark (vertex quality = code: costovertebral joints 100*side+rib, 500 lower sternum end, "
-      "501 deepest funnel point, 502 jugular notch, 503 vertebra at the deepest level, "
-      "600+10*side+s bar exits at the mid-axillary line in intercostal space s = 4, 5, "
-      "700 diaphragm dome height, 701 lung apex height).";
-  s.cls = pectus::ml::HostFilter::MeshCreation;
-  s.arity = pectus::ml::HostFilter::NONE;
-  s.needsCurrentMesh = false;
-  s.postCondition = MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY;
-  addFilter(this, s);
-
   pectus::ml::FilterSpec n;
   n.id = FP_NUSS_FEA;
   n.name = "Nuss Procedure FE Analysis";
@@ -111,172 +72,19 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
       "pectus index at the level of landmark 501.";
   addFilter(this, n);
 
-
-  addPatientFilters();
 }
 
 void FilterNussFeaPlugin::initParameters(int id, const MeshDocument& md, RichParameterList& par) {
-  if (id == FP_CREATE_RIBCAGE) initCreateRibCage(par);
   if (id == FP_NUSS_FEA) initNussFea(md, par);
   if (id == FP_BAR_PLANNER) initBarPlanner(md, par);
-  if (id == FP_IMPORT_CT) initImportCt(par);
-  if (id == FP_PREPARE_PATIENT) initPreparePatient(par);
 }
 
 void FilterNussFeaPlugin::run(int id, FilterContext& ctx) {
   switch (id) {
-    case FP_CREATE_RIBCAGE: runCreateRibCage(ctx); break;
     case FP_NUSS_FEA: runNussFea(ctx); break;
     case FP_BAR_PLANNER: runBarPlanner(ctx); break;
-    case FP_IMPORT_CT: runImportCt(ctx); break;
-    case FP_PREPARE_PATIENT: runPreparePatient(ctx); break;
     default: throw std::logic_error("unknown filter id");
   }
-}
-
-void FilterNussFeaPlugin::initCreateRibCage(RichParameterList& par) {
-  const pectus::ribcage::RibCageParams d;
-  par.addParam(RichEnum("sizeMode", 0, QStringList() << "From age" << "Explicit dimensions", "Size",
-                        "From age: every dimension from the child's age. Explicit: chest width, depth and "
-                        "spine height below (rib and sternum sections still follow the equivalent age)."));
-  addFloat(par, "age", d.age, "Age (years)",
-           "The child's age (thesis patients: 5-8).", rc::kAgeRange);
-  addFloat(par, "chestWidth", 181.0f, "Chest inner width (mm)",
-           "Explicit size: widest inner transverse diameter of the cage.", rc::kChestWidthRange);
-  addFloat(par, "chestDepth", 74.0f, "Chest depth (mm)",
-           "Explicit size: sternum-to-vertebra distance without funnel at the jugular notch, "
-           + num(rc::kChestDepthShare.lo) + "-" + num(rc::kChestDepthShare.hi) + " x chest width.",
-           kChestDepthEnvelope);
-  addFloat(par, "spineHeight", 172.0f, "Thoracic spine height (mm)",
-           "Explicit size: T1-T12.", rc::kSpineHeightRange);
-  addInt(par, "ribPairs", d.ribPairs, "Rib pairs",
-         "Ribs 11 and 12 are floating.", rc::kRibPairsRange);
-  addFloat(par, "hallerIndex", d.hallerIndex, "Pectus (Haller) index",
-           "Requested index: inner transverse diameter / smallest sternum-to-vertebra distance. "
-           "Normal ~2.5, pectus excavatum > 3.25 (thesis patients 3.6-5.3). The lower end is "
-           "at least the index of the same chest without funnel.", rc::kHallerIndexRange);
-  addFloat(par, "funnelCenterX", d.funnelCenterX, "Funnel centre, lateral (mm)",
-           "Lateral offset of the funnel centre (+ = patient's left), |x| <= " + num(rc::kFunnelCenterXShare) + " x funnel width.",
-           kFunnelCenterXEnvelope);
-  addFloat(par, "funnelCenterZ", d.funnelCenterZ, "Funnel centre, along sternum",
-           "0 = jugular notch, 1 = xiphisternal junction (the xiphoid's tip lies near 1.14). The default 1.1 puts "
-           "the deepest point around the lower end of the sternum, where pectus excavatum is deepest and the Nuss "
-           "FE analysis lifts the sternum.", rc::kFunnelCenterZRange);
-  addFloat(par, "funnelWidth", d.funnelWidth, "Funnel width (mm)",
-           "Transverse extent of the depression, up to the chest's inner width.", kFunnelWidthEnvelope);
-  addFloat(par, "funnelHeight", d.funnelHeight, "Funnel height (mm)",
-           "Vertical extent of the depression, up to " + num(rc::kFunnelHeightShare) + " x spine height.",
-           kFunnelHeightEnvelope);
-  addFloat(par, "edgeLength", d.edgeLength, "Target edge length (mm)",
-           "Resolution: 5-6 mm gives a few thousand faces (tests), 2 mm ~80k, "
-           "1 mm ~300k.", rc::kEdgeLengthRange);
-  par.addParam(RichEnum("cartilageSection", 0, QStringList() << "The rib's" << "Circular, twice the rib's area (CT)",
-                        "Costal cartilage section",
-                        "The rib's: each costal cartilage has its rib's elliptic section (0.85 x its height by 1.05 x its "
-                        "thickness). Circular, twice the rib's area: the section that matched radiologists' CT masks of "
-                        "costal cartilage best (a circle of twice the rib's mean cross-section area, PMID 25027382); "
-                        "3.5-7 times stiffer in bending."));
-  par.addParam(RichEnum("output", 0, QStringList() << "One labelled surface" << "One layer per tissue (as CT segmentation)",
-                        "Output",
-                        "One labelled surface: the smooth union of all tissues, tissue per face. One layer per tissue: "
-                        "closed surfaces 'ribs', 'costal cartilage' and 'sternum' that overlap at the costochondral "
-                        "junctions and the sternum, as CT segmentation tools export them (the input of 'Nuss Procedure FE "
-                        "Analysis' with 'One layer per tissue')."));
-}
-
-void FilterNussFeaPlugin::runCreateRibCage(FilterContext& ctx) {
-  pectus::ribcage::RibCageParams p;
-  p.fromAge = ctx.enumIn("sizeMode", 2) == 0;
-  // validate() checks every one against the constants the declaration uses (and the ranges that depend on
-  // other parameters exactly), with messages that give the unit and the dependence; the size parameters
-  // of the other size mode are not used
-  p.age = ctx.floatCheckedByCore("age");
-  p.chestWidth = ctx.floatCheckedByCore("chestWidth");
-  p.chestDepth = ctx.floatCheckedByCore("chestDepth");
-  p.spineHeight = ctx.floatCheckedByCore("spineHeight");
-  p.ribPairs = ctx.intCheckedByCore("ribPairs");
-  p.hallerIndex = ctx.floatCheckedByCore("hallerIndex");
-  p.funnelCenterX = ctx.floatCheckedByCore("funnelCenterX");
-  p.funnelCenterZ = ctx.floatCheckedByCore("funnelCenterZ");
-  p.funnelWidth = ctx.floatCheckedByCore("funnelWidth");
-  p.funnelHeight = ctx.floatCheckedByCore("funnelHeight");
-  p.edgeLength = ctx.floatCheckedByCore("edgeLength");
-  p.cartilageSection = ctx.enumIn("cartilageSection", 2) == 1 ? pectus::ribcage::CartilageSection::Ct
-                                                               : pectus::ribcage::CartilageSection::Rib;
-  pectus::ribcage::validate(p);  // before any layer is added
-
-  const bool perTissue = ctx.enumIn("output", 2) == 1;
-  const auto t0 = std::chrono::steady_clock::now();
-  pectus::OwnedMesh cage;
-  std::array<pectus::OwnedMesh, 3> tissues;
-  pectus::ribcage::RibCageStats st;
-  auto prog = [&](int pc, const char* w) { ctx.progress(pc, w); };
-  const auto lms = perTissue ? pectus::ribcage::generateTissueLayers(p, tissues, &st, prog)
-                             : pectus::ribcage::generateRibCage(p, cage, &st, prog);
-  const double secs = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-
-  auto addLabelled = [&](const QString& name, CMeshO& src) -> MeshModel& {
-    MeshModel& mm = ctx.addLayer(name);
-    mm.updateDataMask(MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY);
-    pectus::copyLabelledMesh(mm.cm, src);
-    vcg::tri::UpdateNormal<CMeshO>::PerVertexNormalizedPerFaceNormalized(mm.cm);
-    vcg::tri::UpdateBounding<CMeshO>::Box(mm.cm);
-    return mm;
-  };
-  std::optional<pectus::ribcage::HallerMeasure> measured;
-  int faces = 0, vertices = 0;
-  if (perTissue) {
-    for (int k = 0; k < 3; ++k) {
-      const MeshModel& mm = addLabelled(pectus::ribcage::kTissueLayerNames[std::size_t(k)], tissues[std::size_t(k)]);
-      faces += mm.cm.fn, vertices += mm.cm.vn;
-    }
-  } else {
-    measured = pectus::ribcage::measureHaller(cage);
-    const MeshModel& mm = addLabelled("pectus rib cage", cage);
-    faces = mm.cm.fn, vertices = mm.cm.vn;
-  }
-
-  MeshModel& lm = ctx.addLayer("ribcage landmarks", false);
-  lm.updateDataMask(MeshModel::MM_VERTQUALITY);
-  pectus::writeLandmarks(lm.cm, lms);
-  vcg::tri::UpdateBounding<CMeshO>::Box(lm.cm);
-
-  const auto& d = st.dims;
-  const std::array<double, 2> cartilage = pectus::ribcage::cartilageDiameters(d, p.cartilageSection);
-  ctx.log("Rib cage" + std::string(perTissue ? " (3 tissue layers)" : "") + ": " + std::to_string(faces) + " faces, " +
-          std::to_string(vertices) + " vertices, " +
-          std::to_string(p.ribPairs) + " rib pairs; Haller index requested " + fmt(p.hallerIndex) +
-          ", model " + fmt(st.hallerModel) + ", measured on mesh " +
-          (measured ? fmt(measured->index) : std::string("n/a")) + " (T " +
-          (measured ? fmt(measured->transverse) : std::string("n/a")) + " mm / AP " +
-          (measured ? fmt(measured->ap) : std::string("n/a")) + " mm); funnel depth " + fmt(st.funnelDepth) +
-          " mm; dimensions: chest width " + fmt(d.chestWidth) + " depth " + fmt(d.chestDepth) + " spine " +
-          fmt(d.spineHeight) + " sternum " + fmt(d.sternumLength) + " mm, rib section " + fmt(d.ribHeight) + " x " +
-          fmt(d.ribThickness) + " mm, costal cartilage section " + fmt(cartilage[0]) + " x " + fmt(cartilage[1]) +
-          " mm; " + std::to_string(lms.size()) +
-          " landmarks; " + fmt(secs, 3) + " s");
-  auto& values = ctx.results();
-  values.set("faces", faces);
-  values.set("vertices", vertices);
-  values.set("rib_pairs", p.ribPairs);
-  values.set("haller_index_requested", p.hallerIndex);
-  values.set("haller_index_model", st.hallerModel);
-  if (measured) {  // the single-layer cage, measured on its mesh
-    values.set("haller_index_measured", measured->index);
-    values.set("transverse_mm", measured->transverse);
-    values.set("ap_mm", measured->ap);
-  }
-  values.set("funnel_depth_mm", st.funnelDepth);
-  values.set("chest_width_mm", d.chestWidth);
-  values.set("chest_depth_mm", d.chestDepth);
-  values.set("spine_height_mm", d.spineHeight);
-  values.set("sternum_length_mm", d.sternumLength);
-  values.set("rib_height_mm", d.ribHeight);
-  values.set("rib_thickness_mm", d.ribThickness);
-  values.set("cartilage_width_mm", cartilage[0]);
-  values.set("cartilage_thickness_mm", cartilage[1]);
-  values.set("landmarks", lms.size());
-  values.set("seconds", secs);
 }
 
 

@@ -1,6 +1,5 @@
-// MeshLab adapter of the Nuss FE analysis plugin: maps parameters, layers, progress and errors to the
-// host-free cores (core/: the parametric rib cage; fe/: the finite element analysis; patient/: CT segmentation
-// import). No algorithm here.
+// MeshLab adapter of the Nuss FE analysis and the Nuss bar planner: maps parameters, layers, progress, errors
+// and results to the host-free core in core/ (pectus/nuss) and the FE library pectus_fe. No algorithm here.
 #pragma once
 #include "filter_plugin.h"
 
@@ -9,7 +8,7 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   PECTUS_FILTER_PLUGIN_METADATA
 
  public:
-  enum { FP_CREATE_RIBCAGE, FP_NUSS_FEA, FP_BAR_PLANNER, FP_IMPORT_CT, FP_PREPARE_PATIENT };
+  enum { FP_NUSS_FEA, FP_BAR_PLANNER };
   FilterNussFeaPlugin();
   QString pluginName() const override { return "FilterPectusNussFea"; }
 
@@ -18,16 +17,8 @@ class FilterNussFeaPlugin : public QObject, public pectus::ml::FilterPluginBase 
   void run(int id, pectus::ml::FilterContext& ctx) override;
 
  private:
-  void initCreateRibCage(RichParameterList& par);
-  void runCreateRibCage(pectus::ml::FilterContext& ctx);
   void initNussFea(const MeshDocument& md, RichParameterList& par);
   void runNussFea(pectus::ml::FilterContext& ctx);
   void initBarPlanner(const MeshDocument& md, RichParameterList& par);
   void runBarPlanner(pectus::ml::FilterContext& ctx);
-  // a patient's CT segmentation (filter_patient.cpp)
-  void addPatientFilters();
-  void initImportCt(RichParameterList& par);
-  void runImportCt(pectus::ml::FilterContext& ctx);
-  void initPreparePatient(RichParameterList& par);
-  void runPreparePatient(pectus::ml::FilterContext& ctx);
 };

@@ -29,7 +29,7 @@ sys.path.insert(0, HERE)
 import pectus_mlx as mlx  # noqa: E402
 
 EX = {
-    "ribcage": os.path.join(ROOT, "filter_nuss_fea", "examples", "create_ribcage.mlx"),
+    "ribcage": os.path.join(ROOT, "filter_ribcage", "examples", "create_ribcage.mlx"),
     "nuss": os.path.join(ROOT, "filter_nuss_fea", "examples", "nuss_fea.mlx"),
     "quality": os.path.join(ROOT, "filter_mga_smooth", "examples", "element_quality.mlx"),
     "mga": os.path.join(ROOT, "filter_mga_smooth", "examples", "mga_smooth.mlx"),

@@ -18,7 +18,7 @@ PKGS=(meshlab qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev
       libtet1.5-dev libsuitesparse-dev libomp-dev libgtest-dev
       xvfb xauth cmake g++ make dpkg-dev python3 python3-numpy
       python3-matplotlib python3-scipy imagemagick libcgal-dev calculix-ccx libopenblas0-pthread
-      liblemon-dev gmsh libcgal-demo parallel libopenmesh-apps libnifti2-dev ccache debootstrap)
+      liblemon-dev gmsh libcgal-demo parallel libopenmesh-apps libnifti2-dev ccache debootstrap universal-ctags)
 
 missing=()
 for p in "${PKGS[@]}"; do

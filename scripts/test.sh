@@ -71,7 +71,7 @@ mkdir -p "$LOGS" "$ROOT/build/Testing/Temporary"
 COSTS="$ROOT/build/Testing/Temporary/CTestCostData.txt"
 if [ -f "$PECTUS_CACHE/CTestCostData.txt" ]; then cp "$PECTUS_CACHE/CTestCostData.txt" "$COSTS"
 elif [ ! -f "$COSTS" ]; then cp "$ROOT/tests/ctest_costs.txt" "$COSTS"; fi
-rm -rf "$ROOT/build/test-cache"  # the unit tests' generated cages (filter_nuss_fea/tests/coarse_cage.h): made anew each run
+rm -rf "$ROOT/build/test-cache"  # the unit tests' generated cages (tools/include/pectus/fixture/coarse_cage.h): made anew each run
 # Two tests share the two cores: an OpenMP thread that waits must sleep, not spin on a core another test needs
 # (the results do not depend on it: every filter is byte-identical across thread counts)
 ctest_all() {  # (called after ||: errexit is off here)

@@ -1,16 +1,18 @@
 #!/usr/bin/env python3
-"""The include rule of the layers (docs/DEVELOPING.md, "The layers"): reads every #include of common/ and of
-the filter_* folders and fails, naming the file, the line and the include, when
+"""The include rule of the layers (docs/DEVELOPING.md, "The layers"): reads every #include of common/,
+pectus_fe/, tools/ and the filter_* folders and fails, naming the file, the line and the include, when
 
-- a core (common/include, common/src, or any subfolder of a filter_* folder: core/, fe/, patient/, tools/,
-  tests/) includes Qt or MeshLab's headers, or a file outside its own plugin folder and the common cores;
-- an adapter (the files directly in a filter_* folder) includes another plugin's folder or anything outside
-  its own plugin folder and common/;
-- common/ includes a plugin's folder;
+- a core (common/include, common/src, pectus_fe/include, pectus_fe/src, a plugin's core/) includes Qt or MeshLab's
+  headers, or a file outside its own core and the libraries: the common cores, and pectus_fe for a plugin's core
+  (common's cores include only common's; pectus_fe's only its own and common's);
+- an adapter (the files directly in a filter_* folder) includes another plugin's folder or anything outside its
+  own plugin folder and the libraries (common/, including its MeshLab adapter contract, and pectus_fe);
+- a test (a tests/ folder) includes an adapter other than its own folder's, or another folder's tests;
+- a tool (tools/) includes Qt, MeshLab, an adapter or a test;
 
-and, for the header layout, when a core's public header is not under an `include/pectus/` folder, or a header
-in `include/pectus/<area>/` does not declare `namespace pectus::<area>` (one in `include/pectus/` itself:
-`namespace pectus`). A core's private headers sit beside its sources in `src/`; test fixtures in `tests/`.
+and, for the header layout, when a core's or a tool's public header is not under an `include/pectus/` folder, or
+a header in `include/pectus/<area>/` does not declare `namespace pectus::<area>` (one in `include/pectus/` itself:
+`namespace pectus`). A core's private headers sit beside its sources in `src/`; test-only headers in `tests/`.
 
 A quoted include is resolved as the compiler does: beside the including file first, then in the include
 directories the CMakeLists.txt files declare (target_include_directories). An include that names headers in
@@ -34,49 +36,73 @@ MESH_TYPE_DOOR = "common/include/pectus/cmesh.h"
 MESH_TYPE_HEADERS = {"common/ml_mesh_type.h", "common/ml_document/cmesh.h"}
 
 
+# the libraries every core may build on: the common cores and the FE library
+LIBRARIES = ("common", "pectus_fe")
+
+
 def zone(rel: str) -> tuple[str, str]:
-    """(owner, role) of a path relative to the root: owner 'common', a plugin folder, or the top folder;
-    role 'core', 'adapter' (a plugin's adapter files, common/meshlab), 'common-other' or 'outside'"""
+    """(owner, role) of a path relative to the root. owner: 'common', 'pectus_fe', a plugin folder, 'tools' or the
+    top folder. role: 'core' (common/include, common/src, pectus_fe/include, pectus_fe/src, a plugin's core/),
+    'adapter' (the files directly in a plugin folder, common/meshlab), 'test' (a tests/ folder of any of them),
+    'tool' (tools/: the command-line drivers, the phantom and the test fixtures) or 'outside'"""
     parts = rel.split("/")
-    if parts[0] == "common":
+    top = parts[0]
+    if top in LIBRARIES:
         if len(parts) > 2 and parts[1] in ("include", "src"):
-            return "common", "core"
+            return top, "core"
         if len(parts) > 2 and parts[1] == "meshlab":
-            return "common", "adapter"
-        return "common", "common-other"
-    if parts[0].startswith("filter_"):
-        return parts[0], "adapter" if len(parts) == 2 else "core"
-    return parts[0], "outside"
+            return top, "adapter"
+        if len(parts) > 2 and parts[1] == "tests":
+            return top, "test"
+        return top, "outside"
+    if top.startswith("filter_"):
+        if len(parts) == 2:
+            return top, "adapter"
+        if parts[1] == "tests":
+            return top, "test"
+        if parts[1] == "core":
+            return top, "core"
+        return top, "outside"
+    if top == "tools":
+        return top, "tool"
+    return top, "outside"
 
 
 def violation(includer: str, include: str, target: str | None) -> str | None:
     """why `#include include` in `includer` (resolved to `target` in the tree, or None) breaks the rule"""
     owner, role = zone(includer)
     if target is None:  # outside the tree: the standard library, vcglib, Eigen, CGAL, TetGen, ..., Qt, MeshLab
-        if role != "core" or not HOST_HEADER.match(include):
+        if role not in ("core", "tool") or not HOST_HEADER.match(include):
             return None
         if includer == MESH_TYPE_DOOR and include in MESH_TYPE_HEADERS:
             return None
-        return "a core includes Qt or MeshLab (the mesh type comes from pectus/cmesh.h)"
+        return f"a {role} includes Qt or MeshLab (the mesh type comes from pectus/cmesh.h)"
     t_owner, t_role = zone(target)
     if role == "core":
-        if t_owner == owner and t_role == "core" or (t_owner, t_role) == ("common", "core"):
+        if t_role == "core" and (t_owner == owner or t_owner == "common"
+                                 or (t_owner == "pectus_fe" and owner != "common")):
             return None
-        if (t_owner, t_role) == ("common", "adapter"):
+        if t_role == "adapter" and t_owner == "common":
             return f"a core includes common's MeshLab adapter contract ({target})"
         if t_owner == owner and t_role == "adapter":
             return f"a core includes its plugin's adapter ({target})"
-        return f"a core includes {target}, outside its plugin's core and the common cores"
-    if owner == "common":
-        if t_owner == "common":
-            return None
-        return f"common/ includes {target}, outside common/"
+        return f"a core includes {target}, outside its own core and the libraries ({', '.join(LIBRARIES)})"
     if role == "adapter":
-        if t_owner in (owner, "common"):
+        if t_owner == owner or (t_owner in LIBRARIES and t_role in ("core", "adapter")):
             return None
         if t_owner.startswith("filter_"):
             return f"an adapter includes another plugin's folder ({target})"
-        return f"an adapter includes {target}, outside its plugin and common/"
+        return f"an adapter includes {target}, outside its plugin and the libraries ({', '.join(LIBRARIES)})"
+    if role == "test":
+        if t_role in ("core", "tool", "test") and (t_role != "test" or t_owner == owner):
+            return None
+        if t_role == "adapter" and t_owner == owner:
+            return None  # an adapter's own tests (common/tests: the adapter contract)
+        return f"a test includes {target}: tests use the cores, the tools' fixtures and their own folder"
+    if role == "tool":
+        if t_role in ("core", "tool"):
+            return None
+        return f"a tool includes {target}: tools use the cores and tools/ only"
     return None
 
 
@@ -102,7 +128,8 @@ def include_dirs(root: str, cmake_files: list[str]) -> list[str]:
 
 
 def scanned_files(root: str) -> tuple[list[str], list[str]]:
-    """(the sources of common/ and the filter_* folders relative to the root, the tree's CMakeLists.txt files)"""
+    """(the sources of common/, pectus_fe/, tools/ and the filter_* folders relative to the root, the tree's
+    CMakeLists.txt files)"""
     sources, cmakes = [], []
     for d, subdirs, names in os.walk(root):
         subdirs[:] = sorted(s for s in subdirs if not s.startswith((".", "build")) and s != "third_party")
@@ -111,7 +138,7 @@ def scanned_files(root: str) -> tuple[list[str], list[str]]:
             p = os.path.join(d, n)
             if n == "CMakeLists.txt":
                 cmakes.append(p)
-            elif n.endswith(SOURCE_EXT) and (top == "common" or top.startswith("filter_")):
+            elif n.endswith(SOURCE_EXT) and (top in LIBRARIES or top == "tools" or top.startswith("filter_")):
                 sources.append(os.path.relpath(p, root))
     return sources, cmakes
 
@@ -122,11 +149,11 @@ NAMESPACE = re.compile(r"^\s*namespace\s+([A-Za-z_][\w:]*)\s*\{", re.M)
 def layout_violation(rel: str, text: str) -> str | None:
     """why the header `rel` (relative to the root) with source `text` breaks the header layout, or None"""
     owner, role = zone(rel)
-    if role != "core" or not rel.endswith((".h", ".hpp")):
+    if role not in ("core", "tool") or not rel.endswith((".h", ".hpp")):
         return None
     parts = rel.split("/")
-    if "tests" in parts or "src" in parts:
-        return None  # a test fixture, or a core's private header beside its sources
+    if "src" in parts:
+        return None  # a core's private header beside its sources
     if "include" not in parts or parts[parts.index("include") + 1:parts.index("include") + 2] != ["pectus"]:
         return "a core's public header outside an include/pectus/ folder (move it to include/pectus/<area>/)"
     below = parts[parts.index("include") + 2:]
@@ -160,21 +187,37 @@ def self_check() -> list[str]:
         ("filter_nuss_fea/core/include/pectus/nuss/bar_planner.h", "pectus/smooth/mga_smooth.h",
          "filter_mga_smooth/core/include/pectus/smooth/mga_smooth.h", True),
         ("filter_nuss_fea/core/include/pectus/nuss/bar_planner.h", "QString", None, True),
-        ("filter_nuss_fea/fe/src/io.cpp", "common/globals.h", None, True),
+        ("pectus_fe/src/io.cpp", "common/globals.h", None, True),
+        ("pectus_fe/src/io.cpp", "pectus/nuss/nuss_analysis.h",
+         "filter_nuss_fea/core/include/pectus/nuss/nuss_analysis.h", True),
         ("common/src/quality.cpp", "QObject", None, True),
-        ("common/src/quality.cpp", "pectus/ribcage/ribcage.h", "filter_nuss_fea/core/include/pectus/ribcage/ribcage.h",
+        ("common/src/quality.cpp", "pectus/ribcage/ribcage.h", "filter_ribcage/core/include/pectus/ribcage/ribcage.h",
          True),
+        ("common/src/quality.cpp", "pectus/fe/solver.h", "pectus_fe/include/pectus/fe/solver.h", True),
+        ("filter_patient/core/src/prepare.cpp", "pectus/ribcage/ribcage.h",
+         "filter_ribcage/core/include/pectus/ribcage/ribcage.h", True),
+        ("filter_patient/core/src/prepare.cpp", "pectus/mesh_simplify.h", "common/include/pectus/mesh_simplify.h",
+         False),
+        ("filter_nuss_fea/core/src/nuss_analysis.cpp", "pectus/fe/solver.h", "pectus_fe/include/pectus/fe/solver.h",
+         False),
         ("filter_mga_smooth/core/src/mga.cpp", "filter_plugin.h", "common/meshlab/filter_plugin.h", True),
         ("filter_mga_smooth/core/src/mga.cpp", "filter_mga_smooth.h", "filter_mga_smooth/filter_mga_smooth.h", True),
         ("common/src/labels.cpp", "plot.h", "common/meshlab/plot.h", True),
         ("filter_thoracic_volume/filter_thoracic_volume.cpp", "pectus/ribcage/ribcage.h",
-         "filter_nuss_fea/core/include/pectus/ribcage/ribcage.h", True),
+         "filter_ribcage/core/include/pectus/ribcage/ribcage.h", True),
         ("filter_nuss_fea/core/include/pectus/nuss/bar_planner.h", "pectus/vol/thoracic_volume.h",
          "common/include/pectus/vol/thoracic_volume.h", False),
         ("filter_nuss_fea/filter_nuss_fea.cpp", "plot.h", "common/meshlab/plot.h", False),
         ("filter_nuss_fea/filter_nuss_fea.cpp", "QFileInfo", None, False),
-        ("filter_nuss_fea/filter_patient.cpp", "pectus/patient/prepare.h",
-         "filter_nuss_fea/patient/include/pectus/patient/prepare.h", False),
+        ("filter_nuss_fea/filter_nuss_fea.cpp", "pectus/patient/prepare.h",
+         "filter_patient/core/include/pectus/patient/prepare.h", True),
+        ("filter_patient/filter_patient.cpp", "pectus/patient/prepare.h",
+         "filter_patient/core/include/pectus/patient/prepare.h", False),
+        ("filter_patient/tests/test_patient_spine.cpp", "pectus/phantom/ct_phantom_core.h",
+         "tools/include/pectus/phantom/ct_phantom_core.h", False),
+        ("filter_patient/tests/test_patient_spine.cpp", "filter_nuss_fea.h", "filter_nuss_fea/filter_nuss_fea.h", True),
+        ("tools/ct_phantom.cpp", "QString", None, True),
+        ("tools/ct_phantom.cpp", "filter_plugin.h", "common/meshlab/filter_plugin.h", True),
         ("common/include/pectus/cmesh.h", "common/ml_mesh_type.h", None, False),
         ("common/include/pectus/labels.h", "common/ml_mesh_type.h", None, True),
     ]
@@ -185,7 +228,9 @@ def self_check() -> list[str]:
         ("common/include/pectus/errors.h", "namespace pectus {", False),
         ("common/include/pectus/c1/surface.h", "namespace pectus {", True),
         ("filter_mga_smooth/core/src/private.h", "namespace pectus::smooth {", False),
-        ("filter_nuss_fea/tests/coarse_cage.h", "namespace pectus::fixture {", False),
+        ("tools/include/pectus/fixture/coarse_cage.h", "namespace pectus::fixture {", False),
+        ("tools/include/pectus/fixture/coarse_cage.h", "namespace pectus {", True),
+        ("pectus_fe/include/pectus/fe/solver.h", "namespace pectus::fe {", False),
         ("filter_nuss_fea/filter_nuss_fea.h", "namespace pectus::ml {", False),
     ]
     wrong = []

@@ -12,6 +12,7 @@
 #include <sstream>
 
 #include "pectus/errors.h"
+#include "pectus/format.h"
 
 namespace pectus::ml {
 
@@ -513,13 +514,8 @@ std::string formatHistogram(const std::vector<std::size_t>& h) {
   return s.str();
 }
 
-std::string fmt(double v, int precision) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
+std::string fmt(double v, int precision) { return pectus::fixedText(v, precision); }
+QString num(double v) { return QString::fromStdString(pectus::significantText(v)); }
 
 MeshModel* defaultLandmarkLayer(const MeshDocument& md) {
   for (MeshModel* m : meshes(md)) {

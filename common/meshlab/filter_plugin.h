@@ -207,8 +207,11 @@ std::map<std::string, QVariant> toVariantMap(const pectus::Results& results);
 pectus::Results fromVariantMap(const std::map<std::string, QVariant>& values);
 #endif
 
-/// "a b c" for a histogram, and a fixed-format number, for Log lines
+/// "a b c" for a histogram, for Log lines
 std::string formatHistogram(const std::vector<std::size_t>& h);
+/// a number for Log lines with `precision` decimals (pectus::fixedText)
 std::string fmt(double v, int precision = 4);
+/// a number for tool-tips, with at most 6 significant digits (pectus::significantText)
+QString num(double v);
 
 }  // namespace pectus::ml

@@ -10,7 +10,7 @@
 
 #include "pectus/nuss/bar_planner.h"
 #include "pectus/errors.h"
-#include "coarse_cage.h"
+#include "pectus/fixture/coarse_cage.h"
 
 using namespace pectus;
 

@@ -12,7 +12,7 @@
 #include "pectus/nuss/tissue_join.h"
 #include "pectus/errors.h"
 #include "pectus/labels.h"
-#include "coarse_cage.h"
+#include "pectus/fixture/coarse_cage.h"
 #include "pectus/ribcage/ribcage.h"
 
 using namespace pectus;

@@ -149,7 +149,7 @@ FILTERS = {
     "gradient": dict(mlx="filter_mga_smooth/examples/gradient_smooth.mlx", base="open", set=dict(maxSweeps=2),
                      kinds=SURFACE_KINDS, group="gradient"),
     # the generator reads no layer: one cell with a layer loaded (left alone), the rest are parameters
-    "ribcage": dict(mlx="filter_nuss_fea/examples/create_ribcage.mlx", base="open", set=dict(edgeLength=8.0),
+    "ribcage": dict(mlx="filter_ribcage/examples/create_ribcage.mlx", base="open", set=dict(edgeLength=8.0),
                     kinds=["valid"], group="ribcage"),
     "nuss": dict(mlx="filter_nuss_fea/examples/nuss_fea.mlx", index=1, base="cage", layout="nuss",
                  set=dict(analysis=1, order=1, tetQuality=0.0, targetElevation=10.0,
@@ -178,9 +178,9 @@ FILTERS = {
     # the patient filters: the input is the file 'path' names (import), or the only layer (prepare: one blob
     # that neither its name nor its shape makes a rib cage of). Prepare so has no valid cell (refusal=True): the
     # patient e2e tests run it on real exports
-    "import_ct": dict(mlx="filter_nuss_fea/examples/import_ct_segmentation.mlx", base="closed", layout="import",
+    "import_ct": dict(mlx="filter_patient/examples/import_ct_segmentation.mlx", base="closed", layout="import",
                       kinds=CLOSED_KINDS, group="patient"),
-    "prepare": dict(mlx="filter_nuss_fea/examples/prepare_patient_rib_cage.mlx", index=1, base="closed",
+    "prepare": dict(mlx="filter_patient/examples/prepare_patient_rib_cage.mlx", index=1, base="closed",
                     kinds=CLOSED_KINDS, group="patient", refusal=True),
 }
 # one ctest per group; a filter with split=True has its parameter cells in a second group <group>_params
@@ -264,7 +264,7 @@ class Runner:
     def _make_cage(self):
         """the coarse rib cage and its landmarks, generated once per build and host (cached: a rib cage takes seconds)"""
         from harness import read_ply
-        gen = mlx.load_script(_ex("filter_nuss_fea/examples/create_ribcage.mlx"))[0].set(edgeLength=8.0)
+        gen = mlx.load_script(_ex("filter_ribcage/examples/create_ribcage.mlx"))[0].set(edgeLength=8.0)
         cache = os.path.join(BUILD, "bad_input_cache", HOST, hashlib.sha1(gen.xml().encode()).hexdigest()[:12])
         cage, lms = os.path.join(cache, "gen_cage.ply"), os.path.join(cache, "gen_landmarks.ply")
         if not (os.path.exists(cage) and os.path.exists(lms)):

@@ -79,7 +79,7 @@ order = [l.split(":")[0] for l in r.log if any(l.startswith(e[0] + ":") for e in
 check(order == [e[0] for e in expected], "structures in name order", str(order))
 
 # the example script runs as shipped (its folder is the docs' folder): every parameter is present
-ex = os.path.join(SOURCE, "filter_nuss_fea", "examples", "import_ct_segmentation.mlx")
+ex = os.path.join(SOURCE, "filter_patient", "examples", "import_ct_segmentation.mlx")
 [f] = mlx.load_script(ex)
 check(sorted(f.params) == ["labelTable", "minVoxels", "path"], "the example lists every parameter", str(f.params))
 r = run([], mlx.Script([f.set(path=os.path.join(seg, "sternum.obj"))]), [(os.path.join(d, "one.ply"), "", 0)])

@@ -94,7 +94,7 @@ for key in bim.FILTERS:
     check(log1 == log2, f"{name}: Log identical with 1 and 2 threads (timings masked)", f"{dl[:3]}")
 
 # Prepare Patient Rib Cage, whose matrix cell is a refusal: on a messy export of the CT phantom
-phantom = os.path.join(os.path.dirname(h.PREFIX), "filter_nuss_fea", "pectus_ct_phantom")
+phantom = os.path.join(os.path.dirname(h.PREFIX), "tools", "pectus_ct_phantom")
 P = os.path.join(W, "patient")
 g = subprocess.run([phantom, P, "--only", "messy", "--age", "5", "--spacing", "1.5"], capture_output=True, text=True)
 check(g.returncode == 0, "pectus_ct_phantom: a messy export", g.stderr[-500:])

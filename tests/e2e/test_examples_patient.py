@@ -16,7 +16,7 @@ from harness import check
 
 paths = check_coverage("patient")
 check(len(paths) == 3, f"{len(paths)} examples in this test")
-PHANTOM = os.path.join(os.path.dirname(h.PREFIX), "filter_nuss_fea", "pectus_ct_phantom")
+PHANTOM = os.path.join(os.path.dirname(h.PREFIX), "tools", "pectus_ct_phantom")
 DOCS = "/tmp/pectus-docs"
 PATIENT = os.path.join(DOCS, "patient")
 IMPORT = os.path.join(DOCS, "import_ct_segmentation")

@@ -89,7 +89,7 @@ for h, r in res.items():
 compare_layers("c1", tol_rel=1e-5)
 
 # 4. a coarse rib cage (8 mm edges), its element quality and its pectus index, in one script
-cage = [f for f in mlx.load_script(EX("filter_nuss_fea", "examples", "create_ribcage.mlx"))][0]
+cage = [f for f in mlx.load_script(EX("filter_ribcage", "examples", "create_ribcage.mlx"))][0]
 quality = mlx.load_script(EX("filter_mga_smooth", "examples", "element_quality.mlx"))[0]
 index = [f for f in mlx.load_script(EX("filter_thoracic_volume", "examples", "pectus_index.mlx")) if f.name == "Pectus Index"][0]
 script = mlx.Script([cage.set(edgeLength=8.0), quality, index.set(compare=False)])

@@ -27,7 +27,7 @@ import pectus_mlx as mlx
 from harness import check, check_refused, log_figure
 from pectus_filters import create_ribcage, import_ct_segmentation, nuss_fea, prepare_patient_rib_cage
 
-PHANTOM = os.path.join(os.path.dirname(h.PREFIX), "filter_nuss_fea", "pectus_ct_phantom")
+PHANTOM = os.path.join(os.path.dirname(h.PREFIX), "tools", "pectus_ct_phantom")
 W = h.workdir("patient")
 FE = dict(analysis=1, order=0, targetElevation=44.7, resultBase="")  # small strain TET10: no locking
 

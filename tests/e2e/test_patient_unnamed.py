@@ -21,7 +21,7 @@ import pectus_mlx as mlx
 from harness import check
 from pectus_filters import import_ct_segmentation, prepare_patient_rib_cage
 
-PHANTOM = os.path.join(os.path.dirname(h.PREFIX), "filter_nuss_fea", "pectus_ct_phantom")
+PHANTOM = os.path.join(os.path.dirname(h.PREFIX), "tools", "pectus_ct_phantom")
 W = h.workdir("patient_unnamed")
 
 r = subprocess.run([PHANTOM, os.path.join(W, "patient"), "--only", "stl"], capture_output=True, text=True, timeout=600)

@@ -49,6 +49,113 @@ double distanceScale(const Vec3& p, const Vec3& lo, const Vec3& hi) {
   const double far = std::max((p - lo).cwiseAbs().maxCoeff(), (p - hi).cwiseAbs().maxCoeff());
   return far > 1e100 ? std::ldexp(1.0, -std::ilogb(far)) : 1.0;
 }
+
+/// The faces a query has tried, per thread: a face's stamp equals the query's counter once tried. The stamps
+/// are cleared when the thread queries another surface, or when the counter wraps.
+struct FaceStamps {
+  std::vector<unsigned> stamp;
+  unsigned counter = 0;
+  const void* owner = nullptr;
+  /// starts a query on a surface of nf faces
+  void next(const void* surface, int nf) {
+    if (owner != surface || stamp.size() != std::size_t(nf)) {
+      stamp.assign(nf, 0);
+      counter = 0;
+      owner = surface;
+    }
+    if (++counter == 0) { std::fill(stamp.begin(), stamp.end(), 0); counter = 1; }
+  }
+  /// face f not tried yet in this query (it is marked tried)
+  bool first(int f) {
+    if (stamp[f] == counter) return false;
+    stamp[f] = counter;
+    return true;
+  }
+};
+
+/// the start of the search on face f: (s, t) of p's projection onto the flat triangle (its centroid if the
+/// triangle is degenerate), clamped into it
+void flatStart(const TriMesh& mesh, int f, const Vec3& p, double& s, double& t) {
+  const auto& F = mesh.F[f];
+  const Vec3 a = mesh.V[F[0]], e1 = mesh.V[F[1]] - a, e2 = mesh.V[F[2]] - a, d = p - a;
+  s = 1.0 / 3;
+  t = 1.0 / 3;
+  const double m11 = e1.dot(e1), m12 = e1.dot(e2), m22 = e2.dot(e2), det = m11 * m22 - m12 * m12;
+  if (det > 1e-14 * m11 * m22) {
+    s = (m22 * e1.dot(d) - m12 * e2.dot(d)) / det;
+    t = (m11 * e2.dot(d) - m12 * e1.dot(d)) / det;
+  }
+  clampST(s, t);
+}
+
+/// Newton's matrix: the Gauss-Newton matrix H plus the scaled residual r times the patch's second
+/// derivatives at (s, t), by central differences of the first ones (Gauss-Newton alone converges slowly
+/// when the residual is large against the radius of curvature)
+Eigen::Matrix2d withCurvature(const C1Surface& S, int f, double s, double t, const Vec3& r, const Eigen::Matrix2d& H) {
+  Eigen::Matrix2d Hn = H;
+  const double h = 1e-5;
+  auto jj = [&](double ds, double dt) { return S.jet(f, Vec3(1 - s - ds - t - dt, s + ds, t + dt)); };
+  const PatchJet sp = jj(h, 0), sm = jj(-h, 0), tp = jj(0, h), tm = jj(0, -h);
+  const Vec3 Pss = (sp.Ps - sm.Ps) / (2 * h), Ptt = (tp.Pt - tm.Pt) / (2 * h), Pst = (tp.Ps - tm.Ps) / (2 * h);
+  Hn(0, 0) += r.dot(Pss);
+  Hn(1, 1) += r.dot(Ptt);
+  Hn(0, 1) += r.dot(Pst);
+  Hn(1, 0) += r.dot(Pst);
+  return Hn;
+}
+
+/// One projected Newton step on patch f from (s, t) (jet j, scaled squared distance fv to p), halved until it
+/// gains; (s, t), j and fv move there. False if no step gains or the move is negligible.
+bool newtonStep(const C1Surface& S, int f, const Vec3& p, double sc, double& s, double& t, PatchJet& j, double& fv) {
+  // the residual scaled by sc, so the whole Newton system (J^T J + r.P'') d = -J^T r is scaled by sc
+  const Vec3 r = sc * (j.P - p);
+  Eigen::Matrix2d H;
+  H << j.Ps.dot(j.Ps), j.Ps.dot(j.Pt), j.Ps.dot(j.Pt), j.Pt.dot(j.Pt);
+  H *= sc;
+  const Vec2 g(j.Ps.dot(r), j.Pt.dot(r));
+  H += 1e-12 * (H.trace() + 1e-300) * Eigen::Matrix2d::Identity();
+  const Eigen::Matrix2d Hn = withCurvature(S, f, s, t, r, H);
+  const bool pd = Hn(0, 0) > 0 && Hn.determinant() > 1e-12 * H.determinant();
+  Vec2 step = pd ? Vec2(-Hn.ldlt().solve(g)) : Vec2(-H.ldlt().solve(g));
+  if (!step.allFinite()) step = -g;
+  for (int ls = 0; ls < 12; ++ls) {
+    double s2 = s + step.x(), t2 = t + step.y();
+    clampST(s2, t2);
+    const PatchJet j2 = S.jet(f, Vec3(1 - s2 - t2, s2, t2));
+    const double f2 = (sc * (j2.P - p)).squaredNorm();
+    if (f2 < fv) {
+      const double ds = std::abs(s2 - s) + std::abs(t2 - t);
+      s = s2; t = t2; j = j2; fv = f2;
+      return ds > 1e-13;
+    }
+    step *= 0.5;
+  }
+  return false;
+}
+
+/// the closest point of patch f to p by projected Newton from the flat projection: its (s, t), and the
+/// squared distance scaled by sc
+double projectOntoPatch(const C1Surface& S, int f, const Vec3& p, double sc, double& s, double& t) {
+  flatStart(S.mesh(), f, p, s, t);
+  PatchJet j = S.jet(f, Vec3(1 - s - t, s, t));
+  double fv = (sc * (j.P - p)).squaredNorm();
+  for (int it = 0; it < 30; ++it)
+    if (!newtonStep(S, f, p, sc, s, t, j, fv)) break;
+  return fv;
+}
+
+/// A lower bound of the distance from p to any grid cell outside the box of cells [lo, hi] (grid origin o,
+/// cell size cs, dim cells per axis); all: the box holds every cell.
+double outsideBound(const Vec3& p, const Vec3& o, double cs, const int dim[3], const int lo[3], const int hi[3],
+                    bool& all) {
+  double bound = std::numeric_limits<double>::max();
+  all = true;
+  for (int k = 0; k < 3; ++k) {
+    if (lo[k] > 0) { all = false; bound = std::min(bound, p[k] - (o[k] + lo[k] * cs)); }
+    if (hi[k] < dim[k] - 1) { all = false; bound = std::min(bound, o[k] + (hi[k] + 1) * cs - p[k]); }
+  }
+  return bound;
+}
 }  // namespace
 
 void C1Surface::buildIndex() const {
@@ -116,73 +223,17 @@ SurfacePoint C1Surface::closestPoint(const Vec3& p) const {
   if (!p.allFinite()) throw InputError("closest point: the query point has a NaN/Inf coordinate");
   if (!index_) buildIndex();
   const Index& ix = *index_;
-  const int nf = int(mesh_.F.size());
-  thread_local std::vector<unsigned> stamp;
-  thread_local unsigned counter = 0;
-  thread_local const void* owner = nullptr;
-  if (owner != this || stamp.size() != std::size_t(nf)) {
-    stamp.assign(nf, 0);
-    counter = 0;
-    owner = this;
-  }
-  if (++counter == 0) { std::fill(stamp.begin(), stamp.end(), 0); counter = 1; }
+  thread_local FaceStamps stamps;
+  stamps.next(this, int(mesh_.F.size()));
 
   const double sc = distanceScale(p, ix.lo, ix.hi);
   double best = std::numeric_limits<double>::max();
   SurfacePoint res;
+  // a face not tried yet whose box is nearer than the best point so far: its patch's closest point
   auto tryFace = [&](int f) {
-    if (boxDist2(p, ix.bmin[f], ix.bmax[f], sc) >= best) return;
-    // start: projection onto the flat triangle
-    const auto& F = mesh_.F[f];
-    const Vec3 a = mesh_.V[F[0]], e1 = mesh_.V[F[1]] - a, e2 = mesh_.V[F[2]] - a, d = p - a;
-    double s = 1.0 / 3, t = 1.0 / 3;
-    const double m11 = e1.dot(e1), m12 = e1.dot(e2), m22 = e2.dot(e2), det = m11 * m22 - m12 * m12;
-    if (det > 1e-14 * m11 * m22) {
-      s = (m22 * e1.dot(d) - m12 * e2.dot(d)) / det;
-      t = (m11 * e2.dot(d) - m12 * e1.dot(d)) / det;
-    }
-    clampST(s, t);
-    PatchJet j = jet(f, Vec3(1 - s - t, s, t));
-    double fv = (sc * (j.P - p)).squaredNorm();
-    for (int it = 0; it < 30; ++it) {
-      // the residual scaled by sc, so the whole Newton system (J^T J + r.P'') d = -J^T r is scaled by sc
-      const Vec3 r = sc * (j.P - p);
-      Eigen::Matrix2d H;
-      H << j.Ps.dot(j.Ps), j.Ps.dot(j.Pt), j.Ps.dot(j.Pt), j.Pt.dot(j.Pt);
-      H *= sc;
-      const Vec2 g(j.Ps.dot(r), j.Pt.dot(r));
-      H += 1e-12 * (H.trace() + 1e-300) * Eigen::Matrix2d::Identity();
-      // Newton: second derivatives of the patch by central differences of the first ones (Gauss-Newton
-      // alone converges slowly when the residual is large against the radius of curvature)
-      Eigen::Matrix2d Hn = H;
-      {
-        const double h = 1e-5;
-        auto jj = [&](double ds, double dt) { return jet(f, Vec3(1 - s - ds - t - dt, s + ds, t + dt)); };
-        const PatchJet sp = jj(h, 0), sm = jj(-h, 0), tp = jj(0, h), tm = jj(0, -h);
-        const Vec3 Pss = (sp.Ps - sm.Ps) / (2 * h), Ptt = (tp.Pt - tm.Pt) / (2 * h), Pst = (tp.Ps - tm.Ps) / (2 * h);
-        Hn(0, 0) += r.dot(Pss);
-        Hn(1, 1) += r.dot(Ptt);
-        Hn(0, 1) += r.dot(Pst);
-        Hn(1, 0) += r.dot(Pst);
-      }
-      const bool pd = Hn(0, 0) > 0 && Hn.determinant() > 1e-12 * H.determinant();
-      Vec2 step = pd ? Vec2(-Hn.ldlt().solve(g)) : Vec2(-H.ldlt().solve(g));
-      if (!step.allFinite()) step = -g;
-      bool moved = false;
-      for (int ls = 0; ls < 12; ++ls) {
-        double s2 = s + step.x(), t2 = t + step.y();
-        clampST(s2, t2);
-        const PatchJet j2 = jet(f, Vec3(1 - s2 - t2, s2, t2));
-        const double f2 = (sc * (j2.P - p)).squaredNorm();
-        if (f2 < fv) {
-          const double ds = std::abs(s2 - s) + std::abs(t2 - t);
-          s = s2; t = t2; j = j2; fv = f2; moved = ds > 1e-13;
-          break;
-        }
-        step *= 0.5;
-      }
-      if (!moved) break;
-    }
+    if (!stamps.first(f) || boxDist2(p, ix.bmin[f], ix.bmax[f], sc) >= best) return;
+    double s, t;
+    const double fv = projectOntoPatch(*this, f, p, sc, s, t);
     if (fv < best) {
       best = fv;
       res.face = f;
@@ -190,6 +241,8 @@ SurfacePoint C1Surface::closestPoint(const Vec3& p) const {
     }
   };
 
+  // the cells in shells of growing radius r around the query's cell, until the cells not visited yet are
+  // all farther than the best point
   int c[3];
   for (int k = 0; k < 3; ++k) c[k] = clampedCell((p[k] - ix.lo[k]) / ix.cs, ix.dim[k]);
   const int maxR = std::max({ix.dim[0], ix.dim[1], ix.dim[2]});
@@ -202,20 +255,10 @@ SurfacePoint C1Surface::closestPoint(const Vec3& p) const {
           const bool shell = x == lo[0] || x == hi[0] || y == lo[1] || y == hi[1] || z == lo[2] || z == hi[2];
           if (!shell) continue;
           const int cc = ix.cell(x, y, z);
-          for (int q = ix.cellStart[cc]; q < ix.cellStart[cc + 1]; ++q) {
-            const int f = ix.cellFaces[q];
-            if (stamp[f] == counter) continue;
-            stamp[f] = counter;
-            tryFace(f);
-          }
+          for (int q = ix.cellStart[cc]; q < ix.cellStart[cc + 1]; ++q) tryFace(ix.cellFaces[q]);
         }
-    // lower bound of the distance to any cell not visited yet
-    double bound = std::numeric_limits<double>::max();
-    bool all = true;
-    for (int k = 0; k < 3; ++k) {
-      if (lo[k] > 0) { all = false; bound = std::min(bound, p[k] - (ix.lo[k] + lo[k] * ix.cs)); }
-      if (hi[k] < ix.dim[k] - 1) { all = false; bound = std::min(bound, ix.lo[k] + (hi[k] + 1) * ix.cs - p[k]); }
-    }
+    bool all;
+    const double bound = outsideBound(p, ix.lo, ix.cs, ix.dim, lo, hi, all);
     if (all) break;
     if (res.face >= 0 && bound > 0 && best <= (sc * bound) * (sc * bound)) break;
   }

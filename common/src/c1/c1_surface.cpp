@@ -624,110 +624,153 @@ SurfacePoint C1Surface::at(int face, const Vec3& bary) const {
 // ------------------------------------------------------------------------------------------------
 // refinement
 
-TriMesh C1Surface::refine(int k, std::vector<Vec3>* outNormals) const {
-  if (!kSubdivisionsRange.contains(k)) throw InputError("refinement: k must be an integer in " + kSubdivisionsRange.text(true));
-  const Topology& topo = *topo_;
-  const int nv = int(mesh_.V.size()), nf = int(mesh_.F.size()), ne = int(topo.edges.size());
-  TriMesh out;
-  // referenced vertices keep their order
-  std::vector<int> vmap(nv, -1);
+namespace {
+
+/// Where refine() puts its vertices: the referenced input vertices in their order (vmap: input -> output,
+/// -1 if unreferenced), then k - 1 per edge, then the interior grid points of each face.
+struct RefineLayout {
+  int k = 1;
+  double ik = 1;  ///< 1 / k
+  std::vector<int> vmap;
+  int edgeBase = 0, perEdge = 0, faceBase = 0, perFace = 0, total = 0;
+};
+
+RefineLayout refineLayout(const Topology& topo, int nv, int nf, int k) {
+  RefineLayout L;
+  L.k = k;
+  L.vmap.assign(std::size_t(nv), -1);
   int n = 0;
   for (int v = 0; v < nv; ++v)
-    if (topo.vfStart[v] != topo.vfStart[v + 1]) vmap[v] = n++;
-  const int edgeBase = n;
-  const int perEdge = k - 1, perFace = (k - 1) * (k - 2) / 2;
-  const int faceBase = edgeBase + ne * perEdge;
-  const int total = faceBase + nf * perFace;
-  out.V.resize(total);
-  std::vector<Vec3> nrm(outNormals ? total : 0);
-  for (int v = 0; v < nv; ++v)
-    if (vmap[v] >= 0) out.V[vmap[v]] = mesh_.V[v];
-  if (outNormals) {
-    // vertex normal: the patch normal at the corner of its first face
-    for (int v = 0; v < nv; ++v) {
-      if (vmap[v] < 0) continue;
-      const int f = topo.vf[topo.vfStart[v]];
-      Vec3 b(0, 0, 0);
-      b[mesh_.F[f][0] == v ? 0 : (mesh_.F[f][1] == v ? 1 : 2)] = 1;
-      Vec3 acc(0, 0, 0);
-      for (int q = topo.vfStart[v]; q < topo.vfStart[v + 1]; ++q) {
-        const int g = topo.vf[q];
-        Vec3 bb(0, 0, 0);
-        bb[mesh_.F[g][0] == v ? 0 : (mesh_.F[g][1] == v ? 1 : 2)] = 1;
-        acc += at(g, bb).normal;
-      }
-      nrm[vmap[v]] = acc.norm() > 0 ? Vec3(acc.normalized()) : at(f, b).normal;
+    if (topo.vfStart[v] != topo.vfStart[v + 1]) L.vmap[v] = n++;
+  L.edgeBase = n;
+  L.perEdge = k - 1;
+  L.perFace = (k - 1) * (k - 2) / 2;
+  L.faceBase = L.edgeBase + int(topo.edges.size()) * L.perEdge;
+  L.total = L.faceBase + nf * L.perFace;
+  L.ik = 1.0 / k;
+  return L;
+}
+
+/// the local index (0, 1, 2) of vertex v in face F
+int corner(const std::array<int, 3>& F, int v) { return F[0] == v ? 0 : (F[1] == v ? 1 : 2); }
+
+/// an output vertex's normal at an input vertex: the mean of the patch normals at its corners (the patch
+/// normal at the corner of its first face if they cancel)
+void cornerNormals(const C1Surface& S, const RefineLayout& L, std::vector<Vec3>& nrm) {
+  const TriMesh& mesh = S.mesh();
+  const Topology& topo = S.topology();
+  const int nv = int(mesh.V.size());
+  for (int v = 0; v < nv; ++v) {
+    if (L.vmap[v] < 0) continue;
+    const int f = topo.vf[topo.vfStart[v]];
+    Vec3 b(0, 0, 0);
+    b[corner(mesh.F[f], v)] = 1;
+    Vec3 acc(0, 0, 0);
+    for (int q = topo.vfStart[v]; q < topo.vfStart[v + 1]; ++q) {
+      const int g = topo.vf[q];
+      Vec3 bb(0, 0, 0);
+      bb[corner(mesh.F[g], v)] = 1;
+      acc += S.at(g, bb).normal;
     }
+    nrm[L.vmap[v]] = acc.norm() > 0 ? Vec3(acc.normalized()) : S.at(f, b).normal;
   }
-  const double ik = 1.0 / k;
-  // edge vertices, from the edge's first face (a point of the shared edge curve)
+}
+
+/// the k - 1 vertices of every edge, from the edge's first face (points of the shared edge curve); with
+/// nrm, their normals: the mean of the two faces' patch normals there
+void edgeVertices(const C1Surface& S, const RefineLayout& L, std::vector<Vec3>& V, std::vector<Vec3>* nrm) {
+  const TriMesh& mesh = S.mesh();
+  const Topology& topo = S.topology();
+  const int ne = int(topo.edges.size()), k = L.k;
+  const double ik = L.ik;
 #pragma omp parallel for schedule(static)
   for (int e = 0; e < ne; ++e) {
     const auto& E = topo.edges[e];
     const int f = E.f0 / 3;
-    const auto& F = mesh_.F[f];
-    const int ia = F[0] == E.a ? 0 : (F[1] == E.a ? 1 : 2);
-    const int ib = F[0] == E.b ? 0 : (F[1] == E.b ? 1 : 2);
+    const auto& F = mesh.F[f];
+    const int ia = corner(F, E.a);
+    const int ib = corner(F, E.b);
     for (int m = 1; m < k; ++m) {
       Vec3 b(0, 0, 0);
       b[ia] = 1.0 - m * ik;
       b[ib] = m * ik;
-      const int id = edgeBase + e * perEdge + (m - 1);
-      if (outNormals) {
-        SurfacePoint sp = at(f, b);
-        out.V[id] = sp.point;
+      const int id = L.edgeBase + e * L.perEdge + (m - 1);
+      if (nrm) {
+        SurfacePoint sp = S.at(f, b);
+        V[id] = sp.point;
         Vec3 nn = sp.normal;
         if (E.f1 >= 0) {
           const int g = E.f1 / 3;
-          const auto& G = mesh_.F[g];
+          const auto& G = mesh.F[g];
           Vec3 bg(0, 0, 0);
-          bg[G[0] == E.a ? 0 : (G[1] == E.a ? 1 : 2)] = 1.0 - m * ik;
-          bg[G[0] == E.b ? 0 : (G[1] == E.b ? 1 : 2)] = m * ik;
-          nn += at(g, bg).normal;
+          bg[corner(G, E.a)] = 1.0 - m * ik;
+          bg[corner(G, E.b)] = m * ik;
+          nn += S.at(g, bg).normal;
         }
-        nrm[id] = nn.norm() > 0 ? Vec3(nn.normalized()) : sp.normal;
+        (*nrm)[id] = nn.norm() > 0 ? Vec3(nn.normalized()) : sp.normal;
       } else {
-        out.V[id] = eval(f, b);
+        V[id] = S.eval(f, b);
       }
     }
   }
+}
+
+/// The output vertex of face f's grid point (i, j), i + j <= k (barycentric (k-i-j, i, j)/k): a corner's
+/// vertex, an edge's (shared with the neighbour), or the face's own interior point.
+class FaceGrid {
+ public:
+  FaceGrid(const Topology& topo, const RefineLayout& L, const std::array<int, 3>& F, int f)
+      : topo_(topo), L_(L), F_(F), f_(f) {}
+  int operator()(int i, int j) const {
+    const int k = L_.k, c = k - i - j;
+    if (i == 0 && j == 0) return L_.vmap[F_[0]];
+    if (i == k) return L_.vmap[F_[1]];
+    if (j == k) return L_.vmap[F_[2]];
+    if (j == 0) return edgePoint(0, 1, i);
+    if (i == 0) return edgePoint(0, 2, j);
+    if (c == 0) return edgePoint(1, 2, j);
+    // interior: row-major over j = 1..k-2, i = 1..k-1-j
+    int idx = 0;
+    for (int jj = 1; jj < j; ++jj) idx += k - 1 - jj;
+    idx += i - 1;
+    return L_.faceBase + f_ * L_.perFace + idx;
+  }
+
+ private:
+  /// the vertex m steps from local corner la to lb
+  int edgePoint(int la, int lb, int m) const {
+    const int l = 3 - la - lb;  // local edge opposite l
+    const int e = topo_.faceEdge[f_][l];
+    if (e < 0) return L_.vmap[F_[la]];  // repeated vertex: collapsed edge
+    const auto& E = topo_.edges[e];
+    const int mm = E.a == F_[la] ? m : L_.k - m;
+    return L_.edgeBase + e * L_.perEdge + (mm - 1);
+  }
+  const Topology& topo_;
+  const RefineLayout& L_;
+  const std::array<int, 3>& F_;
+  int f_;
+};
+
+/// every face's interior vertices (with nrm, their patch normals) and its k x k triangles
+void faceGrids(const C1Surface& S, const RefineLayout& L, TriMesh& out, std::vector<Vec3>* nrm) {
+  const TriMesh& mesh = S.mesh();
+  const int nf = int(mesh.F.size()), k = L.k;
+  const double ik = L.ik;
   out.F.resize(std::size_t(nf) * k * k);
 #pragma omp parallel for schedule(static)
   for (int f = 0; f < nf; ++f) {
-    const auto& F = mesh_.F[f];
-    // grid point (i, j), i + j <= k: bary (k-i-j, i, j)/k
-    auto edgePoint = [&](int la, int lb, int m) -> int {  // m steps from local corner la to lb
-      const int l = 3 - la - lb;                             // local edge opposite l
-      const int e = topo.faceEdge[f][l];
-      if (e < 0) return vmap[F[la]];                         // repeated vertex: collapsed edge
-      const auto& E = topo.edges[e];
-      const int mm = E.a == F[la] ? m : k - m;
-      return edgeBase + e * perEdge + (mm - 1);
-    };
-    auto id = [&](int i, int j) -> int {
-      const int c = k - i - j;
-      if (i == 0 && j == 0) return vmap[F[0]];
-      if (i == k) return vmap[F[1]];
-      if (j == k) return vmap[F[2]];
-      if (j == 0) return edgePoint(0, 1, i);
-      if (i == 0) return edgePoint(0, 2, j);
-      if (c == 0) return edgePoint(1, 2, j);
-      // interior: row-major over j = 1..k-2, i = 1..k-1-j
-      int idx = 0;
-      for (int jj = 1; jj < j; ++jj) idx += k - 1 - jj;
-      idx += i - 1;
-      return faceBase + f * perFace + idx;
-    };
+    const FaceGrid id(S.topology(), L, mesh.F[f], f);
     for (int j = 1; j < k - 1; ++j)
       for (int i = 1; i < k - j; ++i) {
         const int vid = id(i, j);
         const Vec3 b((k - i - j) * ik, i * ik, j * ik);
-        if (outNormals) {
-          const SurfacePoint sp = at(f, b);
+        if (nrm) {
+          const SurfacePoint sp = S.at(f, b);
           out.V[vid] = sp.point;
-          nrm[vid] = sp.normal;
+          (*nrm)[vid] = sp.normal;
         } else {
-          out.V[vid] = eval(f, b);
+          out.V[vid] = S.eval(f, b);
         }
       }
     std::size_t o = std::size_t(f) * k * k;
@@ -737,6 +780,22 @@ TriMesh C1Surface::refine(int k, std::vector<Vec3>* outNormals) const {
         if (i + j < k - 1) out.F[o++] = {id(i + 1, j), id(i + 1, j + 1), id(i, j + 1)};
       }
   }
+}
+
+}  // namespace
+
+TriMesh C1Surface::refine(int k, std::vector<Vec3>* outNormals) const {
+  if (!kSubdivisionsRange.contains(k)) throw InputError("refinement: k must be an integer in " + kSubdivisionsRange.text(true));
+  const int nv = int(mesh_.V.size()), nf = int(mesh_.F.size());
+  const RefineLayout L = refineLayout(*topo_, nv, nf, k);
+  TriMesh out;
+  out.V.resize(L.total);
+  std::vector<Vec3> nrm(outNormals ? L.total : 0);
+  for (int v = 0; v < nv; ++v)
+    if (L.vmap[v] >= 0) out.V[L.vmap[v]] = mesh_.V[v];
+  if (outNormals) cornerNormals(*this, L, nrm);
+  edgeVertices(*this, L, out.V, outNormals ? &nrm : nullptr);
+  faceGrids(*this, L, out, outNormals ? &nrm : nullptr);
   if (outNormals) *outNormals = std::move(nrm);
   return out;
 }

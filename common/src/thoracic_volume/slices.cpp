@@ -283,9 +283,8 @@ long long rasterCount(const std::vector<Eigen::Vector2d>& poly, const Eigen::Vec
   }
   return count;
 }
-}  // namespace
-
-SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p, const Progress& progress) {
+/// the slice method's parameters: throws InputError for a degenerate range or a parameter below its range
+void checkSliceParams(const Range& range, const SliceParams& p) {
   requireRange(range, "of the slice method");
   if (!(p.spacing >= kSpacingRange.lo)) {
     std::ostringstream s;
@@ -296,32 +295,50 @@ SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p,
     throw InputError("the raster resolution must be at least " + std::to_string(int(kResolutionRange.lo)) + " pixels");
   if (p.rays < kRaysRange.lo)
     throw InputError("the number of boundary rays must be at least " + std::to_string(int(kRaysRange.lo)));
-  SliceResult res;
-  const int N = std::max(1, int(std::ceil((range.zHi - range.zLo) / p.spacing - 1e-9)));
-  const double h = (range.zHi - range.zLo) / N;
-  res.spacingUsed = h;
-  res.slices = N;
-  res.z.resize(N);
-  for (int k = 0; k < N; ++k) res.z[k] = range.zLo + (k + 0.5) * h;
+}
+
+/// The slices' regions and their polygons' areas (0 for an empty region). A region whose polygon has no
+/// area (every ray stopped at the seed) counts as empty: it would set no extent (with only such regions the
+/// pixel size would be 0 / resolution) and lie anywhere outside the raster.
+struct SliceRegions {
+  std::vector<SliceRegion> regions;
+  std::vector<double> polyArea;
+  bool hasArea(int k) const { return !regions[k].empty() && std::abs(polyArea[k]) > 0; }
+};
+
+/// the regions of the planes at heights z, cut from the soup
+SliceRegions sliceRegions(const Soup& s, const std::vector<double>& z, int rays, const Progress& progress) {
+  const int N = int(z.size());
   if (progress) progress(5, "cutting the planes");
-  auto cuts = cutPlanes(s, res.z);
-  std::vector<SliceRegion> regions(N);
-  std::vector<double> polyArea(N, 0.0);
+  auto cuts = cutPlanes(s, z);
+  SliceRegions R;
+  R.regions.resize(N);
+  R.polyArea.assign(N, 0.0);
   for (int k = 0; k < N; ++k) {
-    regions[k] = regionFromSegments(res.z[k], std::move(cuts[k]), p.rays);
-    if (!regions[k].empty()) polyArea[k] = regions[k].polygonArea();
+    R.regions[k] = regionFromSegments(z[k], std::move(cuts[k]), rays);
+    if (!R.regions[k].empty()) R.polyArea[k] = R.regions[k].polygonArea();
     if (progress && k % std::max(1, N / 10) == 0) progress(10 + 60 * k / N, "slice regions");
   }
-  // a region whose polygon has no area (every ray stopped at the seed) counts as
-  // empty: it would set no extent (with only such regions the pixel size would be 0 / resolution) and
-  // lie anywhere outside the raster
-  auto hasArea = [&](int k) { return !regions[k].empty() && std::abs(polyArea[k]) > 0; };
+  return R;
+}
+
+/// the raster shared by the slices: pixel size px, cols x rows pixels from the origin o
+struct SliceRaster {
+  double px = 0;
+  int cols = 0, rows = 0;
+  Eigen::Vector2d o;
+};
+
+/// The raster over the common box of the regions with area, one pixel of margin on each side, resolution
+/// pixels along its longer side. Throws InputError if no region has an area.
+SliceRaster sliceRaster(const SliceRegions& R, const Range& range, int resolution) {
+  const int N = int(R.regions.size());
   Eigen::Vector2d lo(1e300, 1e300), hi(-1e300, -1e300);
   int nonEmpty = 0;
   for (int k = 0; k < N; ++k) {
-    if (!hasArea(k)) continue;
+    if (!R.hasArea(k)) continue;
     ++nonEmpty;
-    for (const auto& q : regions[k].polygon) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
+    for (const auto& q : R.regions[k].polygon) lo = lo.cwiseMin(q), hi = hi.cwiseMax(q);
   }
   if (nonEmpty == 0) {
     std::ostringstream o;
@@ -330,52 +347,79 @@ SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p,
          "that the layer is the rib cage)";
     throw InputError(o.str());
   }
+  SliceRaster G;
   const double ext = std::max(hi.x() - lo.x(), hi.y() - lo.y());
-  res.pixel = ext / p.resolution;
-  const double px = res.pixel;
-  const int cols = int(std::ceil((hi.x() - lo.x()) / px)) + 2, rows = int(std::ceil((hi.y() - lo.y()) / px)) + 2;
-  const Eigen::Vector2d o = lo - Eigen::Vector2d(px, px);
+  G.px = ext / resolution;
+  const double px = G.px;
+  G.cols = int(std::ceil((hi.x() - lo.x()) / px)) + 2;
+  G.rows = int(std::ceil((hi.y() - lo.y()) / px)) + 2;
+  G.o = lo - Eigen::Vector2d(px, px);
+  return G;
+}
+
+/// Bridged slice k (a plane between two ribs, or through a missing or thin rib), between the slices with
+/// area below and above: its rasterised area, and its polygon's area in polygonArea. Its region is
+/// interpolated ray by ray: the boundary point on ray j moves linearly in z from the region below to the
+/// region above (both regions have the same K ray angles, so the point is the interpolated centroid plus the
+/// interpolated radius along the same direction: the bridged region is star-shaped like the others and lies
+/// in the slices' common box). A wall running straight between the two cuts is reproduced exactly, and the
+/// area follows the square of the interpolated radii, as a tapering section's area does (interpolating the
+/// area itself would be linear in z). The region is rasterised like the measured ones, so the raster and
+/// polygon volumes stay comparable.
+double bridgedArea(const SliceRegions& R, const std::vector<double>& z, int k, int below, int above,
+                   const SliceRaster& G, double& polygonArea) {
+  const auto& P0 = R.regions[below].polygon;
+  const auto& P1 = R.regions[above].polygon;
+  const double t = (z[k] - z[below]) / (z[above] - z[below]);
+  std::vector<Eigen::Vector2d> poly(P0.size());
+  for (std::size_t j = 0; j < poly.size(); ++j) poly[j] = (1 - t) * P0[j] + t * P1[j];
+  SliceRegion B;
+  B.polygon = std::move(poly);
+  polygonArea = B.polygonArea();
+  return double(rasterCount(B.polygon, G.o, G.px, G.cols, G.rows)) * G.px * G.px;
+}
+}  // namespace
+
+SliceResult sliceVolume(const Soup& s, const Range& range, const SliceParams& p, const Progress& progress) {
+  checkSliceParams(range, p);
+  SliceResult res;
+  const int N = std::max(1, int(std::ceil((range.zHi - range.zLo) / p.spacing - 1e-9)));
+  const double h = (range.zHi - range.zLo) / N;
+  res.spacingUsed = h;
+  res.slices = N;
+  res.z.resize(N);
+  for (int k = 0; k < N; ++k) res.z[k] = range.zLo + (k + 0.5) * h;
+  const SliceRegions R = sliceRegions(s, res.z, p.rays, progress);
+  const SliceRaster G = sliceRaster(R, range, p.resolution);
+  res.pixel = G.px;
+  const double px = G.px;
   res.area.assign(N, 0.0);
   res.bridged.assign(N, 0);
   int below = -1;  // the nearest slice with area below k
   for (int k = 0; k < N; ++k) {
-    const auto& r = regions[k];
-    if (!hasArea(k)) {
+    const auto& r = R.regions[k];
+    if (!R.hasArea(k)) {
       ++res.emptySlices;
       int above = k + 1;
-      while (above < N && !hasArea(above)) ++above;
+      while (above < N && !R.hasArea(above)) ++above;
       if (below < 0 || above >= N) {
         // beyond the last slice with area at either end of the range: nothing to interpolate, zero area
         ++res.endEmptySlices;
         continue;
       }
-      // Bridged slice (a plane between two ribs, or through a missing or thin rib). Its region is
-      // interpolated ray by ray: the boundary point on ray j moves linearly in z from the region below to
-      // the region above (both regions have the same K ray angles, so the point is the interpolated
-      // centroid plus the interpolated radius along the same direction: the bridged region is
-      // star-shaped like the others and lies in the slices' common box). A wall running straight between
-      // the two cuts is reproduced exactly, and the area follows the square of the interpolated radii,
-      // as a tapering section's area does (interpolating the area itself would be linear in z). The
-      // region is rasterised like the measured ones, so the raster and polygon volumes stay comparable.
-      const auto& P0 = regions[below].polygon;
-      const auto& P1 = regions[above].polygon;
-      const double t = (res.z[k] - res.z[below]) / (res.z[above] - res.z[below]);
-      std::vector<Eigen::Vector2d> poly(P0.size());
-      for (std::size_t j = 0; j < poly.size(); ++j) poly[j] = (1 - t) * P0[j] + t * P1[j];
-      SliceRegion B;
-      B.polygon = std::move(poly);
+      double polygonArea = 0;
       ++res.bridgedSlices;
       res.bridged[k] = 1;
-      res.area[k] = double(rasterCount(B.polygon, o, px, cols, rows)) * px * px;
+      res.area[k] = bridgedArea(R, res.z, k, below, above, G, polygonArea);
       res.volume += res.area[k] * h;
-      res.polygonVolume += B.polygonArea() * h;
+      res.polygonVolume += polygonArea * h;
       continue;
     }
     below = k;
     res.minCoverage = std::min(res.minCoverage, r.coverage());
-    res.area[k] = double(rasterCount(r.polygon, o, px, cols, rows)) * px * px;
+    res.area[k] = double(rasterCount(r.polygon, G.o, px, G.cols, G.rows)) * px * px;
     res.volume += res.area[k] * h;
-    res.polygonVolume += polyArea[k] * h;
+    res.polygonVolume += R.polyArea[k] * h;
     if (progress && k % std::max(1, N / 10) == 0) progress(70 + 30 * k / N, "rasterising");
   }
   return res;

@@ -181,158 +181,222 @@ struct DepthGuard {
   DepthGuard& operator=(const DepthGuard&) = delete;
 };
 
-}  // namespace
-
-Result optimize(const std::vector<Range>& ranges, const std::function<double(const std::vector<double>&)>& fitness,
-                const Options& opt, const std::vector<std::vector<double>>& seeds) {
+/// the inputs optimize() refuses: throws InternalError
+void checkInputs(const std::vector<Range>& ranges, const Options& opt, const std::vector<std::vector<double>>& seeds) {
   if (opt.population < 3) throw InternalError("MGA: population must be at least 3");
   if (ranges.empty()) throw InternalError("MGA: no design parameter");
   if (seeds.size() > std::size_t(opt.population)) throw InternalError("MGA: more seeds than the population");
   for (const auto& s : seeds)
     if (s.size() != ranges.size()) throw InternalError("MGA: a seed of the wrong size");
-  std::unique_ptr<Workspace> own;
-  Workspace& ws = tlDepth == 0 ? tlWorkspace : *(own = std::make_unique<Workspace>());
-  const DepthGuard depth;
-  Codec& codec = ws.codec;
+}
+
+/// the codec of the parameters' ranges: each range's substring length for the accuracy, packed after the
+/// previous one (throws InternalError for an empty range)
+void setUpCodec(Codec& codec, const std::vector<Range>& ranges, double accuracy) {
   codec.ranges.assign(ranges.begin(), ranges.end());
   codec.len.clear();
   codec.maxv.clear();
   codec.total = 0;
   for (const auto& r : ranges) {
     if (!(r.hi > r.lo)) throw InternalError("MGA: empty parameter range");
-    codec.len.push_back(substringLength(r.hi - r.lo, opt.accuracy));
+    codec.len.push_back(substringLength(r.hi - r.lo, accuracy));
     codec.maxv.push_back(double(std::uint64_t(1) << codec.len.back()) - 1.0);
     codec.total += codec.len.back();
   }
   codec.words = (codec.total + 63) / 64;
-  const std::size_t W = std::size_t(codec.words);
-  Xoshiro rng(opt.seed);
-  auto randomBits = [&](std::uint64_t* b) {
-    for (std::size_t w = 0; w < W; ++w) b[w] = rng() & codec.usedMask(int(w));
-  };
+}
 
-  // strings live in flat buffers (individual i at i * W): no allocation per generation
-  const std::size_t P = std::size_t(opt.population);
-  auto& pop = ws.pop;
-  auto& next = ws.next;
-  auto& best = ws.best;
-  pop.assign(P * W, 0);
-  next.assign(P * W, 0);
-  best.assign(W, 0);
-  auto ind = [&](std::vector<std::uint64_t>& buf, std::size_t i) { return buf.data() + i * W; };
-  auto& fit = ws.fit;
-  fit.assign(P, 0.0);
-  Result res;
-  if (opt.recordHistory) res.bestHistory.reserve(std::size_t(std::max(opt.maxGenerations, 0)));
-  // The fitness is a function of the string alone, and a micro-GA breeds many copies of the same
-  // string (crossover of near-identical parents, the converged population): each distinct string is
-  // evaluated once per run and looked up afterwards (strings of up to 64 bits; longer ones are not
-  // cached). The search itself - selection, crossover, restarts - is unchanged.
-  Memo& memo = ws.memo;
-  memo.reset();
-  const bool useMemo = W == 1;
-  auto& x = ws.x;
-  x.assign(ranges.size(), 0.0);
-  auto eval = [&](const std::uint64_t* b) {
-    double f = 0;
-    if (useMemo && memo.find(b[0], f)) {
-      ++res.cacheHits;
-      return f;
-    }
-    ++res.evaluations;
-    codec.decode(b, x);
-    f = fitness(x);
-    if (!std::isfinite(f)) f = -1e300;
-    if (useMemo) memo.insert(b[0], f);
-    return f;
-  };
+/// One run of the micro-GA on a workspace whose codec is set up. Strings live in the workspace's flat
+/// buffers (individual i at i * W): no allocation per generation.
+class Run {
+ public:
+  Run(Workspace& ws, const std::function<double(const std::vector<double>&)>& fitness, const Options& opt,
+      std::size_t parameters)
+      : codec_(ws.codec),
+        fitness_(fitness),
+        opt_(opt),
+        W_(std::size_t(ws.codec.words)),
+        P_(std::size_t(opt.population)),
+        rng_(opt.seed),
+        pop_(ws.pop),
+        next_(ws.next),
+        best_(ws.best),
+        fit_(ws.fit),
+        wheel_(ws.wheel),
+        x_(ws.x),
+        memo_(ws.memo),
+        useMemo_(W_ == 1),
+        cut_(1, std::max(1, ws.codec.total - 1)) {
+    pop_.assign(P_ * W_, 0);
+    next_.assign(P_ * W_, 0);
+    best_.assign(W_, 0);
+    fit_.assign(P_, 0.0);
+    if (opt.recordHistory) res_.bestHistory.reserve(std::size_t(std::max(opt.maxGenerations, 0)));
+    memo_.reset();
+    x_.assign(parameters, 0.0);
+    wheel_.assign(P_, 0.0);
+  }
 
-  for (std::size_t i = 0; i < P; ++i) randomBits(ind(pop, i));
-  for (std::size_t i = 0; i < seeds.size(); ++i) codec.encode(seeds[i], ind(pop, i));
-  for (std::size_t i = 0; i < P; ++i) fit[i] = eval(ind(pop, i));
-  std::size_t bestIdx = std::size_t(std::max_element(fit.begin(), fit.end()) - fit.begin());
-  std::copy_n(ind(pop, bestIdx), W, best.begin());
-  double bestFit = fit[bestIdx];
+  /// the first population: random strings, the seeds in the first places; its best is kept
+  void start(const std::vector<std::vector<double>>& seeds) {
+    for (std::size_t i = 0; i < P_; ++i) randomBits(ind(pop_, i));
+    for (std::size_t i = 0; i < seeds.size(); ++i) codec_.encode(seeds[i], ind(pop_, i));
+    for (std::size_t i = 0; i < P_; ++i) fit_[i] = eval(ind(pop_, i));
+    const std::size_t bestIdx = std::size_t(std::max_element(fit_.begin(), fit_.end()) - fit_.begin());
+    std::copy_n(ind(pop_, bestIdx), W_, best_.begin());
+    bestFit_ = fit_[bestIdx];
+  }
 
-  // roulette wheel (eq. 1-2) on fitness shifted to be positive: the cumulative sums, once per generation
-  auto& wheel = ws.wheel;
-  wheel.assign(P, 0.0);
-  auto buildWheel = [&] {
-    const double fmin = *std::min_element(fit.begin(), fit.end());
-    const double fmax = *std::max_element(fit.begin(), fit.end());
-    const double shift = fmin < 0 ? -fmin : 0.0;
-    const double eps = 1e-12 * (1.0 + std::abs(fmax));
-    double acc = 0;
-    for (std::size_t i = 0; i < P; ++i) wheel[i] = acc += fit[i] + shift + eps;
-  };
-  auto select = [&](void) -> std::size_t {
-    if (opt.selection == Selection::Tournament) {
-      std::uniform_int_distribution<std::size_t> pick(0, P - 1);
-      std::size_t w = pick(rng);
-      for (int t = 1; t < opt.tournamentSize; ++t) {
-        const std::size_t c = pick(rng);
-        if (fit[c] > fit[w]) w = c;
-      }
-      return w;
-    }
-    std::uniform_real_distribution<double> u(0.0, wheel[P - 1]);
-    const double r = u(rng);
-    for (std::size_t i = 0; i < P; ++i)
-      if (r <= wheel[i]) return i;
-    return P - 1;
-  };
-
-  std::uniform_int_distribution<int> cut(1, std::max(1, codec.total - 1));
-  for (int gen = 0; gen < opt.maxGenerations; ++gen) {
-    // Step 6: select parents (the elite is in the pool), one-point crossover with probability one
-    std::copy(best.begin(), best.end(), ind(next, 0));
-    if (opt.selection == Selection::Roulette) buildWheel();
-    for (std::size_t n = 1; n < P;) {
-      const std::uint64_t* a = ind(pop, select());
-      const std::uint64_t* b = ind(pop, select());
-      const int c = cut(rng);
-      std::uint64_t* c1 = ind(next, n++);
-      std::uint64_t* c2 = n < P ? ind(next, n++) : nullptr;
-      for (std::size_t w = 0; w < W; ++w) {
-        const std::uint64_t tail = codec.tailMask(int(w), c);
+  /// Step 6: select parents (the elite is in the pool), one-point crossover with probability one; the
+  /// children replace the population, the elite first
+  void breed() {
+    std::copy(best_.begin(), best_.end(), ind(next_, 0));
+    if (opt_.selection == Selection::Roulette) buildWheel();
+    for (std::size_t n = 1; n < P_;) {
+      const std::uint64_t* a = ind(pop_, select());
+      const std::uint64_t* b = ind(pop_, select());
+      const int c = cut_(rng_);
+      std::uint64_t* c1 = ind(next_, n++);
+      std::uint64_t* c2 = n < P_ ? ind(next_, n++) : nullptr;
+      for (std::size_t w = 0; w < W_; ++w) {
+        const std::uint64_t tail = codec_.tailMask(int(w), c);
         c1[w] = (a[w] & ~tail) | (b[w] & tail);
         if (c2) c2[w] = (b[w] & ~tail) | (a[w] & tail);
       }
     }
-    pop.swap(next);
-    fit[0] = bestFit;
-    for (std::size_t i = 1; i < P; ++i) fit[i] = eval(ind(pop, i));
-    for (std::size_t i = 1; i < P; ++i)
-      if (fit[i] > bestFit) {
-        bestFit = fit[i];
-        std::copy_n(ind(pop, i), W, best.begin());
-      }
-    res.generations = gen + 1;
-    if (opt.recordHistory) res.bestHistory.push_back(bestFit);
+    pop_.swap(next_);
+  }
 
-    // Step 7: nominal convergence -> restart around the kept best
+  /// the children's fitness (the elite keeps its own) and the best of them, recorded as generation `gen`
+  void evaluateChildren(int gen) {
+    fit_[0] = bestFit_;
+    for (std::size_t i = 1; i < P_; ++i) fit_[i] = eval(ind(pop_, i));
+    for (std::size_t i = 1; i < P_; ++i)
+      if (fit_[i] > bestFit_) {
+        bestFit_ = fit_[i];
+        std::copy_n(ind(pop_, i), W_, best_.begin());
+      }
+    res_.generations = gen + 1;
+    if (opt_.recordHistory) res_.bestHistory.push_back(bestFit_);
+  }
+
+  /// Step 7: nominal convergence, the population's bits differing from the best's below the fraction
+  bool converged() const {
     std::size_t differing = 0;
-    for (std::size_t i = 0; i < P; ++i)
-      for (std::size_t w = 0; w < W; ++w) differing += popcount(ind(pop, i)[w] ^ best[w]);
-    if (double(differing) < opt.convergedBitFraction * double(codec.total * int(P))) {
-      if (res.restarts >= opt.maxRestarts) break;
-      ++res.restarts;
-      std::copy(best.begin(), best.end(), ind(pop, 0));
-      fit[0] = bestFit;
-      for (std::size_t i = 1; i < P; ++i) {
-        randomBits(ind(pop, i));
-        fit[i] = eval(ind(pop, i));
-        if (fit[i] > bestFit) {
-          bestFit = fit[i];
-          std::copy_n(ind(pop, i), W, best.begin());
-        }
+    for (std::size_t i = 0; i < P_; ++i)
+      for (std::size_t w = 0; w < W_; ++w) differing += popcount(ind(pop_, i)[w] ^ best_[w]);
+    return double(differing) < opt_.convergedBitFraction * double(codec_.total * int(P_));
+  }
+
+  /// Step 7: a restart around the kept best, if restarts are left (else false)
+  bool restart() {
+    if (res_.restarts >= opt_.maxRestarts) return false;
+    ++res_.restarts;
+    std::copy(best_.begin(), best_.end(), ind(pop_, 0));
+    fit_[0] = bestFit_;
+    for (std::size_t i = 1; i < P_; ++i) {
+      randomBits(ind(pop_, i));
+      fit_[i] = eval(ind(pop_, i));
+      if (fit_[i] > bestFit_) {
+        bestFit_ = fit_[i];
+        std::copy_n(ind(pop_, i), W_, best_.begin());
       }
     }
+    return true;
   }
-  res.x.resize(ranges.size());
-  codec.decode(best.data(), res.x);
-  res.fitness = bestFit;
-  return res;
+
+  /// the result: the best string decoded, its fitness and the run's counts
+  Result finish() {
+    res_.x.resize(codec_.ranges.size());
+    codec_.decode(best_.data(), res_.x);
+    res_.fitness = bestFit_;
+    return std::move(res_);
+  }
+
+ private:
+  std::uint64_t* ind(std::vector<std::uint64_t>& buf, std::size_t i) const { return buf.data() + i * W_; }
+  void randomBits(std::uint64_t* b) {
+    for (std::size_t w = 0; w < W_; ++w) b[w] = rng_() & codec_.usedMask(int(w));
+  }
+  /// The fitness is a function of the string alone, and a micro-GA breeds many copies of the same string
+  /// (crossover of near-identical parents, the converged population): each distinct string is evaluated
+  /// once per run and looked up afterwards (strings of up to 64 bits; longer ones are not cached). The
+  /// search itself - selection, crossover, restarts - is unchanged.
+  double eval(const std::uint64_t* b) {
+    double f = 0;
+    if (useMemo_ && memo_.find(b[0], f)) {
+      ++res_.cacheHits;
+      return f;
+    }
+    ++res_.evaluations;
+    codec_.decode(b, x_);
+    f = fitness_(x_);
+    if (!std::isfinite(f)) f = -1e300;
+    if (useMemo_) memo_.insert(b[0], f);
+    return f;
+  }
+  /// roulette wheel (eq. 1-2) on fitness shifted to be positive: the cumulative sums, once per generation
+  void buildWheel() {
+    const double fmin = *std::min_element(fit_.begin(), fit_.end());
+    const double fmax = *std::max_element(fit_.begin(), fit_.end());
+    const double shift = fmin < 0 ? -fmin : 0.0;
+    const double eps = 1e-12 * (1.0 + std::abs(fmax));
+    double acc = 0;
+    for (std::size_t i = 0; i < P_; ++i) wheel_[i] = acc += fit_[i] + shift + eps;
+  }
+  /// a parent: by tournament, or on the roulette wheel
+  std::size_t select() {
+    if (opt_.selection == Selection::Tournament) {
+      std::uniform_int_distribution<std::size_t> pick(0, P_ - 1);
+      std::size_t w = pick(rng_);
+      for (int t = 1; t < opt_.tournamentSize; ++t) {
+        const std::size_t c = pick(rng_);
+        if (fit_[c] > fit_[w]) w = c;
+      }
+      return w;
+    }
+    std::uniform_real_distribution<double> u(0.0, wheel_[P_ - 1]);
+    const double r = u(rng_);
+    for (std::size_t i = 0; i < P_; ++i)
+      if (r <= wheel_[i]) return i;
+    return P_ - 1;
+  }
+
+  const Codec& codec_;
+  const std::function<double(const std::vector<double>&)>& fitness_;
+  const Options& opt_;
+  const std::size_t W_, P_;
+  Xoshiro rng_;
+  std::vector<std::uint64_t>& pop_;
+  std::vector<std::uint64_t>& next_;
+  std::vector<std::uint64_t>& best_;
+  std::vector<double>& fit_;
+  std::vector<double>& wheel_;
+  std::vector<double>& x_;
+  Memo& memo_;
+  const bool useMemo_;
+  std::uniform_int_distribution<int> cut_;
+  Result res_;
+  double bestFit_ = 0;
+};
+
+}  // namespace
+
+Result optimize(const std::vector<Range>& ranges, const std::function<double(const std::vector<double>&)>& fitness,
+                const Options& opt, const std::vector<std::vector<double>>& seeds) {
+  checkInputs(ranges, opt, seeds);
+  std::unique_ptr<Workspace> own;
+  Workspace& ws = tlDepth == 0 ? tlWorkspace : *(own = std::make_unique<Workspace>());
+  const DepthGuard depth;
+  setUpCodec(ws.codec, ranges, opt.accuracy);
+  Run run(ws, fitness, opt, ranges.size());
+  run.start(seeds);
+  for (int gen = 0; gen < opt.maxGenerations; ++gen) {
+    run.breed();
+    run.evaluateChildren(gen);
+    if (run.converged() && !run.restart()) break;
+  }
+  return run.finish();
 }
 
 }  // namespace pectus::mga

@@ -379,15 +379,11 @@ struct NodeSearch {
   }
 };
 
-/// thesis steps 3-7: the micro-GA inside each triangle around the node (a quad gives two), in the order
-/// of Options::elementSearch.
-void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, ElementSearch mode) {
-  static const std::vector<mga::Range> ranges{{0.0, 1.0}, {0.0, 0.5}};
-  static const std::vector<std::vector<double>> nodeSeed1{{0.0, 0.0}};
-  const Mesh& M = ns.M;
-  const int n = ns.n;
-  // the triangles of the node's elements: V1 = node, (V2, V3) in boundary order (buffers reused per thread)
-  thread_local std::vector<std::pair<int, int>> fan;
+/// a node's fan: the triangles of its elements as (V2, V3), V1 = node, in boundary order (a quad gives two)
+using Fan = std::vector<std::pair<int, int>>;
+
+/// the fan of node n (the buffer is reused)
+void gatherFan(const Mesh& M, int n, Fan& fan) {
   fan.clear();
   for (int ei : M.vE[std::size_t(n)]) {
     const Element& e = M.E[std::size_t(ei)];
@@ -400,23 +396,31 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
       fan.push_back({e.v[(k + 2) % 4], e.v[(k + 3) % 4]});
     }
   }
-  const int nf = int(fan.size());
-  // GuidedLocal on a star that starts valid: the micro-GA measures its candidates on the triangle's plane
-  // (no projection), and only each triangle's best is projected and measured on the surface; a folded or
-  // invalid star, which needs the surface normal at every candidate to unfold, is searched on the surface
-  const bool onPlane = mode == ElementSearch::GuidedLocal && ns.startFit >= 0;
-  // the micro-GA in fan triangle i, seeded with the node itself (r2 = 0) and, if given, with `toward`;
-  // returns its best (r1, r2)
-  thread_local std::vector<std::vector<double>> seeds2{{0.0, 0.0}, {0.0, 0.0}};
-  auto search = [&](int i, const std::array<double, 2>* toward = nullptr) {
-    const Vec3 V2 = M.X[std::size_t(fan[std::size_t(i)].first)];
-    const Vec3 V3 = M.X[std::size_t(fan[std::size_t(i)].second)];
+}
+
+/// The micro-GA in one triangle of a node's fan (thesis steps 3-7); its best is offered to the node's search.
+class FanSearch {
+ public:
+  /// onPlane: the candidates are measured on the triangle's plane with the node's normal (no projection),
+  /// only the triangle's best is projected and measured on the surface
+  FanSearch(NodeSearch& ns, const Fan& fan, const mga::Options& mo, std::uint64_t nodeSeed, bool onPlane)
+      : ns_(ns), fan_(fan), mo_(mo), nodeSeed_(nodeSeed), onPlane_(onPlane) {}
+
+  /// the micro-GA in fan triangle i, seeded with the node itself (r2 = 0) and, if given, with `toward`;
+  /// returns its best (r1, r2)
+  std::array<double, 2> operator()(int i, const std::array<double, 2>* toward = nullptr) {
+    static const std::vector<mga::Range> ranges{{0.0, 1.0}, {0.0, 0.5}};
+    static const std::vector<std::vector<double>> nodeSeed1{{0.0, 0.0}};
+    thread_local std::vector<std::vector<double>> seeds2{{0.0, 0.0}, {0.0, 0.0}};
+    NodeSearch& ns = ns_;
+    const Vec3 V2 = ns.M.X[std::size_t(fan_[std::size_t(i)].first)];
+    const Vec3 V3 = ns.M.X[std::size_t(fan_[std::size_t(i)].second)];
     auto candidate = [&](const std::vector<double>& r) {
       return (1 - r[1]) * ns.x0 + r[1] * (1 - r[0]) * V2 + r[0] * r[1] * V3;
     };
     auto fitness = [&](const std::vector<double>& r) {
       if (r[1] <= 0) return ns.startFit;  // r2 = 0: the node itself, exactly
-      if (onPlane) {  // the candidate where it lies, with the node's normal
+      if (onPlane_) {  // the candidate where it lies, with the node's normal
         ++ns.evaluations;
         return ns.fitness(candidate(r), ns.n0);
       }
@@ -424,19 +428,81 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
       Loc L;
       return ns.eval(candidate(r), P, L);
     };
-    mga::Options o = mo;
-    o.seed = mga::itemSeed(nodeSeed, std::uint64_t(i));
+    mga::Options o = mo_;
+    o.seed = mga::itemSeed(nodeSeed_, std::uint64_t(i));
     o.recordHistory = false;
     if (toward) seeds2[1] = {(*toward)[0], (*toward)[1]};
     const mga::Result r = mga::optimize(ranges, fitness, o, toward ? seeds2 : nodeSeed1);
-    if ((onPlane || r.fitness > ns.bestFit) && r.x[1] > 0) {
+    if ((onPlane_ || r.fitness > ns.bestFit) && r.x[1] > 0) {
       Vec3 P;
       Loc L;
       const Vec3 q = candidate(r.x);
       ns.offer(ns.eval(q, P, L), P, L, q);
     }
     return std::array<double, 2>{r.x[0], r.x[1]};
-  };
+  }
+
+ private:
+  NodeSearch& ns_;
+  const Fan& fan_;
+  const mga::Options& mo_;
+  std::uint64_t nodeSeed_;
+  bool onPlane_;
+};
+
+/// the centroid of the fan's corners other than the node, relative to the node
+Vec3 neighbourCentroid(const Mesh& M, const Fan& fan, const Vec3& x0) {
+  Vec3 c(0, 0, 0);
+  for (const auto& f : fan) c += M.X[std::size_t(f.first)] + M.X[std::size_t(f.second)];
+  return c / double(2 * fan.size()) - x0;
+}
+
+/// the first fan triangle whose sector (seen along the node's normal) holds the direction c (else 0)
+int sectorOf(const NodeSearch& ns, const Fan& fan, const Vec3& c) {
+  const int nf = int(fan.size());
+  for (int i = 0; i < nf; ++i) {
+    const Vec3 d2 = ns.M.X[std::size_t(fan[std::size_t(i)].first)] - ns.x0;
+    const Vec3 d3 = ns.M.X[std::size_t(fan[std::size_t(i)].second)] - ns.x0;
+    if (ns.n0.dot(d2.cross(c)) >= 0 && ns.n0.dot(c.cross(d3)) >= 0) return i;
+  }
+  return 0;
+}
+
+/// c as (r1, r2) of fan triangle i: c ~ a d2 + b d3 (least squares in the triangle's plane), r2 = a + b
+/// (at most 0.5, the search's range), r1 = b / (a + b): the point tangential relaxation would move to;
+/// (0, 0) if c is not ahead of the node in that triangle
+std::array<double, 2> seedToward(const NodeSearch& ns, const Fan& fan, int i, const Vec3& c) {
+  std::array<double, 2> toward{0.0, 0.0};
+  const Vec3 d2 = ns.M.X[std::size_t(fan[std::size_t(i)].first)] - ns.x0;
+  const Vec3 d3 = ns.M.X[std::size_t(fan[std::size_t(i)].second)] - ns.x0;
+  const double g22 = d2.dot(d2), g23 = d2.dot(d3), g33 = d3.dot(d3), det = g22 * g33 - g23 * g23;
+  if (det > 1e-12 * g22 * g33) {
+    const double a = std::max(0.0, (g33 * d2.dot(c) - g23 * d3.dot(c)) / det);
+    const double b = std::max(0.0, (g22 * d3.dot(c) - g23 * d2.dot(c)) / det);
+    if (a + b > 0) toward = {b / (a + b), std::min(a + b, 0.5)};
+  }
+  return toward;
+}
+
+/// the other fan triangle than i with the edge (node, v); -1 if none
+int across(const Fan& fan, int i, int v) {
+  const int nf = int(fan.size());
+  for (int j = 0; j < nf; ++j)
+    if (j != i && (fan[std::size_t(j)].first == v || fan[std::size_t(j)].second == v)) return j;
+  return -1;
+}
+
+/// thesis steps 3-7: the micro-GA inside each triangle around the node (a quad gives two), in the order
+/// of Options::elementSearch.
+void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, ElementSearch mode) {
+  thread_local Fan fan;  // buffers reused per thread
+  gatherFan(ns.M, ns.n, fan);
+  const int nf = int(fan.size());
+  // GuidedLocal on a star that starts valid: the micro-GA measures its candidates on the triangle's plane
+  // (no projection), and only each triangle's best is projected and measured on the surface; a folded or
+  // invalid star, which needs the surface normal at every candidate to unfold, is searched on the surface
+  const bool onPlane = mode == ElementSearch::GuidedLocal && ns.startFit >= 0;
+  FanSearch search(ns, fan, mo, nodeSeed, onPlane);
   if (mode == ElementSearch::Every || nf < 2) {
     for (int i = 0; i < nf; ++i) search(i);
     return;
@@ -444,44 +510,16 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
   // Guided: start in the triangle whose sector (seen along the node's normal) holds the direction to
   // the centroid of the node's neighbours, with the centroid as a second seed there; while the best
   // point of a triangle lies on one of its two edges through the node (r1 within kEdgeR1 of 0 or 1), go
-  // on into the triangle across that edge; stop at an optimum inside a triangle. A triangle where no move gains (r2 ~ 0) sends the search to every
-  // triangle, as the thesis does (GuidedLocal: only if the star starts folded or invalid; else the
-  // search ends there).
+  // on into the triangle across that edge; stop at an optimum inside a triangle. A triangle where no move gains
+  // (r2 ~ 0) sends the search to every triangle, as the thesis does (GuidedLocal: only if the star starts folded or
+  // invalid; else the search ends there).
   constexpr double kEdgeR1 = 0.05;
-  Vec3 c(0, 0, 0);
-  for (const auto& f : fan) c += M.X[std::size_t(f.first)] + M.X[std::size_t(f.second)];
-  c = c / double(2 * nf) - ns.x0;
-  int cur = 0;
-  for (int i = 0; i < nf; ++i) {
-    const Vec3 d2 = M.X[std::size_t(fan[std::size_t(i)].first)] - ns.x0;
-    const Vec3 d3 = M.X[std::size_t(fan[std::size_t(i)].second)] - ns.x0;
-    if (ns.n0.dot(d2.cross(c)) >= 0 && ns.n0.dot(c.cross(d3)) >= 0) {
-      cur = i;
-      break;
-    }
-  }
-  // the centroid as (r1, r2) of the start triangle: c ~ a d2 + b d3 (least squares in the triangle's
-  // plane), r2 = a + b (at most 0.5, the search's range), r1 = b / (a + b): the point tangential
-  // relaxation would move to, as a second seed of the start triangle's micro-GA
-  std::array<double, 2> towardC{0.0, 0.0};
-  {
-    const Vec3 d2 = M.X[std::size_t(fan[std::size_t(cur)].first)] - ns.x0;
-    const Vec3 d3 = M.X[std::size_t(fan[std::size_t(cur)].second)] - ns.x0;
-    const double g22 = d2.dot(d2), g23 = d2.dot(d3), g33 = d3.dot(d3), det = g22 * g33 - g23 * g23;
-    if (det > 1e-12 * g22 * g33) {
-      const double a = std::max(0.0, (g33 * d2.dot(c) - g23 * d3.dot(c)) / det);
-      const double b = std::max(0.0, (g22 * d3.dot(c) - g23 * d2.dot(c)) / det);
-      if (a + b > 0) towardC = {b / (a + b), std::min(a + b, 0.5)};
-    }
-  }
+  const Vec3 c = neighbourCentroid(ns.M, fan, ns.x0);
+  int cur = sectorOf(ns, fan, c);
+  const std::array<double, 2> towardC = seedToward(ns, fan, cur, c);
   const std::array<double, 2>* toward = towardC[1] > 0 ? &towardC : nullptr;
   thread_local std::vector<char> done;
   done.assign(std::size_t(nf), 0);
-  auto across = [&](int i, int v) {  // the other fan triangle with the edge (node, v)
-    for (int j = 0; j < nf; ++j)
-      if (j != i && (fan[std::size_t(j)].first == v || fan[std::size_t(j)].second == v)) return j;
-    return -1;
-  };
   while (cur >= 0 && !done[std::size_t(cur)]) {
     done[std::size_t(cur)] = 1;
     const auto x = search(cur, toward);
@@ -492,47 +530,55 @@ void searchMga(NodeSearch& ns, const mga::Options& mo, std::uint64_t nodeSeed, E
           if (!done[std::size_t(i)]) search(i);
       return;
     }
-    cur = x[0] < kEdgeR1 ? across(cur, fan[std::size_t(cur)].first)
-        : x[0] > 1 - kEdgeR1 ? across(cur, fan[std::size_t(cur)].second) : -1;
+    cur = x[0] < kEdgeR1 ? across(fan, cur, fan[std::size_t(cur)].first)
+        : x[0] > 1 - kEdgeR1 ? across(fan, cur, fan[std::size_t(cur)].second) : -1;
   }
 }
 
-/// the baseline: Polak-Ribiere conjugate gradient ascent in the node's tangent plane (u, v)
-void searchGradient(NodeSearch& ns, int iterations) {
-  const Mesh& M = ns.M;
-  // local parametric frame: tangent plane at the node, unit = mean edge length to its element neighbours
+/// The node's tangent plane as a local parametric frame: (u, v) -> x0 + h (u e1 + v e2), h the mean edge
+/// length to the node's element neighbours. The fitness there is of the surface point nearest to the
+/// frame's point, and each point measured is offered to the node's search.
+struct TangentPlane {
+  NodeSearch& ns;
   double h = 0;
-  int cnt = 0;
-  Vec3 ref(0, 0, 0);
-  for (int ei : M.vE[std::size_t(ns.n)]) {
-    const Element& e = M.E[std::size_t(ei)];
-    for (int k = 0; k < e.nv; ++k)
-      if (e.v[k] != ns.n) {
-        const Vec3 d = M.X[std::size_t(e.v[k])] - ns.x0;
-        h += d.norm();
-        ++cnt;
-        if (ref.squaredNorm() == 0) ref = d;
-      }
+  Vec3 e1, e2;
+
+  /// the frame at the node; false if the node has no neighbour or no tangent direction
+  bool build() {
+    const Mesh& M = ns.M;
+    int cnt = 0;
+    Vec3 ref(0, 0, 0);
+    for (int ei : M.vE[std::size_t(ns.n)]) {
+      const Element& e = M.E[std::size_t(ei)];
+      for (int k = 0; k < e.nv; ++k)
+        if (e.v[k] != ns.n) {
+          const Vec3 d = M.X[std::size_t(e.v[k])] - ns.x0;
+          h += d.norm();
+          ++cnt;
+          if (ref.squaredNorm() == 0) ref = d;
+        }
+    }
+    if (cnt == 0 || !(h > 0)) return false;
+    h /= cnt;
+    e1 = ref - ns.n0.dot(ref) * ns.n0;
+    if (!(e1.norm() > 1e-12 * h)) return false;
+    e1.normalize();
+    e2 = ns.n0.cross(e1);
+    return true;
   }
-  if (cnt == 0 || !(h > 0)) return;
-  h /= cnt;
-  Vec3 e1 = ref - ns.n0.dot(ref) * ns.n0;
-  if (!(e1.norm() > 1e-12 * h)) return;
-  e1.normalize();
-  const Vec3 e2 = ns.n0.cross(e1);
-  auto point = [&](const Eigen::Vector2d& p) { return Vec3(ns.x0 + h * (p.x() * e1 + p.y() * e2)); };
-  Eigen::Vector2d p(0, 0);          // current point (the node: u = v = 0)
-  double fp = ns.startFit;
-  auto f = [&](const Eigen::Vector2d& x) {
+  Vec3 point(const Eigen::Vector2d& p) const { return Vec3(ns.x0 + h * (p.x() * e1 + p.y() * e2)); }
+  double operator()(const Eigen::Vector2d& x) const {
     Vec3 P;
     Loc L;
     const Vec3 q = point(x);
     const double v = ns.eval(q, P, L);
     ns.offer(v, P, L, q);
     return v;
-  };
-  const double delta = 1e-5;
-  auto grad = [&](const Eigen::Vector2d& x) {
+  }
+  /// the gradient by central differences
+  Eigen::Vector2d grad(const Eigen::Vector2d& x) const {
+    const double delta = 1e-5;
+    const TangentPlane& f = *this;
     Eigen::Vector2d g;
     for (int i = 0; i < 2; ++i) {
       Eigen::Vector2d a = x, b = x;
@@ -541,49 +587,69 @@ void searchGradient(NodeSearch& ns, int iterations) {
       g[i] = (f(a) - f(b)) / (2 * delta);
     }
     return g;
-  };
-  Eigen::Vector2d g = grad(p), d = g;
+  }
+};
+
+/// Line search along d from p (fitness fp): steps of at most half an edge length (amax), halved until
+/// better; the best step and its fitness in (bestA, bestF), bestA = 0 if none gains.
+void halvingSteps(const TangentPlane& f, const Eigen::Vector2d& p, const Eigen::Vector2d& d, double amax, double fp,
+                  double& bestA, double& bestF) {
+  bestA = 0;
+  bestF = fp;
+  for (int k = 0; k < 10; ++k) {
+    const double a = amax * std::ldexp(1.0, -k);
+    const double fa = f(p + a * d);
+    if (fa > bestF) {
+      bestF = fa;
+      bestA = a;
+    } else if (bestA > 0) {
+      break;  // got worse again after an improvement: bracketed
+    }
+  }
+}
+
+/// The line search's refinement: a parabola through (a/2, a, 2a) where available; (bestA, bestF) become the
+/// best of those points and the parabola's vertex.
+void parabolaStep(const TangentPlane& f, const Eigen::Vector2d& p, const Eigen::Vector2d& d, double amax, double& bestA,
+                  double& bestF) {
+  const double a0 = bestA * 0.5, a2 = std::min(bestA * 2, amax);
+  if (!(a2 > bestA)) return;
+  const double f0 = f(p + a0 * d), f2 = f(p + a2 * d);
+  // concave through (a0, f0), (a, f), (a2, f2) (second divided difference < 0): try its vertex
+  if ((f2 - bestF) / (a2 - bestA) - (bestF - f0) / (bestA - a0) < 0) {
+    const double num = (bestA - a0) * (bestA - a0) * (bestF - f2) - (bestA - a2) * (bestA - a2) * (bestF - f0);
+    const double dd = (bestA - a0) * (bestF - f2) - (bestA - a2) * (bestF - f0);
+    if (dd != 0) {
+      const double av = bestA - 0.5 * num / dd;
+      if (av > 0 && av <= amax) {
+        const double fv = f(p + av * d);
+        if (fv > bestF) bestF = fv, bestA = av;
+      }
+    }
+  }
+  if (f0 > bestF) bestF = f0, bestA = a0;
+  if (f2 > bestF) bestF = f2, bestA = a2;
+}
+
+/// the baseline: Polak-Ribiere conjugate gradient ascent in the node's tangent plane (u, v)
+void searchGradient(NodeSearch& ns, int iterations) {
+  TangentPlane f{ns};
+  if (!f.build()) return;
+  Eigen::Vector2d p(0, 0);  // current point (the node: u = v = 0)
+  double fp = ns.startFit;
+  Eigen::Vector2d g = f.grad(p), d = g;
   for (int it = 0; it < iterations; ++it) {
     const double dn = d.norm();
     if (!(dn > 1e-9) || !g.allFinite()) break;
     // line search along d: steps of at most half an edge length, halved until better, then a parabola
     const double amax = 0.5 / dn;
-    double bestA = 0, bestF = fp;
-    for (int k = 0; k < 10; ++k) {
-      const double a = amax * std::ldexp(1.0, -k);
-      const double fa = f(p + a * d);
-      if (fa > bestF) {
-        bestF = fa;
-        bestA = a;
-      } else if (bestA > 0) {
-        break;  // got worse again after an improvement: bracketed
-      }
-    }
+    double bestA, bestF;
+    halvingSteps(f, p, d, amax, fp, bestA, bestF);
     if (bestA <= 0) break;
-    {
-      // parabola through (a/2, a, 2a) where available
-      const double a0 = bestA * 0.5, a2 = std::min(bestA * 2, amax);
-      if (a2 > bestA) {
-        const double f0 = f(p + a0 * d), f2 = f(p + a2 * d);
-        // concave through (a0, f0), (a, f), (a2, f2) (second divided difference < 0): try its vertex
-        if ((f2 - bestF) / (a2 - bestA) - (bestF - f0) / (bestA - a0) < 0) {
-          const double num = (bestA - a0) * (bestA - a0) * (bestF - f2) - (bestA - a2) * (bestA - a2) * (bestF - f0);
-          const double dd = (bestA - a0) * (bestF - f2) - (bestA - a2) * (bestF - f0);
-          if (dd != 0) {
-            const double av = bestA - 0.5 * num / dd;
-            if (av > 0 && av <= amax) {
-              const double fv = f(p + av * d);
-              if (fv > bestF) bestF = fv, bestA = av;
-            }
-          }
-        }
-        if (f0 > bestF) bestF = f0, bestA = a0;
-        if (f2 > bestF) bestF = f2, bestA = a2;
-      }
-    }
+    parabolaStep(f, p, d, amax, bestA, bestF);
     p += bestA * d;
     fp = bestF;
-    const Eigen::Vector2d gn = grad(p);
+    const Eigen::Vector2d gn = f.grad(p);
     const double beta = std::max(0.0, gn.dot(gn - g) / std::max(g.squaredNorm(), 1e-300));  // Polak-Ribiere+
     d = gn + beta * d;
     if (d.dot(gn) <= 0) d = gn;  // not an ascent direction: restart with the gradient

@@ -11,20 +11,14 @@
 #include <sstream>
 
 #include "pectus/errors.h"
+#include "pectus/format.h"
+#include "pectus/union_find.h"
 #include "pectus/mesh_checks.h"
 
 namespace pectus::nuss {
 
 using Eigen::Vector3d;
 using Clock = std::chrono::steady_clock;
-
-std::string fixedText(double v, int precision) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(precision);
-  s << v;
-  return s.str();
-}
 
 namespace {
 
@@ -33,11 +27,6 @@ double since(Clock::time_point t0) { return std::chrono::duration<double>(Clock:
 std::string mm(double v, int prec = 1) { return fixedText(v, prec); }
 
 std::string pointText(const Vector3d& p) { return "(" + mm(p.x()) + ", " + mm(p.y()) + ", " + mm(p.z()) + ") mm"; }
-
-int find(std::vector<int>& parent, int a) {
-  while (parent[a] != a) a = parent[a] = parent[parent[a]];
-  return a;
-}
 
 }  // namespace
 
@@ -80,8 +69,7 @@ CageSurface cageFromMesh(const CMeshO& m) {
                      "(Cleaning: Remove Duplicate Faces); a closed surface has each face once.");
   // weld micro-edges (shorter than 1e-3 x the mean edge length: marching-cubes / STL slivers that
   // TetGen cannot mesh) by collapsing them; faces that become degenerate or doubled are dropped
-  std::vector<int> parent(m.vert.size());
-  std::iota(parent.begin(), parent.end(), 0);
+  UnionFind sets(m.vert.size());
   double sum = 0;
   std::size_t ne = 0;
   for (const auto& F : m.face)
@@ -92,7 +80,7 @@ CageSurface cageFromMesh(const CMeshO& m) {
     if (!F.IsD())
       for (int k = 0; k < 3; ++k)
         if (vcg::Distance(F.cP(k), F.cP((k + 1) % 3)) < tol)
-          parent[find(parent, int(vcg::tri::Index(m, F.cV(k))))] = find(parent, int(vcg::tri::Index(m, F.cV((k + 1) % 3))));
+          sets.unite(int(vcg::tri::Index(m, F.cV(k))), int(vcg::tri::Index(m, F.cV((k + 1) % 3))));
   // vertices no live face references (left by deleting faces, or by a segmentation tool) are dropped:
   // TetGen would keep them as nodes without elements, and the stiffness would be singular there
   std::vector<char> used(m.vert.size(), 0);
@@ -104,7 +92,7 @@ CageSurface cageFromMesh(const CMeshO& m) {
   for (size_t i = 0; i < m.vert.size(); ++i) {
     if (m.vert[i].IsD()) continue;
     if (!used[i]) { ++c.unreferencedVertices; continue; }
-    const int r = find(parent, int(i));
+    const int r = sets.find(int(i));
     if (compact[r] < 0) {
       compact[r] = static_cast<int>(c.surface.V.size());
       const auto& p = m.vert[r].cP();
@@ -113,7 +101,7 @@ CageSurface cageFromMesh(const CMeshO& m) {
   }
   c.nodeOfVertex.assign(m.vert.size(), -1);
   for (size_t i = 0; i < m.vert.size(); ++i)
-    if (!m.vert[i].IsD() && used[i]) c.nodeOfVertex[i] = compact[find(parent, int(i))];
+    if (!m.vert[i].IsD() && used[i]) c.nodeOfVertex[i] = compact[sets.find(int(i))];
   std::map<std::array<int, 3>, int> seen;  // sorted vertex triple -> count
   std::vector<std::array<int, 3>> faces;
   std::vector<int> tissue, part;
@@ -402,14 +390,13 @@ std::string slivers(const Analysis& a) {
 
 // connected components of the tet mesh; every one must hold a fixed node
 int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, const std::vector<int>& fixedNodes) {
-  std::vector<int> parent(mesh.numNodes());
-  std::iota(parent.begin(), parent.end(), 0);
+  UnionFind sets(std::size_t(mesh.numNodes()));
   for (const auto& t : mesh.tets)
-    for (int k = 1; k < mesh.nodesPerTet(); ++k) parent[find(parent, t[k])] = find(parent, t[0]);
+    for (int k = 1; k < mesh.nodesPerTet(); ++k) sets.unite(t[k], t[0]);
   std::map<int, int> fixedIn;
-  for (int n : fixedNodes) fixedIn[find(parent, n)]++;
+  for (int n : fixedNodes) fixedIn[sets.find(n)]++;
   std::map<int, int> compTet;
-  for (int t = 0; t < mesh.numTets(); ++t) compTet.emplace(find(parent, mesh.tets[t][0]), t);
+  for (int t = 0; t < mesh.numTets(); ++t) compTet.emplace(sets.find(mesh.tets[t][0]), t);
   for (const auto& [root, t] : compTet)
     if (!fixedIn.count(root))
       throw TopologyError("A part of the model is not held by any costovertebral joint or the vertebral column (the connected piece containing the " +
@@ -417,8 +404,7 @@ int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, co
                        "): the system would be singular. Connect it to the cage, remove it, or add its joint landmark.");
   // pieces that hang on the rest by a node or an edge only (tets sharing no face with it) turn about that
   // hinge freely: every piece of face-connected tets needs a fixed node of its own
-  std::vector<int> tp(mesh.tets.size());
-  std::iota(tp.begin(), tp.end(), 0);
+  UnionFind tp(mesh.tets.size());
   std::map<std::array<int, 3>, int> faceTet;
   static const int kFaces[4][3] = {{1, 2, 3}, {0, 2, 3}, {0, 1, 3}, {0, 1, 2}};
   for (int t = 0; t < mesh.numTets(); ++t)
@@ -426,19 +412,19 @@ int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, co
       std::array<int, 3> key{mesh.tets[t][f[0]], mesh.tets[t][f[1]], mesh.tets[t][f[2]]};
       std::sort(key.begin(), key.end());
       const auto [it, fresh] = faceTet.emplace(key, t);
-      if (!fresh) tp[find(tp, t)] = find(tp, it->second);
+      if (!fresh) tp.unite(t, it->second);
     }
   std::vector<char> fixed(mesh.numNodes(), 0);
   for (int n : fixedNodes) fixed[n] = 1;
   std::map<int, bool> held;
   for (int t = 0; t < mesh.numTets(); ++t) {
-    bool& h = held[find(tp, t)];
+    bool& h = held[tp.find(t)];
     for (int k = 0; k < mesh.nodesPerTet(); ++k) h = h || fixed[mesh.tets[t][k]];
   }
   for (const auto& [root, h] : held)
     if (!h) {
       int n = 0;
-      for (int t = 0; t < mesh.numTets(); ++t) n += find(tp, t) == root;
+      for (int t = 0; t < mesh.numTets(); ++t) n += tp.find(t) == root;
       throw TopologyError("A piece of the model (" + std::to_string(n) + " tets of the " + partName(mesh.tissue[root], tetPart[root]) +
                        " near " + pointText(mesh.centroid(root)) +
                        ") hangs on the rest by a single node or edge, no tet face: it turns freely about it and the system "

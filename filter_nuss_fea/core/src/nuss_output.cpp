@@ -8,6 +8,7 @@
 #include <vcg/complex/algorithms/update/normal.h>
 
 #include "pectus/errors.h"
+#include "pectus/format.h"
 
 namespace pectus::nuss {
 

@@ -262,10 +262,6 @@ std::vector<char> supportAndLoadNodes(const Analysis& a);
 /// Whether tet t of m has a node flagged in `nodes`
 bool touches(const fe::TetMesh& m, int t, const std::vector<char>& nodes);
 
-/// `v` with `precision` decimals in the classic locale ("47.83"), whatever the host's C locale: the
-/// figures of the messages and of the files' headings.
-std::string fixedText(double v, int precision);
-
 /// "right rib 5", "left costal cartilage 3", "sternum body", ...
 std::string partName(int tissue, int part);
 

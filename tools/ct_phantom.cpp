@@ -26,6 +26,7 @@
 #include "pectus/phantom/ct_phantom_core.h"
 #include "pectus/patient/label_volume.h"
 #include "pectus/errors.h"
+#include "pectus/format.h"
 
 using namespace pectus;
 using namespace pectus::phantom;
@@ -93,12 +94,7 @@ patient::LabelVolume maskOf(const patient::LabelVolume& v, const std::function<b
   return m;
 }
 
-std::string fmt(double x) {
-  std::ostringstream s;
-  s.precision(10);
-  s << x;
-  return s.str();
-}
+std::string fmt(double x) { return pectus::significantText(x, 10); }
 
 struct Args {
   PhantomParams p;

@@ -19,8 +19,9 @@
 #include <CGAL/Exact_predicates_inexact_constructions_kernel.h>
 #include <vcg/complex/allocate.h>
 
-#include "pectus/ribcage/mesh_simplify.h"
+#include "pectus/mesh_simplify.h"
 #include "pectus/errors.h"
+#include "pectus/format.h"
 #include "pectus/patient/shape_classify.h"
 #include "pectus/patient/solid_grid.h"
 #include "pectus/patient/soup.h"
@@ -32,13 +33,7 @@ namespace {
 using Vec3 = Eigen::Vector3d;
 using Mat3 = Eigen::Matrix3d;
 
-std::string mm(double v, int digits = 1) {
-  std::ostringstream s;
-  s.setf(std::ios::fixed);
-  s.precision(digits);
-  s << v;
-  return s.str();
-}
+std::string mm(double v, int digits = 1) { return fixedText(v, digits); }
 std::string at(const Vec3& p) { return "(" + mm(p.x()) + ", " + mm(p.y()) + ", " + mm(p.z()) + ")"; }
 std::string sideName(int side) { return side == 2 ? "left" : "right"; }
 
@@ -1146,10 +1141,10 @@ void Preparation::decimate(OwnedMesh& joinedSurface, CMeshO& cage) {
   // in two stages: a retry (where a collapse made faces cross) starts again from its stage's input, so the first
   // stage, from the union's hundreds of thousands of faces, goes to a fine edge where it rarely needs one
   if (4 * target < cage.fn) {
-    ribcage::decimateEmbedded(cage, 4 * target, opt.edgeLength / 2);
+    decimateEmbedded(cage, 4 * target, opt.edgeLength / 2);
     vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
   }
-  ribcage::decimateEmbedded(cage, target, opt.edgeLength);
+  decimateEmbedded(cage, target, opt.edgeLength);
   vcg::tri::Allocator<CMeshO>::CompactEveryVector(cage);
   // Quadric decimation keeps short edges where the surface turns sharply: the cut ends of the ribs at the
   // costovertebral joints, the tissue junctions. TetGen grades its tets down to them, which adds tets and,

@@ -10,8 +10,9 @@
 #include <vcg/complex/algorithms/clean.h>
 
 #include "pectus/ribcage/marching_tets.h"
-#include "pectus/ribcage/mesh_simplify.h"
+#include "pectus/mesh_simplify.h"
 #include "pectus/errors.h"
+#include "pectus/format.h"
 #include "pectus/ribcage/ribcage_model.h"
 #include "pectus/surface_cmesh.h"
 
@@ -22,12 +23,7 @@ using Vec3 = Eigen::Vector3d;
 using Clock = std::chrono::steady_clock;
 double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(4);
-  s << v;
-  return s.str();
-}
+std::string num(double v) { return significantText(v, 4); }
 [[noreturn]] void bad(const std::string& name, const std::string& range, double got, const std::string& why = "") {
   throw InputError("parameter '" + name + "' must be " + range + ", got " + num(got) + (why.empty() ? "" : " (" + why + ")"));
 }

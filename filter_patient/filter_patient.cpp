@@ -1,6 +1,7 @@
-// MeshLab adapter of the patient-data core (patient/): 'Import CT Segmentation' and 'Prepare Patient Rib
-// Cage'. Maps parameters, files, the visible layers, progress and errors; every decision is in patient/.
-#include "filter_nuss_fea.h"
+// MeshLab adapter of the patient-data core (core/: pectus/patient): 'Import CT Segmentation' and 'Prepare
+// Patient Rib Cage'. Maps parameters, files, the visible layers, progress, errors and results; every decision
+// is in the core.
+#include "filter_patient.h"
 
 #include <chrono>
 
@@ -8,22 +9,23 @@
 #include <vcg/complex/append.h>
 
 #include "pectus/errors.h"
+#include "pectus/format.h"
 #include "pectus/labels.h"
 #include "pectus/patient/ct_import.h"
 #include "pectus/patient/prepare.h"
 
 using pectus::ml::FilterContext;
 using pectus::ml::fmt;
+using pectus::ml::num;
 using pectus::ml::addFloat;
 using pectus::ml::addInt;
 
 namespace {
 using pectus::patient::kEdgeLengthRange;
 using pectus::patient::kMinEdgeLength;
-std::string num(double v) { return QString::number(v).toStdString(); }
 }  // namespace
 
-void FilterNussFeaPlugin::addPatientFilters() {
+FilterPatientPlugin::FilterPatientPlugin() {
   pectus::ml::FilterSpec c;
   c.id = FP_IMPORT_CT;
   c.name = "Import CT Segmentation";
@@ -95,7 +97,20 @@ void FilterNussFeaPlugin::addPatientFilters() {
   addFilter(this, s);
 }
 
-void FilterNussFeaPlugin::initPreparePatient(RichParameterList& par) {
+void FilterPatientPlugin::initParameters(int id, const MeshDocument&, RichParameterList& par) {
+  if (id == FP_IMPORT_CT) initImportCt(par);
+  if (id == FP_PREPARE_PATIENT) initPreparePatient(par);
+}
+
+void FilterPatientPlugin::run(int id, FilterContext& ctx) {
+  switch (id) {
+    case FP_IMPORT_CT: runImportCt(ctx); break;
+    case FP_PREPARE_PATIENT: runPreparePatient(ctx); break;
+    default: throw std::logic_error("unknown filter id");
+  }
+}
+
+void FilterPatientPlugin::initPreparePatient(RichParameterList& par) {
   const pectus::patient::PrepareOptions d;
   par.addParam(RichEnum("units", 0, QStringList() << "Automatic" << "Millimetres" << "Centimetres" << "Metres", "Units",
                         "Units of the input layers. Automatic: from the size of the whole (a rib cage spans 150-700 mm): "
@@ -115,7 +130,7 @@ void FilterNussFeaPlugin::initPreparePatient(RichParameterList& par) {
            "the surface follows the input's faces. Smaller: finer features kept, more time and memory.",
            pectus::patient::kGridStepRange);
   addFloat(par, "edgeLength", d.edgeLength, "Target edge length (mm)",
-           "The joined surface is decimated to this edge length; 0 keeps every face, else " + QString::number(kMinEdgeLength) + " mm at least. The FE analysis's "
+           "The joined surface is decimated to this edge length; 0 keeps every face, else " + num(kMinEdgeLength) + " mm at least. The FE analysis's "
            "time and memory grow with the cube of 1/edge: 4 mm suits it, 2 mm shows the anatomy finer.",
            kEdgeLengthRange);
   par.addParam(RichEnum("spine", int(d.spine),
@@ -130,7 +145,7 @@ void FilterNussFeaPlugin::initPreparePatient(RichParameterList& par) {
                           "automatic landmark of its code."));
 }
 
-void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
+void FilterPatientPlugin::runPreparePatient(FilterContext& ctx) {
   pectus::patient::PrepareOptions o;
   o.units = pectus::patient::Units(ctx.enumIn("units", 4));
   o.frame = pectus::patient::FrameMode(ctx.enumIn("frame", 4));
@@ -138,8 +153,8 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
   o.gridStep = ctx.floatIn("gridStep");
   o.edgeLength = ctx.floatIn("edgeLength");
   if (o.edgeLength > 0 && o.edgeLength < kMinEdgeLength)
-    throw pectus::InputError("parameter 'edgeLength' (Target edge length) must be 0 or " + num(kMinEdgeLength) + "-" +
-                             num(kEdgeLengthRange.hi) + " mm, got " + fmt(o.edgeLength));
+    throw pectus::InputError("parameter 'edgeLength' (Target edge length) must be 0 or " + pectus::significantText(kMinEdgeLength) +
+                             "-" + pectus::significantText(kEdgeLengthRange.hi) + " mm, got " + fmt(o.edgeLength));
   o.spine = pectus::patient::SpineMode(ctx.enumIn("spine", 2));
   const std::string pp = ctx.string("pickedPoints").trimmed().toStdString();
   if (!pp.empty()) {
@@ -213,7 +228,7 @@ void FilterNussFeaPlugin::runPreparePatient(FilterContext& ctx) {
   res.set("seconds", r.seconds);
 }
 
-void FilterNussFeaPlugin::initImportCt(RichParameterList& par) {
+void FilterPatientPlugin::initImportCt(RichParameterList& par) {
   par.addParam(RichString("path", "", "Path (file or folder)",
                           "A segmentation file (.stl, .obj, .ply, .off, .nii, .nii.gz) or a folder of them (every such "
                           "file in it, in name order). Absolute, or relative to the working folder."));
@@ -228,7 +243,7 @@ void FilterNussFeaPlugin::initImportCt(RichParameterList& par) {
          "1 keeps every label present.", pectus::patient::kMinVoxelsRange);
 }
 
-void FilterNussFeaPlugin::runImportCt(FilterContext& ctx) {
+void FilterPatientPlugin::runImportCt(FilterContext& ctx) {
   pectus::patient::ImportOptions opt;
   opt.labelTable = ctx.string("labelTable").toStdString();
   opt.minVoxels = ctx.intIn("minVoxels");

@@ -5,6 +5,7 @@
 #include <sstream>
 
 #include "pectus/errors.h"
+#include "pectus/format.h"
 
 namespace pectus::patient {
 
@@ -30,12 +31,7 @@ constexpr double kLateral = 0.12;         // lateral offset of a scapula at leas
 constexpr double kPlate = 0.55;           // sheet = area / (2 length width): plates above, bars below
 constexpr double kMinRib = 0.12;          // a rib is at least this long
 
-std::string num(double v) {
-  std::ostringstream s;
-  s.precision(3);
-  s << v;
-  return s.str();
-}
+std::string num(double v) { return significantText(v, 3); }
 
 double median(std::vector<double> v) {
   if (v.empty()) return 0;

@@ -8,7 +8,7 @@
 
 #include "pectus/cmesh.h"
 
-namespace pectus::ribcage {
+namespace pectus {
 void decimateQuadric(CMeshO& m, int targetFaces, double embeddingCell = 0, const std::vector<vcg::Box3<Scalarm>>& guarded = {});
 
 /// Decimates a closed, embedded (self-intersection-free) surface to `targetFaces` and keeps it embedded:

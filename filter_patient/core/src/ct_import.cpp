@@ -25,6 +25,8 @@
 #include "pectus/patient/label_volume.h"
 #include "pectus/surface_cmesh.h"
 #include "pectus/errors.h"
+#include "pectus/union_find.h"
+#include "pectus/format.h"
 
 namespace fs = std::filesystem;
 
@@ -58,14 +60,7 @@ std::string grouped(long long n) {
   return n < 0 ? "-" + out : out;
 }
 
-std::string fixed(double v, int decimals = 1) {
-  std::ostringstream s;
-  s.imbue(std::locale::classic());
-  s.setf(std::ios::fixed);
-  s.precision(decimals);
-  s << v;
-  return s.str();
-}
+std::string fixed(double v, int decimals = 1) { return fixedText(v, decimals); }
 
 std::string plural(long long n, const char* one, const char* many) {
   return grouped(n) + " " + (n == 1 ? one : many);
@@ -579,25 +574,20 @@ std::map<int, std::string> parseLabelTable(const std::string& textOrPath) {
 }
 
 int countComponents(const CMeshO& m) {
-  std::vector<int> parent(m.vert.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int a) {
-    while (parent[std::size_t(a)] != a) a = parent[std::size_t(a)] = parent[std::size_t(parent[std::size_t(a)])];
-    return a;
-  };
+  UnionFind sets(m.vert.size());
   std::vector<char> used(m.vert.size(), 0);
   for (const auto& f : m.face) {
     if (f.IsD()) continue;
-    const int a = find(int(vcg::tri::Index(m, f.cV(0))));
+    const int a = sets.find(int(vcg::tri::Index(m, f.cV(0))));
     for (int k = 0; k < 3; ++k) {
       const int vi = int(vcg::tri::Index(m, f.cV(k)));
       used[std::size_t(vi)] = 1;
-      parent[std::size_t(find(vi))] = find(a);
+      sets.unite(vi, a);
     }
   }
   int n = 0;
-  for (std::size_t i = 0; i < parent.size(); ++i)
-    if (used[i] && find(int(i)) == int(i)) ++n;
+  for (std::size_t i = 0; i < sets.size(); ++i)
+    if (used[i] && sets.isRoot(int(i))) ++n;
   return n;
 }
 

@@ -1,4 +1,4 @@
-#include "pectus/ribcage/mesh_simplify.h"
+#include "pectus/mesh_simplify.h"
 
 #include <stdexcept>
 #include <string>
@@ -26,7 +26,7 @@
 #include <vcg/complex/algorithms/update/normal.h>
 #include <vcg/container/simple_temporary_data.h>
 
-namespace pectus::ribcage {
+namespace pectus {
 namespace {
 using QuadricTemp = vcg::SimpleTempData<CMeshO::VertContainer, vcg::math::Quadric<double>>;
 class QHelper {
@@ -245,4 +245,4 @@ int decimateEmbedded(CMeshO& m, int targetFaces, double edgeLength) {
   return kAttempts - 1;
 }
 
-}  // namespace pectus::ribcage
+}  // namespace pectus

@@ -1,5 +1,7 @@
 #include "pectus/patient/solid_grid.h"
 
+#include "pectus/union_find.h"
+
 #include <algorithm>
 #include <cmath>
 #include <numeric>
@@ -112,26 +114,21 @@ Box3i boxOf(const Soup& s, const Grid& g) {
 // the flood does not mind. The fans' faces are appended to s.F, their centres to s.V; returns the number of fans.
 int capHoles(Soup& s) {
   const Topology top(s);
-  std::vector<int> parent(s.V.size());
-  std::iota(parent.begin(), parent.end(), 0);
-  auto find = [&](int v) {
-    while (parent[std::size_t(v)] != v) v = parent[std::size_t(v)] = parent[std::size_t(parent[std::size_t(v)])];
-    return v;
-  };
+  UnionFind sets(s.V.size());
   std::vector<std::pair<int, int>> rim;
   for (const auto& e : top.edges)
     if (e.faces % 2 == 1) {
       rim.push_back({e.a, e.b});
-      parent[std::size_t(find(e.a))] = find(e.b);
+      sets.unite(e.a, e.b);
     }
   if (rim.empty()) return 0;
   std::vector<Vec3> sum(s.V.size(), Vec3::Zero());
   std::vector<int> n(s.V.size(), 0), centre(s.V.size(), -1);
   for (const auto& [a, b] : rim)
-    for (int v : {a, b}) sum[std::size_t(find(v))] += s.V[std::size_t(v)], ++n[std::size_t(find(v))];
+    for (int v : {a, b}) sum[std::size_t(sets.find(v))] += s.V[std::size_t(v)], ++n[std::size_t(sets.find(v))];
   int groups = 0;
   for (const auto& [a, b] : rim) {
-    const int root = find(a);
+    const int root = sets.find(a);
     if (centre[std::size_t(root)] < 0) {
       s.V.push_back(sum[std::size_t(root)] / n[std::size_t(root)]);
       centre[std::size_t(root)] = int(s.V.size()) - 1;

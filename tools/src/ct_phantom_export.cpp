@@ -6,6 +6,7 @@
 
 
 #include "pectus/phantom/ct_phantom_core.h"
+#include "pectus/union_find.h"
 
 namespace pectus::phantom {
 
@@ -199,26 +200,22 @@ std::vector<ExportedFile> messyExport(const Phantom& ph, std::uint32_t seed) {
     std::vector<Triangle> t = surface(maskOf(v, [](std::int32_t l) { return l == kCartilageLabel; }));
     // the faces as pieces (sharing corners)
     std::map<std::array<double, 3>, int> corner;
-    std::vector<int> parent;
-    auto find = [&](int a) {
-      while (parent[std::size_t(a)] != a) a = parent[std::size_t(a)] = parent[std::size_t(parent[std::size_t(a)])];
-      return a;
-    };
+    UnionFind sets;
     std::vector<std::array<int, 3>> F;
     for (const auto& f : t) {
       std::array<int, 3> ids{};
       for (int k = 0; k < 3; ++k) {
         const auto [it, fresh] = corner.emplace(std::array<double, 3>{f[std::size_t(k)].x(), f[std::size_t(k)].y(), f[std::size_t(k)].z()},
-                                                int(parent.size()));
-        if (fresh) parent.push_back(int(parent.size()));
+                                                int(sets.size()));
+        if (fresh) sets.add();
         ids[std::size_t(k)] = it->second;
       }
-      parent[std::size_t(find(ids[1]))] = find(ids[0]);
-      parent[std::size_t(find(ids[2]))] = find(ids[0]);
+      sets.unite(ids[1], ids[0]);
+      sets.unite(ids[2], ids[0]);
       F.push_back(ids);
     }
     std::map<int, std::vector<std::size_t>> pieces;
-    for (std::size_t f = 0; f < F.size(); ++f) pieces[find(F[f][0])].push_back(f);
+    for (std::size_t f = 0; f < F.size(); ++f) pieces[sets.find(F[f][0])].push_back(f);
     std::vector<std::vector<std::size_t>> bySize;
     for (auto& [root, faces] : pieces) bySize.push_back(faces);
     std::stable_sort(bySize.begin(), bySize.end(), [](const auto& a, const auto& b) { return a.size() > b.size(); });

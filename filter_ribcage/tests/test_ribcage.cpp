@@ -14,7 +14,7 @@
 #include "pectus/ribcage/ribcage.h"
 #include "pectus/ribcage/ribcage_model.h"
 #include "pectus/surface_cmesh.h"
-#include "coarse_cage.h"
+#include "pectus/fixture/coarse_cage.h"
 
 using namespace pectus;
 using namespace pectus::ribcage;
@@ -75,7 +75,7 @@ TEST(MarchingTets, SphereIsClosedOrientedAndAccurate) {
   for (const auto& v : s.V) EXPECT_NEAR(v.norm(), 4.0, 0.05);
 }
 
-// the coarse cage, generated once per ctest run (coarse_cage.h)
+// the coarse cage, generated once per ctest run (pectus/fixture/coarse_cage.h)
 class RibCageCoarse : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
