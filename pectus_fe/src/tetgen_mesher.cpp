@@ -454,9 +454,9 @@ SurfaceFeature smallestFeature(const SurfaceMesh& s) {
 }
 
 namespace {
-// tetrahedralize after its checks
-TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<int>* tetFace) {
-  tetgenio in;
+
+// the surface as TetGen's input: its points, and one facet per triangle marked with the face's tissue
+void fillTetgenInput(const SurfaceMesh& s, tetgenio& in) {
   in.firstnumber = 0;
   in.numberofpoints = static_cast<int>(s.V.size());
   in.pointlist = new REAL[3 * s.V.size()];
@@ -476,27 +476,41 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
     for (int k = 0; k < 3; ++k) fc.polygonlist[0].vertexlist[k] = s.F[f][k];
     in.facetmarkerlist[f] = s.faceTissue[f];
   }
+}
+
+// TetGen's switches for the options
+std::string tetgenSwitches(const TetgenOptions& opt) {
   std::ostringstream sw;
   sw << "pzQ";
   if (opt.preserveSurface) sw << "Y";
   if (opt.radiusEdgeRatio > 0) sw << "q" << opt.radiusEdgeRatio;
   if (opt.maxVolume > 0) sw << "a" << opt.maxVolume;
   if (opt.maxAddedPoints >= 0) sw << "S" << opt.maxAddedPoints;
-  // TetGen 1.6 merges adjacent facets of one tissue where they are nearly coplanar (or where a sliver face
-  // has a small angle beside a nearly flat edge) and triangulates the merged facet anew; on a surface the exact
-  // check has found free of self-intersections, that new triangulation can cross a neighbour and TetGen
-  // refuses its own result as self-intersecting. Meshed again without merging (-M), the input triangles are
-  // kept as they are. Surfaces TetGen meshes at the first attempt (every one with TetGen 1.5) are unchanged.
+  return sw.str();
+}
+
+// TetGen 1.6 merges adjacent facets of one tissue where they are nearly coplanar (or where a sliver face
+// has a small angle beside a nearly flat edge) and triangulates the merged facet anew; on a surface the exact
+// check has found free of self-intersections, that new triangulation can cross a neighbour and TetGen
+// refuses its own result as self-intersecting. Meshed again without merging (-M), the input triangles are
+// kept as they are. Surfaces TetGen meshes at the first attempt (every one with TetGen 1.5) are unchanged.
+TetgenOutput meshSurface(const std::string& switches, tetgenio& in, const TetgenOptions& opt) {
   TetgenOutput out;
   try {
-    out = runTetgen(sw.str(), in, opt.timeLimitSeconds);
+    out = runTetgen(switches, in, opt.timeLimitSeconds);
   } catch (const TetgenRefusal& e) {
     if (e.code() != kTetgenSelfIntersection) throw;
-    out = runTetgen(sw.str() + "M", in, opt.timeLimitSeconds);
+    out = runTetgen(switches + "M", in, opt.timeLimitSeconds);
   }
   if (out.numTets() <= 0) throw TopologyError("TetGen produced no tetrahedra (is the surface closed?).");
   for (int v : out.tets)
     if (v < 0 || v >= out.numPoints()) throw InputError("TetGen returned a tetrahedron with a node out of range.");
+  return out;
+}
+
+// TetGen's tets as a TET4 mesh, the surface's vertices first and every tet positively oriented (a tet
+// without volume is an error); marks in inTet the surface vertices the tets use, gives the tets' centroids
+TetMesh linearMesh(const SurfaceMesh& s, const TetgenOutput& out, std::vector<char>& inTet, std::vector<Vector3d>& centroids) {
   const std::vector<int> node = inputVerticesFirst(s, out);
   TetMesh m;
   m.order = 1;
@@ -504,8 +518,8 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
   for (int i = 0; i < out.numPoints(); ++i)
     m.nodes[node[i]] = Vector3d(out.points[3 * i], out.points[3 * i + 1], out.points[3 * i + 2]);
   m.tets.resize(out.numTets());
-  std::vector<Vector3d> centroids(out.numTets());
-  std::vector<char> inTet(s.V.size(), 0);
+  centroids.resize(out.numTets());
+  inTet.assign(s.V.size(), 0);
   for (int t = 0; t < out.numTets(); ++t) {
     std::array<int, 10> e{};
     for (int k = 0; k < 4; ++k) {
@@ -523,6 +537,11 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
     }
     centroids[t] = m.centroid(t);
   }
+  return m;
+}
+
+// every surface vertex must be a node of some tet
+void requireEveryVertexMeshed(const SurfaceMesh& s, const std::vector<char>& inTet) {
   for (size_t i = 0; i < inTet.size(); ++i)
     if (!inTet[i]) {
       std::ostringstream msg;
@@ -530,6 +549,17 @@ TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<i
           << "the meshed volume. Remove it (e.g. MeshLab's 'Remove Unreferenced Vertices').";
       throw TopologyError(msg.str());
     }
+}
+
+// tetrahedralize after its checks
+TetMesh tetgenMesh(const SurfaceMesh& s, const TetgenOptions& opt, std::vector<int>* tetFace) {
+  tetgenio in;
+  fillTetgenInput(s, in);
+  const TetgenOutput out = meshSurface(tetgenSwitches(opt), in, opt);
+  std::vector<char> inTet;
+  std::vector<Vector3d> centroids;
+  TetMesh m = linearMesh(s, out, inTet, centroids);
+  requireEveryVertexMeshed(s, inTet);
   const std::vector<int> nf = nearestFaces(s, centroids);
   m.tissue.resize(m.tets.size());
   for (size_t t = 0; t < m.tets.size(); ++t) m.tissue[t] = s.faceTissue[nf[t]];

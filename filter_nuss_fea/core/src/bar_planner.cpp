@@ -90,11 +90,14 @@ vol::Soup measuredSurface(const CageSurface& cage, const Analysis* after = nullp
 }
 }  // namespace
 
-Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const PlanOptions& opt) {
-  auto progress = [&](int pc, const std::string& w) {
-    if (opt.progress) opt.progress(pc, w);
-  };
-  const auto tAll = Clock::now();
+namespace {
+
+void report(const PlanOptions& opt, int pc, const std::string& what) {
+  if (opt.progress) opt.progress(pc, what);
+}
+
+// the planner's own options: a target to calibrate to, levels, and a configuration of one or two bars
+void checkPlanOptions(const PlanOptions& opt) {
   validate(opt.analysis);
   if (!(opt.analysis.targetElevation > 0) && !opt.analysis.targetFromChestLine)
     throw InputError("The bar planner calibrates every option to the sternal elevation: give a positive target elevation (mm), "
@@ -104,10 +107,13 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
   if (opt.twoBars && !kSecondOffsetRange.contains(opt.secondOffset))
     throw InputError("The second bar's offset must lie in " + kSecondOffsetRange.text(true) + " intercostal spaces.");
   if (opt.twoBars && opt.secondOffset == 0) throw InputError("The second bar's offset must not be 0: it would share the first bar's space.");
+}
 
-  // the options, each placement checked before any solve
-  struct Option { int level, second; };
-  std::vector<Option> options;
+struct BarOption { int level, second; };  // the first bar's intercostal space, the second's (0: none)
+
+// the options, each placement checked before any solve
+std::vector<BarOption> barOptions(const CageSurface& cage, const std::vector<Landmark>& lms, const PlanOptions& opt) {
+  std::vector<BarOption> options;
   for (int s : opt.levels) {
     if (s < 1) throw InputError("Bar level " + std::to_string(s) + ": intercostal spaces start at 1 (between ribs 1 and 2).");
     if (opt.oneBar) options.push_back({s, 0});
@@ -124,30 +130,102 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
     pl.secondShare = opt.secondShare;
     checkPlacement(cage, lms, pl);
   }
+  return options;
+}
+
+// what is measured before and after each option: the slice and envelope volumes' ranges, the envelope, the index
+struct Measures {
+  vol::Range sliceRange, envelopeRange;
+  vol::EnvelopeParams envelope;
+  vol::IndexInputs index;
+};
+
+Measures measuresOf(const std::vector<Landmark>& lms, const PlanOptions& opt) {
   const double dome = needLandmark(lms, kDiaphragmDome, "dome of the diaphragm").z();
   const double apex = needLandmark(lms, kLungApex, "lung apex").z();
   const Eigen::Vector3d sternumEnd = needLandmark(lms, kSternumLowerEnd, "lower end of the sternum");
   const Eigen::Vector3d deepest = needLandmark(lms, kFunnelDeepest, "deepest point of the funnel");
-  const vol::Range sliceRange{dome, apex}, envelopeRange{sternumEnd.z(), apex};
-  vol::requireRange(sliceRange, "landmarks 700 .. 701");
-  vol::requireRange(envelopeRange, "landmarks 500 .. 701");
-  vol::EnvelopeParams envelope = opt.envelope;
-  envelope.sternumEnd = sternumEnd;
-  vol::IndexInputs index;
-  index.level = deepest.z();
-  index.midlineX = deepest.x();
-  if (auto v = findLandmark(lms, kVertebraAtDeepest)) index.spineY = v->y();
-  index.rays = opt.indexRays;
+  Measures m{{dome, apex}, {sternumEnd.z(), apex}, opt.envelope, {}};
+  vol::requireRange(m.sliceRange, "landmarks 700 .. 701");
+  vol::requireRange(m.envelopeRange, "landmarks 500 .. 701");
+  m.envelope.sternumEnd = sternumEnd;
+  m.index.level = deepest.z();
+  m.index.midlineX = deepest.x();
+  if (auto v = findLandmark(lms, kVertebraAtDeepest)) m.index.spineY = v->y();
+  m.index.rays = opt.indexRays;
+  return m;
+}
+
+// the volumes and the pectus index of the cage before the bars
+void measureBefore(const CageSurface& cage, const Measures& m, const PlanOptions& opt, Plan& plan) {
+  report(opt, 1, "Volumes and pectus index before");
+  const vol::Soup before = measuredSurface(cage);
+  plan.sliceBefore = vol::sliceVolume(before, m.sliceRange, opt.slice).volume;
+  plan.envelopeBefore = vol::fergusonEnvelope(before, m.envelopeRange, m.envelope).volume;
+  plan.hallerBefore = vol::pectusIndex(before, m.index).haller;
+}
+
+// option k of n analysed (calibrated to the target) on the model, and measured after: its row, its analysis in `a`
+PlanRow analyseOption(const CageSurface& cage, const Model& model, const std::vector<Landmark>& lms, const PlanOptions& opt,
+                      const Measures& m, const Plan& plan, const BarOption& o, int k, int n, Analysis& a) {
+  const auto t0 = Clock::now();
+  PlanRow r;
+  r.bars = o.second ? 2 : 1;
+  r.level = o.level;
+  r.secondLevel = o.second;
+  r.option = o.second ? "2 bars, spaces " + std::to_string(o.level) + " + " + std::to_string(o.second)
+                      : "1 bar, space " + std::to_string(o.level);
+  Options ao = opt.analysis;
+  ao.place.intercostalSpace = o.level;
+  ao.place.secondSpace = o.second;
+  ao.place.secondShare = opt.secondShare;
+  const int p0 = 5 + 90 * k / n, p1 = 5 + 90 * (k + 1) / n;
+  ao.progress = [&](int pc, const std::string& w) { report(opt, p0 + (p1 - p0) * pc / 125, r.option + ": " + w); };
+  a = analyze(cage, model, lms, ao);
+  r.force = a.force;
+  r.elevation = a.elevation;
+  r.solves = a.calibration ? a.calibration->evaluations : 1;
+  r.maxStress = a.maxStressBody;  // the singular peaks at the tissue junctions would rank the mesh, not the bar
+  r.maxStrain = a.maxStrain;
+  r.maxStressAt = a.maxStressBodyAt.describe();
+  r.maxStrainAt = a.maxStrainAt.describe();
+
+  report(opt, p0 + (p1 - p0) * 4 / 5, r.option + ": volumes and pectus index after");
+  const vol::Soup after = measuredSurface(cage, &a);
+  const double sv = vol::sliceVolume(after, m.sliceRange, opt.slice).volume;
+  const double ev = vol::fergusonEnvelope(after, m.envelopeRange, m.envelope).volume;
+  r.sliceGain = sv - plan.sliceBefore;
+  r.slicePercent = 100.0 * r.sliceGain / plan.sliceBefore;
+  r.envelopeGain = ev - plan.envelopeBefore;
+  r.envelopePercent = 100.0 * r.envelopeGain / plan.envelopeBefore;
+  r.hallerAfter = vol::pectusIndex(after, m.index).haller;
+  r.seconds = since(t0);
+  return r;
+}
+
+// the row joins the plan; its analysis is kept when it is the best so far (lowest force or lowest stress)
+void addRow(const PlanOptions& opt, PlanRow r, Analysis& a, Plan& plan) {
+  const auto key = [&](const PlanRow& x) { return opt.best == PlanOptions::Best::LowestForce ? x.force : x.maxStress; };
+  if (plan.best < 0 || key(r) < key(plan.rows[plan.best])) {
+    plan.best = static_cast<int>(plan.rows.size());
+    plan.bestAnalysis = std::move(a);
+  }
+  plan.rows.push_back(std::move(r));
+}
+
+}  // namespace
+
+Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const PlanOptions& opt) {
+  const auto tAll = Clock::now();
+  checkPlanOptions(opt);
+  const std::vector<BarOption> options = barOptions(cage, lms, opt);
+  const Measures measures = measuresOf(lms, opt);
 
   Plan plan;
   plan.target = resolveTarget(cage, lms, opt.analysis);  // refuses a target past the chest line's reach
-  progress(1, "Volumes and pectus index before");
-  const vol::Soup before = measuredSurface(cage);
-  plan.sliceBefore = vol::sliceVolume(before, sliceRange, opt.slice).volume;
-  plan.envelopeBefore = vol::fergusonEnvelope(before, envelopeRange, envelope).volume;
-  plan.hallerBefore = vol::pectusIndex(before, index).haller;
+  measureBefore(cage, measures, opt, plan);
 
-  progress(3, "TetGen (once for every option)");
+  report(opt, 3, "TetGen (once for every option)");
   const Model model = buildModel(cage, opt.analysis.mesh);
   plan.tets = model.mesh.numTets();
   plan.order = model.mesh.order;
@@ -155,49 +233,12 @@ Plan planBars(const CageSurface& cage, const std::vector<Landmark>& lms, const P
 
   const int n = static_cast<int>(options.size());
   for (int k = 0; k < n; ++k) {
-    const auto t0 = Clock::now();
-    const Option& o = options[k];
-    PlanRow r;
-    r.bars = o.second ? 2 : 1;
-    r.level = o.level;
-    r.secondLevel = o.second;
-    r.option = o.second ? "2 bars, spaces " + std::to_string(o.level) + " + " + std::to_string(o.second)
-                        : "1 bar, space " + std::to_string(o.level);
-    Options ao = opt.analysis;
-    ao.place.intercostalSpace = o.level;
-    ao.place.secondSpace = o.second;
-    ao.place.secondShare = opt.secondShare;
-    const int p0 = 5 + 90 * k / n, p1 = 5 + 90 * (k + 1) / n;
-    ao.progress = [&](int pc, const std::string& w) { progress(p0 + (p1 - p0) * pc / 125, r.option + ": " + w); };
-    Analysis a = analyze(cage, model, lms, ao);
-    r.force = a.force;
-    r.elevation = a.elevation;
-    r.solves = a.calibration ? a.calibration->evaluations : 1;
-    r.maxStress = a.maxStressBody;  // the singular peaks at the tissue junctions would rank the mesh, not the bar
-    r.maxStrain = a.maxStrain;
-    r.maxStressAt = a.maxStressBodyAt.describe();
-    r.maxStrainAt = a.maxStrainAt.describe();
-
-    progress(p0 + (p1 - p0) * 4 / 5, r.option + ": volumes and pectus index after");
-    const vol::Soup after = measuredSurface(cage, &a);
-    const double sv = vol::sliceVolume(after, sliceRange, opt.slice).volume;
-    const double ev = vol::fergusonEnvelope(after, envelopeRange, envelope).volume;
-    r.sliceGain = sv - plan.sliceBefore;
-    r.slicePercent = 100.0 * r.sliceGain / plan.sliceBefore;
-    r.envelopeGain = ev - plan.envelopeBefore;
-    r.envelopePercent = 100.0 * r.envelopeGain / plan.envelopeBefore;
-    r.hallerAfter = vol::pectusIndex(after, index).haller;
-    r.seconds = since(t0);
-
-    const auto key = [&](const PlanRow& x) { return opt.best == PlanOptions::Best::LowestForce ? x.force : x.maxStress; };
-    if (plan.best < 0 || key(r) < key(plan.rows[plan.best])) {
-      plan.best = static_cast<int>(plan.rows.size());
-      plan.bestAnalysis = std::move(a);
-    }
-    plan.rows.push_back(std::move(r));
+    Analysis a;
+    PlanRow r = analyseOption(cage, model, lms, opt, measures, plan, options[k], k, n, a);
+    addRow(opt, std::move(r), a, plan);
   }
   plan.secondsTotal = since(tAll);
-  progress(100, "Done");
+  report(opt, 100, "Done");
   return plan;
 }
 

@@ -621,27 +621,35 @@ Analysis analyze(const CageSurface& cage, const Model& model, const std::vector<
 }
 
 namespace {
-Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<Landmark>& lms, const Options& given,
-                      const Target& target) {
-  Options opt = given;
-  opt.targetElevation = target.elevation;
-  auto progress = [&](int pc, const std::string& w) {
-    if (opt.progress) opt.progress(pc, w);
-  };
+
+using Curve = std::vector<std::pair<double, double>>;  // (force N, elevation mm)
+
+void report(const Options& opt, int pc, const std::string& what) {
+  if (opt.progress) opt.progress(pc, what);
+}
+
+// the solves of one analysis: the model's solver, its linear solve at unit force, the options, the force
+// direction, and the analysis they fill in
+struct Solves {
+  fe::Solver& solver;
+  const fe::Result& unit;
+  const Options& opt;
+  const Vector3d dir;
+  Analysis& a;
+};
+
+// the analysis of a model before any solve: the target, the tets and their parts
+Analysis analysisOf(Model model, const Target& target) {
   Analysis a;
   a.target = target;
   a.mesh = std::move(model.mesh);
   a.tetPart = std::move(model.tetPart);
   a.secondsMesh = model.secondsMesh;
+  return a;
+}
 
-  place(cage, lms, opt.place, a);
-  const Vector3d dir = opt.place.direction.normalized();
-  a.components = checkComponents(a.mesh, a.tetPart, a.fixedNodes);
-
-  auto t0 = Clock::now();
-  progress(15, "Factorising (CHOLMOD)");
-  fe::Problem prob = problemAt(a, opt, 1.0);  // unit Fe; the solves scale it
-  fe::Solver solver(prob);
+// the linear solve at unit force: the sternum's compliance along the force direction, which must be positive
+fe::Result linearPreSolve(fe::Solver& solver, Analysis& a, const Vector3d& dir) {
   fe::Result lin1;
   try {
     lin1 = solver.solveLinear(1.0);
@@ -654,127 +662,170 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
   if (!(a.linearCompliance > 0))
     throw InputError("The sternum does not move along the force direction under the elevating force (compliance " +
                      std::to_string(a.linearCompliance) + " mm/N): check the direction and the load placement.");
+  return lin1;
+}
 
-  // one solve at force F; records the curve at every curveStep when `curve` is given
-  auto solveAt = [&](double F, std::vector<std::pair<double, double>>* curve, const fe::Observer& observe) {
-    if (!opt.nonlinear) {
-      // small strain: the solve at F is F times the unit-force solve (forces and prescribed displacements
-      // both scale with the load), von Mises stress and equivalent strain |F| times theirs
-      fe::Result r = lin1;
-      r.u *= F;
-      for (double& s : r.vonMises) s *= std::abs(F);
-      for (double& e : r.eqStrain) e *= std::abs(F);
-      if (curve) {
-        curve->assign(1, {0.0, 0.0});
-        for (double f = opt.curveStep; f < F - 1e-9; f += opt.curveStep) curve->push_back({f, a.linearCompliance * f});
-        curve->push_back({F, elevationOf(r.u, a, dir)});
-      }
-      return r;
-    }
-    fe::NewtonOptions no = opt.newton;
-    no.stops.clear();
-    for (double f = opt.curveStep; f < F - 1e-9; f += opt.curveStep) no.stops.push_back(f / F);
-    no.loadSteps = std::max(no.loadSteps, static_cast<int>(std::ceil(F / opt.curveStep)));
-    std::vector<std::pair<double, double>> pts{{0.0, 0.0}};
-    no.onIncrement = [&](double lam, const Eigen::VectorXd& u) {
-      pts.push_back({lam * F, elevationOf(u, a, dir)});
-      if (observe) observe(pts.back().first, pts.back().second);
-    };
-    fe::Result r = solver.solveNonlinear(no, F);
-    ++a.nonlinearSolves;
-    a.newtonIterations += r.newtonIterations;
-    a.factorizations += r.factorizations;
-    if (curve) *curve = pts;  // every converged increment: the curveStep multiples and the steps between
-    return r;
-  };
-
-  if (opt.targetElevation > 0 && opt.nonlinear && opt.calibration == CalibrationMethod::DisplacementControl) {
-    // one solve: the sternal patch's mean displacement along the force direction is stepped to the target
-    // (steps of about curveStep N at the linear compliance), Fe is the load factor of the unit-force problem
-    progress(30, "Driving the sternum to " + mm(opt.targetElevation) + " mm");
-    Eigen::VectorXd w = Eigen::VectorXd::Zero(3 * a.mesh.numNodes());
-    for (int n : a.sternumNodes) w.segment<3>(3 * n) = dir / double(a.sternumNodes.size());
-    fe::NewtonOptions no = opt.newton;
-    no.stops.clear();
-    no.loadSteps = std::max(no.loadSteps, static_cast<int>(std::ceil(opt.targetElevation / (a.linearCompliance * opt.curveStep))));
-    a.curve.assign(1, {0.0, 0.0});
-    no.onIncrement = [&](double F, const Eigen::VectorXd& u) { a.curve.push_back({F, elevationOf(u, a, dir)}); };
-    try {
-      a.result = solver.solveControlled(w, opt.targetElevation, no);
-    } catch (const fe::NewtonDidNotConverge& e) {
-      const auto& last = a.curve.back();
-      std::ostringstream s;
-      s << "No converged state reaches the target displacement " << opt.targetElevation << " mm: driving the sternum up, "
-        << "the nonlinear solve stops converging beyond " << last.second << " mm at " << last.first << " N (" << e.what()
-        << "). Lower the target, or check the model where it deforms most (an element inverting at the load).";
-      throw SolverFailure(s.str());
-    }
-    ++a.nonlinearSolves;
-    a.newtonIterations += a.result.newtonIterations;
-    a.factorizations += a.result.factorizations;
-    a.force = a.result.loadFactor;
-    const double d = elevationOf(a.result.u, a, dir);
-    if (!(a.force > 0))
-      throw InputError("Calibration: the sternum reaches the target only under a force <= 0 (" + mm(a.force, 2) +
-                       " N) along the force direction; check the force direction and the load placement.");
-    if (a.force > opt.maxForce) {
-      std::ostringstream s;
-      s << "No force up to " << opt.maxForce << " N reaches the target displacement " << opt.targetElevation << " mm (it takes "
-        << a.force << " N). Lower the target or raise the maximum force.";
-      throw SolverFailure(s.str());
-    }
-    fe::CalibrationResult c;
-    c.force = a.force;
-    c.displacement = d;
-    c.evaluations = 1;
-    c.history.emplace_back(a.force, d);
-    a.calibration = c;
-  } else if (opt.targetElevation > 0) {
-    fe::CalibrationOptions co;
-    co.tolerance = opt.tolerance;
-    co.maxForce = opt.maxForce;
-    co.initialForce = std::min(opt.targetElevation / a.linearCompliance, opt.maxForce);
-    co.maxEvaluations = 12;
-    fe::Result last;
-    std::vector<std::pair<double, double>> lastCurve;
-    int k = 0;
-    auto disp = [&](double F, const fe::Observer& observe) {
-      progress(std::min(90, 20 + 15 * k++), "Calibrating the force: Fe = " + mm(F) + " N");
-      last = solveAt(F, &lastCurve, observe);
-      a.force = F;
-      return elevationOf(last.u, a, dir);
-    };
-    a.calibration = fe::calibrateForce(disp, opt.targetElevation, co);
-    if (std::abs(a.force - a.calibration->force) > 1e-9 * a.calibration->force) {  // last evaluation not the answer
-      last = solveAt(a.calibration->force, &lastCurve, {});
-      a.force = a.calibration->force;
-    }
-    a.result = std::move(last);
-    a.curve = std::move(lastCurve);
-  } else {
-    progress(30, "Solving");
-    a.force = opt.force;
-    a.result = solveAt(opt.force, &a.curve, {});
+// small strain: the solve at F is F times the unit-force solve (forces and prescribed displacements both
+// scale with the load), von Mises stress and equivalent strain |F| times theirs
+fe::Result linearAt(const Solves& s, double F, Curve* curve) {
+  fe::Result r = s.unit;
+  r.u *= F;
+  for (double& v : r.vonMises) v *= std::abs(F);
+  for (double& e : r.eqStrain) e *= std::abs(F);
+  if (curve) {
+    curve->assign(1, {0.0, 0.0});
+    for (double f = s.opt.curveStep; f < F - 1e-9; f += s.opt.curveStep) curve->push_back({f, s.a.linearCompliance * f});
+    curve->push_back({F, elevationOf(r.u, s.a, s.dir)});
   }
-  a.elevation = elevationOf(a.result.u, a, dir);
-  a.secondsSolve = since(t0);
+  return r;
+}
 
-  progress(95, "Stress and strain");
+// the nonlinear solve at F, its increments stopping at every curveStep; each converged increment is
+// observed and goes into the curve
+fe::Result nonlinearAt(Solves& s, double F, Curve* curve, const fe::Observer& observe) {
+  Analysis& a = s.a;
+  fe::NewtonOptions no = s.opt.newton;
+  no.stops.clear();
+  for (double f = s.opt.curveStep; f < F - 1e-9; f += s.opt.curveStep) no.stops.push_back(f / F);
+  no.loadSteps = std::max(no.loadSteps, static_cast<int>(std::ceil(F / s.opt.curveStep)));
+  Curve pts{{0.0, 0.0}};
+  no.onIncrement = [&](double lam, const Eigen::VectorXd& u) {
+    pts.push_back({lam * F, elevationOf(u, a, s.dir)});
+    if (observe) observe(pts.back().first, pts.back().second);
+  };
+  fe::Result r = s.solver.solveNonlinear(no, F);
+  ++a.nonlinearSolves;
+  a.newtonIterations += r.newtonIterations;
+  a.factorizations += r.factorizations;
+  if (curve) *curve = pts;  // every converged increment: the curveStep multiples and the steps between
+  return r;
+}
+
+// one solve at force F; records the curve at every curveStep when `curve` is given
+fe::Result solveAt(Solves& s, double F, Curve* curve, const fe::Observer& observe) {
+  if (!s.opt.nonlinear) return linearAt(s, F, curve);
+  return nonlinearAt(s, F, curve, observe);
+}
+
+// displacement control: the force Fe, the load factor found, must be positive and within the maximum force
+void checkControlledForce(const Options& opt, double force) {
+  if (!(force > 0))
+    throw InputError("Calibration: the sternum reaches the target only under a force <= 0 (" + mm(force, 2) +
+                     " N) along the force direction; check the force direction and the load placement.");
+  if (force > opt.maxForce) {
+    std::ostringstream s;
+    s << "No force up to " << opt.maxForce << " N reaches the target displacement " << opt.targetElevation << " mm (it takes "
+      << force << " N). Lower the target or raise the maximum force.";
+    throw SolverFailure(s.str());
+  }
+}
+
+// one solve: the sternal patch's mean displacement along the force direction is stepped to the target
+// (steps of about curveStep N at the linear compliance), Fe is the load factor of the unit-force problem
+void calibrateByDisplacement(Solves& s) {
+  Analysis& a = s.a;
+  const Options& opt = s.opt;
+  const Vector3d& dir = s.dir;
+  report(opt, 30, "Driving the sternum to " + mm(opt.targetElevation) + " mm");
+  Eigen::VectorXd w = Eigen::VectorXd::Zero(3 * a.mesh.numNodes());
+  for (int n : a.sternumNodes) w.segment<3>(3 * n) = dir / double(a.sternumNodes.size());
+  fe::NewtonOptions no = opt.newton;
+  no.stops.clear();
+  no.loadSteps = std::max(no.loadSteps, static_cast<int>(std::ceil(opt.targetElevation / (a.linearCompliance * opt.curveStep))));
+  a.curve.assign(1, {0.0, 0.0});
+  no.onIncrement = [&](double F, const Eigen::VectorXd& u) { a.curve.push_back({F, elevationOf(u, a, dir)}); };
+  try {
+    a.result = s.solver.solveControlled(w, opt.targetElevation, no);
+  } catch (const fe::NewtonDidNotConverge& e) {
+    const auto& last = a.curve.back();
+    std::ostringstream m;
+    m << "No converged state reaches the target displacement " << opt.targetElevation << " mm: driving the sternum up, "
+      << "the nonlinear solve stops converging beyond " << last.second << " mm at " << last.first << " N (" << e.what()
+      << "). Lower the target, or check the model where it deforms most (an element inverting at the load).";
+    throw SolverFailure(m.str());
+  }
+  ++a.nonlinearSolves;
+  a.newtonIterations += a.result.newtonIterations;
+  a.factorizations += a.result.factorizations;
+  a.force = a.result.loadFactor;
+  const double d = elevationOf(a.result.u, a, dir);
+  checkControlledForce(opt, a.force);
+  fe::CalibrationResult c;
+  c.force = a.force;
+  c.displacement = d;
+  c.evaluations = 1;
+  c.history.emplace_back(a.force, d);
+  a.calibration = c;
+}
+
+// a search over the force (calibrateForce), one solve per trial force; the result is the solve at the force found
+void calibrateByForce(Solves& s) {
+  Analysis& a = s.a;
+  const Options& opt = s.opt;
+  fe::CalibrationOptions co;
+  co.tolerance = opt.tolerance;
+  co.maxForce = opt.maxForce;
+  co.initialForce = std::min(opt.targetElevation / a.linearCompliance, opt.maxForce);
+  co.maxEvaluations = 12;
+  fe::Result last;
+  Curve lastCurve;
+  int k = 0;
+  auto disp = [&](double F, const fe::Observer& observe) {
+    report(opt, std::min(90, 20 + 15 * k++), "Calibrating the force: Fe = " + mm(F) + " N");
+    last = solveAt(s, F, &lastCurve, observe);
+    a.force = F;
+    return elevationOf(last.u, a, s.dir);
+  };
+  a.calibration = fe::calibrateForce(disp, opt.targetElevation, co);
+  if (std::abs(a.force - a.calibration->force) > 1e-9 * a.calibration->force) {  // last evaluation not the answer
+    last = solveAt(s, a.calibration->force, &lastCurve, {});
+    a.force = a.calibration->force;
+  }
+  a.result = std::move(last);
+  a.curve = std::move(lastCurve);
+}
+
+// no target: the solve at the given force
+void solveGivenForce(Solves& s) {
+  report(s.opt, 30, "Solving");
+  s.a.force = s.opt.force;
+  s.a.result = solveAt(s, s.opt.force, &s.a.curve, {});
+}
+
+// nodes where two tissues meet (rib and cartilage, cartilage and sternum): the stiffness changes about
+// 1000-fold across them, and at the corner such a junction makes with the free surface the stress of a
+// linear model is singular, so the stress of the tets touching them grows as the mesh is refined
+std::vector<char> tissueJunctions(const fe::TetMesh& mesh) {
+  std::vector<int> nodeTissue(mesh.nodes.size(), -1);
+  std::vector<char> junction(mesh.nodes.size(), 0);
+  for (int t = 0; t < mesh.numTets(); ++t)
+    for (int k = 0; k < mesh.nodesPerTet(); ++k) {
+      int& nt = nodeTissue[mesh.tets[t][k]];
+      if (nt >= 0 && nt != mesh.tissue[t]) junction[mesh.tets[t][k]] = 1;
+      nt = mesh.tissue[t];
+    }
+  return junction;
+}
+
+// where tet t lies: its centroid, tissue, part and distance to its rib's joint (none for t < 0)
+Location locate(const Analysis& a, const std::vector<Landmark>& lms, int t) {
+  Location L;
+  if (t < 0) return L;
+  L.tet = t;
+  L.p = a.mesh.centroid(t);
+  L.tissue = a.mesh.tissue[t];
+  L.part = a.tetPart[t];
+  if (auto j = findLandmark(lms, L.part)) L.distanceToJoint = (*j - L.p).norm();
+  return L;
+}
+
+// the nodal stress and strain, the maxima over all tets and per tissue, and the peaks away from the supports
+// and load patches (where nodal forces make the stress singular) with where they lie
+void locatePeaks(Analysis& a, const std::vector<Landmark>& lms) {
   a.nodalStress = fe::averageToNodes(a.mesh, a.result.vonMises);
   a.nodalStrain = fe::averageToNodes(a.mesh, a.result.eqStrain);
-  // maxima away from the supports and load patches, where nodal forces make the stress singular
   const std::vector<char> special = supportAndLoadNodes(a);
-  // nodes where two tissues meet (rib and cartilage, cartilage and sternum): the stiffness changes about
-  // 1000-fold across them, and at the corner such a junction makes with the free surface the stress of a
-  // linear model is singular, so the stress of the tets touching them grows as the mesh is refined
-  std::vector<int> nodeTissue(a.mesh.nodes.size(), -1);
-  std::vector<char> junction(a.mesh.nodes.size(), 0);
-  for (int t = 0; t < a.mesh.numTets(); ++t)
-    for (int k = 0; k < a.mesh.nodesPerTet(); ++k) {
-      int& nt = nodeTissue[a.mesh.tets[t][k]];
-      if (nt >= 0 && nt != a.mesh.tissue[t]) junction[a.mesh.tets[t][k]] = 1;
-      nt = a.mesh.tissue[t];
-    }
+  const std::vector<char> junction = tissueJunctions(a.mesh);
   int iS = -1, iE = -1, iB = -1;
   for (int t = 0; t < a.mesh.numTets(); ++t) {
     a.maxStressAll = std::max(a.maxStressAll, a.result.vonMises[t]);
@@ -786,20 +837,40 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
     if (iE < 0 || a.result.eqStrain[t] > a.result.eqStrain[iE]) iE = t;
     if (!touches(a.mesh, t, junction) && (iB < 0 || a.result.vonMises[t] > a.result.vonMises[iB])) iB = t;
   }
-  auto locate = [&](int t) {
-    Location L;
-    if (t < 0) return L;
-    L.tet = t;
-    L.p = a.mesh.centroid(t);
-    L.tissue = a.mesh.tissue[t];
-    L.part = a.tetPart[t];
-    if (auto j = findLandmark(lms, L.part)) L.distanceToJoint = (*j - L.p).norm();
-    return L;
-  };
-  if (iS >= 0) a.maxStress = a.result.vonMises[iS], a.maxStressAt = locate(iS);
-  if (iE >= 0) a.maxStrain = a.result.eqStrain[iE], a.maxStrainAt = locate(iE);
-  if (iB >= 0) a.maxStressBody = a.result.vonMises[iB], a.maxStressBodyAt = locate(iB);
-  progress(100, "Done");
+  if (iS >= 0) a.maxStress = a.result.vonMises[iS], a.maxStressAt = locate(a, lms, iS);
+  if (iE >= 0) a.maxStrain = a.result.eqStrain[iE], a.maxStrainAt = locate(a, lms, iE);
+  if (iB >= 0) a.maxStressBody = a.result.vonMises[iB], a.maxStressBodyAt = locate(a, lms, iB);
+}
+
+// the supports and loads placed on the model, the linear pre-solve, the calibration (by displacement control,
+// by a force search, or none: the given force), the peaks
+Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<Landmark>& lms, const Options& given,
+                      const Target& target) {
+  Options opt = given;
+  opt.targetElevation = target.elevation;
+  Analysis a = analysisOf(std::move(model), target);
+  place(cage, lms, opt.place, a);
+  const Vector3d dir = opt.place.direction.normalized();
+  a.components = checkComponents(a.mesh, a.tetPart, a.fixedNodes);
+
+  auto t0 = Clock::now();
+  report(opt, 15, "Factorising (CHOLMOD)");
+  fe::Problem prob = problemAt(a, opt, 1.0);  // unit Fe; the solves scale it
+  fe::Solver solver(prob);
+  const fe::Result lin1 = linearPreSolve(solver, a, dir);
+  Solves solves{solver, lin1, opt, dir, a};
+  if (opt.targetElevation > 0 && opt.nonlinear && opt.calibration == CalibrationMethod::DisplacementControl)
+    calibrateByDisplacement(solves);
+  else if (opt.targetElevation > 0)
+    calibrateByForce(solves);
+  else
+    solveGivenForce(solves);
+  a.elevation = elevationOf(a.result.u, a, dir);
+  a.secondsSolve = since(t0);
+
+  report(opt, 95, "Stress and strain");
+  locatePeaks(a, lms);
+  report(opt, 100, "Done");
   return a;
 }
 }  // namespace

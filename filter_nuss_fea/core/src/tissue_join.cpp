@@ -207,26 +207,34 @@ Tissue tissueFromName(const std::string& name) {
   return Tissue::Unknown;
 }
 
-CageSurface joinTissueLayers(const std::vector<TissueLayer>& layers, const std::vector<Landmark>& lms, CMeshO& joined,
-                             JoinStats* stats) {
+namespace {
+
+// the tissue of a layer: given, from its name, or the one tissue its faces are labelled with throughout
+Tissue layerTissue(const TissueLayer& l) {
+  Tissue t = l.tissue != Tissue::Unknown ? l.tissue : tissueFromName(l.name);
+  if (t == Tissue::Unknown)
+    if (const auto lab = readFaceLabels(*l.mesh)) {  // a layer labelled with one tissue throughout
+      int first = 0;
+      bool one = true;
+      for (std::size_t f = 0; f < l.mesh->face.size(); ++f)
+        if (!l.mesh->face[f].IsD()) {
+          if (!first) first = lab->tissue[f];
+          one = one && lab->tissue[f] == first;
+        }
+      if (one) t = Tissue(first);
+    }
+  if (t == Tissue::Unknown)
+    throw InputError("Cannot tell the tissue of layer '" + l.name + "': rename it to contain 'rib' or 'bone', 'cartilage', "
+                     "or 'sternum', or hide it if it is not part of the cage.");
+  return t;
+}
+
+// one solid per layer, at least one of bone and one of cartilage
+std::shared_ptr<std::vector<Solid>> solidsOf(const std::vector<TissueLayer>& layers) {
   auto solids = std::make_shared<std::vector<Solid>>();
   bool bone = false, cartilage = false;
   for (const auto& l : layers) {
-    Tissue t = l.tissue != Tissue::Unknown ? l.tissue : tissueFromName(l.name);
-    if (t == Tissue::Unknown)
-      if (const auto lab = readFaceLabels(*l.mesh)) {  // a layer labelled with one tissue throughout
-        int first = 0;
-        bool one = true;
-        for (std::size_t f = 0; f < l.mesh->face.size(); ++f)
-          if (!l.mesh->face[f].IsD()) {
-            if (!first) first = lab->tissue[f];
-            one = one && lab->tissue[f] == first;
-          }
-        if (one) t = Tissue(first);
-      }
-    if (t == Tissue::Unknown)
-      throw InputError("Cannot tell the tissue of layer '" + l.name + "': rename it to contain 'rib' or 'bone', 'cartilage', "
-                       "or 'sternum', or hide it if it is not part of the cage.");
+    const Tissue t = layerTissue(l);
     bone = bone || t == Tissue::Bone;
     cartilage = cartilage || t == Tissue::Cartilage;
     solids->push_back(toSolid(l, t));
@@ -234,29 +242,46 @@ CageSurface joinTissueLayers(const std::vector<TissueLayer>& layers, const std::
   if (!bone || !cartilage)
     throw InputError(std::string("The tissue layers have no ") + (!bone ? "bone (rib)" : "cartilage") +
                      " layer: give one closed surface per tissue, named after it ('ribs', 'costal cartilage', 'sternum').");
-  assignParts(*solids, lms);
+  return solids;
+}
 
-  // the union, cartilage first (the order does not change the union, only the corefinement's work)
-  std::vector<int> order(solids->size());
+// the union, cartilage first (the order does not change the union, only the corefinement's work)
+Mesh unionOf(const std::vector<Solid>& solids, JoinStats* stats) {
+  std::vector<int> order(solids.size());
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return priority((*solids)[a].tissue) < priority((*solids)[b].tissue); });
-  Mesh u = (*solids)[order[0]].mesh;
+  std::stable_sort(order.begin(), order.end(), [&](int a, int b) { return priority(solids[a].tissue) < priority(solids[b].tissue); });
+  Mesh u = solids[order[0]].mesh;
   double sum = PMP::volume(u);
   for (std::size_t k = 1; k < order.size(); ++k) {
-    Mesh b = (*solids)[order[k]].mesh;  // corefinement changes both operands
+    Mesh b = solids[order[k]].mesh;  // corefinement changes both operands
     sum += PMP::volume(b);
     if (!PMP::corefine_and_compute_union(u, b, u))
-      throw TopologyError("Joining layer '" + (*solids)[order[k]].name +
+      throw TopologyError("Joining layer '" + solids[order[k]].name +
                        "' to the others gives a non-manifold surface (the layers touch along an edge or at a vertex only): "
                        "let the touching tissues overlap a little, or merge those layers.");
   }
   if (stats) {
     auto comp = u.add_property_map<Mesh::Face_index, std::size_t>("f:c").first;
-    *stats = {static_cast<int>(solids->size()), sum, PMP::volume(u), static_cast<int>(PMP::connected_components(u, comp))};
+    *stats = {static_cast<int>(solids.size()), sum, PMP::volume(u), static_cast<int>(PMP::connected_components(u, comp))};
     u.remove_property_map(comp);
   }
+  return u;
+}
 
-  // into the CMeshO, each face labelled by the input surface it lies on (nearest; ties by priority)
+// the label of the input surface nearest to q (ties by priority): (tissue, part)
+std::pair<int, int> nearestLabel(const std::vector<Solid>& solids, const Point& q) {
+  double bd = 1e300;
+  int bt = 0, bp = 0, bprio = 9;
+  for (const auto& s : solids) {
+    const auto [d, p] = s.nearest(q);
+    const bool tie = std::abs(d - bd) <= 1e-10;
+    if ((d < bd && !tie) || (tie && priority(s.tissue) < bprio)) bd = std::min(bd, d), bt = int(s.tissue), bp = p, bprio = priority(s.tissue);
+  }
+  return {bt, bp};
+}
+
+// the union into the CMeshO, each face labelled by the input surface it lies on (nearest; ties by priority)
+void toLabelledMesh(const Mesh& u, const std::vector<Solid>& solids, CMeshO& joined) {
   joined.Clear();
   std::map<Mesh::Vertex_index, std::size_t> vi;
   auto v = vcg::tri::Allocator<CMeshO>::AddVertices(joined, u.number_of_vertices());
@@ -274,38 +299,45 @@ CageSurface joinTissueLayers(const std::vector<TissueLayer>& layers, const std::
     vcg::tri::Allocator<CMeshO>::AddFace(joined, &joined.vert[c[0]], &joined.vert[c[1]], &joined.vert[c[2]]);
     const auto h = halfedge(f, u);
     const Point q = CGAL::centroid(u.point(source(h, u)), u.point(target(h, u)), u.point(target(next(h, u), u)));
-    double bd = 1e300;
-    int bt = 0, bp = 0, bprio = 9;
-    for (const auto& s : *solids) {
-      const auto [d, p] = s.nearest(q);
-      const bool tie = std::abs(d - bd) <= 1e-10;
-      if ((d < bd && !tie) || (tie && priority(s.tissue) < bprio)) bd = std::min(bd, d), bt = int(s.tissue), bp = p, bprio = priority(s.tissue);
-    }
+    const auto [bt, bp] = nearestLabel(solids, q);
     tissue.push_back(bt);
     part.push_back(bp);
   }
   writeFaceLabels(joined, tissue, part);
   vcg::tri::UpdateBounding<CMeshO>::Box(joined);
+}
 
-  CageSurface cage = cageFromMesh(joined);
-  cage.labelTets = [solids](fe::TetMesh& mesh, std::vector<int>& tetPart) {
-    std::vector<const Solid*> byPriority;
-    for (const auto& s : *solids) byPriority.push_back(&s);
-    std::stable_sort(byPriority.begin(), byPriority.end(), [](const Solid* a, const Solid* b) { return priority(a->tissue) < priority(b->tissue); });
-    for (int t = 0; t < mesh.numTets(); ++t) {
-      const Eigen::Vector3d c = mesh.centroid(t);
-      const Point p(c.x(), c.y(), c.z());
-      const Solid* in = nullptr;
-      double depth = -1;
-      for (const Solid* s : byPriority)
-        if ((*s->inside)(p) != CGAL::ON_UNBOUNDED_SIDE)
-          if (const double d = s->tree->squared_distance(p); d > depth) in = s, depth = d;  // ties: priority
-      if (in) {  // in no solid (a rounding sliver at the union's surface): the nearest face's label stays
-        mesh.tissue[std::size_t(t)] = int(in->tissue);
-        tetPart[std::size_t(t)] = in->nearest(p).second;
-      }
+// each tet takes the tissue and part of the solid its centroid lies deepest in (ties: priority); a tet in
+// no solid (a rounding sliver at the union's surface) keeps the nearest face's label
+void labelTetsBySolids(const std::vector<Solid>& solids, fe::TetMesh& mesh, std::vector<int>& tetPart) {
+  std::vector<const Solid*> byPriority;
+  for (const auto& s : solids) byPriority.push_back(&s);
+  std::stable_sort(byPriority.begin(), byPriority.end(), [](const Solid* a, const Solid* b) { return priority(a->tissue) < priority(b->tissue); });
+  for (int t = 0; t < mesh.numTets(); ++t) {
+    const Eigen::Vector3d c = mesh.centroid(t);
+    const Point p(c.x(), c.y(), c.z());
+    const Solid* in = nullptr;
+    double depth = -1;
+    for (const Solid* s : byPriority)
+      if ((*s->inside)(p) != CGAL::ON_UNBOUNDED_SIDE)
+        if (const double d = s->tree->squared_distance(p); d > depth) in = s, depth = d;  // ties: priority
+    if (in) {  // in no solid (a rounding sliver at the union's surface): the nearest face's label stays
+      mesh.tissue[std::size_t(t)] = int(in->tissue);
+      tetPart[std::size_t(t)] = in->nearest(p).second;
     }
-  };
+  }
+}
+
+}  // namespace
+
+CageSurface joinTissueLayers(const std::vector<TissueLayer>& layers, const std::vector<Landmark>& lms, CMeshO& joined,
+                             JoinStats* stats) {
+  const std::shared_ptr<std::vector<Solid>> solids = solidsOf(layers);
+  assignParts(*solids, lms);
+  const Mesh u = unionOf(*solids, stats);
+  toLabelledMesh(u, *solids, joined);
+  CageSurface cage = cageFromMesh(joined);
+  cage.labelTets = [solids](fe::TetMesh& mesh, std::vector<int>& tetPart) { labelTetsBySolids(*solids, mesh, tetPart); };
   return cage;
 }
 

@@ -368,35 +368,42 @@ void readOff(const std::string& path, Soup& s, MeshFileStats& st) {
 // ------------------------------------------------------------------------------------------------
 // label tables
 
-std::map<int, std::string> parseTableText(const std::string& text, const std::string& source, bool semicolons) {
-  std::map<int, std::string> out;
-  const std::string t = trim(text);
-  auto add = [&](long long v, const std::string& name, const std::string& where) {
-    if (v == 0) return;  // background
-    if (v < INT32_MIN || v > INT32_MAX) throw InputError(source + where + ": label value out of range");
-    if (name.empty()) throw InputError(source + where + ": label " + std::to_string(v) + " has no name");
-    const auto r = out.emplace(int(v), name);
-    if (!r.second && r.first->second != name)
-      throw InputError(source + where + ": label " + std::to_string(v) + " is named twice ('" + r.first->second +
-                       "' and '" + name + "')");
-  };
-  if (!t.empty() && t[0] == '{') {  // a flat JSON object
-    static const std::regex pair(R"re("((?:[^"\\]|\\.)*)"\s*:\s*(?:"((?:[^"\\]|\\.)*)"|(-?\d+)))re");
-    for (auto it = std::sregex_iterator(t.begin(), t.end(), pair); it != std::sregex_iterator(); ++it) {
-      const auto& m = *it;
-      long long v = 0;
-      if (m[3].matched) {  // {"name": value}
-        parseInt(m[3].str(), v);
-        add(v, m[1].str(), "");
-      } else if (parseInt(trim(m[1].str()), v)) {  // {"value": "name"}
-        add(v, m[2].str(), "");
-      } else {
-        throw InputError(source + ": JSON key '" + m[1].str() + "' is not a label value (write {\"1\": \"name\"})");
-      }
+using LabelTable = std::map<int, std::string>;
+
+// label v (0: the background, left out) named `name`; a value out of range, a label without a name or named
+// twice is refused, naming the source and where in it
+void addLabel(LabelTable& out, const std::string& source, long long v, const std::string& name, const std::string& where) {
+  if (v == 0) return;  // background
+  if (v < INT32_MIN || v > INT32_MAX) throw InputError(source + where + ": label value out of range");
+  if (name.empty()) throw InputError(source + where + ": label " + std::to_string(v) + " has no name");
+  const auto r = out.emplace(int(v), name);
+  if (!r.second && r.first->second != name)
+    throw InputError(source + where + ": label " + std::to_string(v) + " is named twice ('" + r.first->second +
+                     "' and '" + name + "')");
+}
+
+// a flat JSON object: {"name": value} or {"value": "name"}
+LabelTable parseJsonTable(const std::string& t, const std::string& source) {
+  LabelTable out;
+  static const std::regex pair(R"re("((?:[^"\\]|\\.)*)"\s*:\s*(?:"((?:[^"\\]|\\.)*)"|(-?\d+)))re");
+  for (auto it = std::sregex_iterator(t.begin(), t.end(), pair); it != std::sregex_iterator(); ++it) {
+    const auto& m = *it;
+    long long v = 0;
+    if (m[3].matched) {  // {"name": value}
+      parseInt(m[3].str(), v);
+      addLabel(out, source, v, m[1].str(), "");
+    } else if (parseInt(trim(m[1].str()), v)) {  // {"value": "name"}
+      addLabel(out, source, v, m[2].str(), "");
+    } else {
+      throw InputError(source + ": JSON key '" + m[1].str() + "' is not a label value (write {\"1\": \"name\"})");
     }
-    if (out.empty()) throw InputError(source + ": no label in the JSON object (write {\"1\": \"name\", ...})");
-    return out;
   }
+  if (out.empty()) throw InputError(source + ": no label in the JSON object (write {\"1\": \"name\", ...})");
+  return out;
+}
+
+// the table's entries: its lines, each split at its semicolons too when `semicolons`
+std::vector<std::string> tableEntries(const std::string& text, bool semicolons) {
   std::vector<std::string> entries;
   for (const auto& l : splitLines(text)) {
     if (!semicolons) {
@@ -411,6 +418,28 @@ std::map<int, std::string> parseTableText(const std::string& text, const std::st
       a = b + 1;
     }
   }
+  return entries;
+}
+
+// the fields of an entry, separated by blanks, commas, semicolons, '=' or ':'
+std::vector<std::string> entryFields(const std::string& rest) {
+  std::vector<std::string> f;
+  std::string cur;
+  for (char c : rest) {
+    if (std::isspace(static_cast<unsigned char>(c)) || c == ',' || c == ';' || c == '=' || c == ':' || c == '\t') {
+      if (!cur.empty()) f.push_back(cur), cur.clear();
+    } else {
+      cur += c;
+    }
+  }
+  if (!cur.empty()) f.push_back(cur);
+  return f;
+}
+
+// entries of 'value name' (Slicer: value name R G B A; ITK-SNAP: IDX R G B A VIS MSH "name"; CSV: 1,"name");
+// comments (#) and blank entries are skipped, and a header before the first label
+LabelTable parseTableEntries(const std::vector<std::string>& entries, const std::string& source, bool semicolons) {
+  LabelTable out;
   bool firstData = true;
   for (std::size_t i = 0; i < entries.size(); ++i) {
     const std::string e = trim(entries[i]);
@@ -425,18 +454,7 @@ std::map<int, std::string> parseTableText(const std::string& text, const std::st
       name = e.substr(q + 1, q2 - q - 1);
       rest = e.substr(0, q);
     }
-    std::vector<std::string> f;
-    {
-      std::string cur;
-      for (char c : rest) {
-        if (std::isspace(static_cast<unsigned char>(c)) || c == ',' || c == ';' || c == '=' || c == ':' || c == '\t') {
-          if (!cur.empty()) f.push_back(cur), cur.clear();
-        } else {
-          cur += c;
-        }
-      }
-      if (!cur.empty()) f.push_back(cur);
-    }
+    const std::vector<std::string> f = entryFields(rest);
     long long v = 0;
     if (f.empty() || !parseInt(f[0], v)) {
       if (firstData) {  // a header such as "value,name"
@@ -450,9 +468,15 @@ std::map<int, std::string> parseTableText(const std::string& text, const std::st
       if (f.size() < 2) throw InputError(source + where + ": label " + f[0] + " has no name (write 'value name')");
       name = f[1];  // Slicer colour tables: value name R G B A
     }
-    add(v, name, where);
+    addLabel(out, source, v, name, where);
   }
   return out;
+}
+
+std::map<int, std::string> parseTableText(const std::string& text, const std::string& source, bool semicolons) {
+  const std::string t = trim(text);
+  if (!t.empty() && t[0] == '{') return parseJsonTable(t, source);
+  return parseTableEntries(tableEntries(text, semicolons), source, semicolons);
 }
 
 std::optional<std::string> sidecarOf(const std::string& niftiPath) {
@@ -624,42 +648,87 @@ void readMeshFile(const std::string& path, CMeshO& out) {
   readMeshFile(path, out, st);
 }
 
-std::vector<Structure> importSegmentation(const std::string& path, const ImportOptions& opt, ImportReport* report,
-                                          const std::function<void(int, const char*)>& progress) {
+namespace {
+
+// the options and the path: a minimum voxel count in range, a path that exists
+void checkImportInput(const std::string& path, const ImportOptions& opt) {
   if (opt.minVoxels < kMinVoxelsRange.lo)
     throw InputError("minimum voxel count must be >= " + std::to_string(int(kMinVoxelsRange.lo)) + ", got " +
                      std::to_string(opt.minVoxels));
   std::error_code ec;
   if (trim(path).empty()) throw InputError("no path given: give a segmentation file or a folder of them");
   if (!fs::exists(path, ec)) throw IOError("'" + path + "' does not exist: give a segmentation file or a folder of them");
+}
 
-  std::vector<std::string> files, other;
+// the files to import: the file at path, or the folder's files of a known kind (sorted); the folder's
+// other entries in `other`
+std::vector<std::string> segmentationFiles(const std::string& path, std::vector<std::string>& other) {
+  std::vector<std::string> files;
+  std::error_code ec;
   const bool folder = fs::is_directory(path, ec);
-  if (folder) {
-    for (const auto& e : fs::directory_iterator(path, ec)) {
-      const std::string n = e.path().filename().string();
-      std::error_code ec2;
-      if (e.is_regular_file(ec2) && kindOf(n) != Kind::Unknown)
-        files.push_back(e.path().string());
-      else
-        other.push_back(n + (e.is_directory(ec2) ? "/" : ""));
-    }
-    if (ec) throw IOError("cannot list folder '" + path + "': " + ec.message());
-    std::sort(files.begin(), files.end());
-    std::sort(other.begin(), other.end());
-    if (files.empty()) {
-      std::string found;
-      for (std::size_t i = 0; i < other.size() && i < 10; ++i) found += (i ? ", " : "") + other[i];
-      if (other.size() > 10) found += ", ... (" + std::to_string(other.size()) + " in all)";
-      throw IOError("folder '" + path + "' has no " + kKnown + " file; found " +
-                       (other.empty() ? std::string("nothing") : found));
-    }
-  } else {
+  if (!folder) {
     if (kindOf(path) == Kind::Unknown)
       throw IOError("file '" + path + "' has an unknown extension '" + fs::path(path).extension().string() +
                        "': give " + kKnown + ", or a folder of them");
     files.push_back(path);
+    return files;
   }
+  for (const auto& e : fs::directory_iterator(path, ec)) {
+    const std::string n = e.path().filename().string();
+    std::error_code ec2;
+    if (e.is_regular_file(ec2) && kindOf(n) != Kind::Unknown)
+      files.push_back(e.path().string());
+    else
+      other.push_back(n + (e.is_directory(ec2) ? "/" : ""));
+  }
+  if (ec) throw IOError("cannot list folder '" + path + "': " + ec.message());
+  std::sort(files.begin(), files.end());
+  std::sort(other.begin(), other.end());
+  if (files.empty()) {
+    std::string found;
+    for (std::size_t i = 0; i < other.size() && i < 10; ++i) found += (i ? ", " : "") + other[i];
+    if (other.size() > 10) found += ", ... (" + std::to_string(other.size()) + " in all)";
+    throw IOError("folder '" + path + "' has no " + kKnown + " file; found " +
+                     (other.empty() ? std::string("nothing") : found));
+  }
+  return files;
+}
+
+// a mesh file as one structure, described in `lines`
+Structure meshStructure(const std::string& f, std::vector<std::string>& lines) {
+  Structure s;
+  s.name = structureName(f);
+  s.source = f;
+  MeshFileStats st;
+  readMeshFile(f, *s.mesh, st);
+  std::string line = describe(s) + "; " + st.format + ", size " + bboxText(*s.mesh) + " (file units)";
+  if (st.nonFiniteFaces)
+    line += "; " + plural(st.nonFiniteFaces, "face", "faces") + " with NaN or infinite coordinates dropped";
+  lines.push_back(line);
+  return s;
+}
+
+// the folder's other entries that no label map took as its label table, in a line of `lines`
+void reportSkipped(const std::string& path, const std::vector<std::string>& other, const std::set<std::string>& usedSidecars,
+                   std::vector<std::string>& lines) {
+  std::vector<std::string> skipped;
+  for (const auto& o : other)
+    if (!usedSidecars.count((fs::path(path) / o).lexically_normal().string())) skipped.push_back(o);
+  if (!skipped.empty()) {
+    std::string l = "skipped " + plural((long long)skipped.size(), "file", "files") + " (not " + kKnown + "): ";
+    for (std::size_t i = 0; i < skipped.size() && i < 20; ++i) l += (i ? ", " : "") + skipped[i];
+    if (skipped.size() > 20) l += ", ...";
+    lines.push_back(l);
+  }
+}
+
+}  // namespace
+
+std::vector<Structure> importSegmentation(const std::string& path, const ImportOptions& opt, ImportReport* report,
+                                          const std::function<void(int, const char*)>& progress) {
+  checkImportInput(path, opt);
+  std::vector<std::string> other;
+  const std::vector<std::string> files = segmentationFiles(path, other);
 
   std::vector<Structure> out;
   std::vector<std::string> lines;
@@ -675,28 +744,11 @@ std::vector<Structure> importSegmentation(const std::string& path, const ImportO
       });
       continue;
     }
-    Structure s;
-    s.name = structureName(f);
-    s.source = f;
-    MeshFileStats st;
-    readMeshFile(f, *s.mesh, st);
-    std::string line = describe(s) + "; " + st.format + ", size " + bboxText(*s.mesh) + " (file units)";
-    if (st.nonFiniteFaces)
-      line += "; " + plural(st.nonFiniteFaces, "face", "faces") + " with NaN or infinite coordinates dropped";
-    lines.push_back(line);
-    out.push_back(std::move(s));
+    out.push_back(meshStructure(f, lines));
   }
   if (progress) progress(100, "done");
 
-  std::vector<std::string> skipped;
-  for (const auto& o : other)
-    if (!usedSidecars.count((fs::path(path) / o).lexically_normal().string())) skipped.push_back(o);
-  if (!skipped.empty()) {
-    std::string l = "skipped " + plural((long long)skipped.size(), "file", "files") + " (not " + kKnown + "): ";
-    for (std::size_t i = 0; i < skipped.size() && i < 20; ++i) l += (i ? ", " : "") + skipped[i];
-    if (skipped.size() > 20) l += ", ...";
-    lines.push_back(l);
-  }
+  reportSkipped(path, other, usedSidecars, lines);
   if (out.empty()) {
     std::string why;
     for (const auto& l : lines) why += (why.empty() ? "" : "; ") + l;

@@ -379,7 +379,10 @@ LabelVolume readNifti(const std::string& path) {
   return v;
 }
 
-void writeNifti(const LabelVolume& v, const std::string& path) {
+namespace {
+
+// a NIfTI file name, a consistent volume, a folder that exists; returns the voxel count
+std::size_t checkNiftiOutput(const LabelVolume& v, const std::string& path) {
   const std::string l = lower(path);
   const bool nii = l.size() > 4 && l.compare(l.size() - 4, 4, ".nii") == 0;
   const bool niigz = l.size() > 7 && l.compare(l.size() - 7, 7, ".nii.gz") == 0;
@@ -394,20 +397,12 @@ void writeNifti(const LabelVolume& v, const std::string& path) {
   std::error_code ec;
   if (!parent.empty() && !fs::is_directory(parent, ec))
     throw IOError("cannot write '" + path + "': folder '" + parent.string() + "' does not exist");
+  return n;
+}
 
-  std::int32_t lo = 0, hi = 0;
-  for (std::int32_t x : v.labels) { lo = std::min(lo, x); hi = std::max(hi, x); }
-  const bool small = lo >= std::numeric_limits<std::int16_t>::min() && hi <= std::numeric_limits<std::int16_t>::max();
-  const int64_t dims[8] = {3, v.dims[0], v.dims[1], v.dims[2], 1, 1, 1, 1};
-  quietNifti();
-  NimPtr nim(nifti_make_new_nim(dims, small ? DT_INT16 : DT_INT32, 1));
-  if (!nim || !nim->data) throw IOError("cannot write '" + path + "': out of memory");
-  if (small) {
-    auto* d = static_cast<std::int16_t*>(nim->data);
-    for (std::size_t i = 0; i < n; ++i) d[i] = std::int16_t(v.labels[i]);
-  } else {
-    std::memcpy(nim->data, v.labels.data(), n * sizeof(std::int32_t));
-  }
+// the voxel spacing, units, label intent and range, and both the sform and the qform of the voxel-to-mm affine
+void setNiftiGeometry(const LabelVolume& v, std::int32_t lo, std::int32_t hi, nifti_image& im) {
+  nifti_image* nim = &im;
   const Eigen::Vector3d sp = v.spacing();
   nim->dx = nim->pixdim[1] = sp[0];
   nim->dy = nim->pixdim[2] = sp[1];
@@ -433,30 +428,54 @@ void writeNifti(const LabelVolume& v, const std::string& path) {
   nim->qfac = qfac;
   nim->qto_xyz = nifti_quatern_to_dmat44(qb, qc, qd, qx, qy, qz, dx, dy, dz, qfac);
   nim->qto_ijk = nifti_dmat44_inverse(nim->qto_xyz);
+}
+
+// TotalSegmentator's label table: a Caret XML extension (code 0)
+std::string caretLabelTable(const std::map<int, std::string>& names) {
+  static const std::array<std::array<int, 3>, 12> colors{{{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {255, 255, 0}, {255, 0, 255},
+                                                          {0, 255, 255}, {255, 128, 0}, {255, 0, 128}, {128, 255, 128},
+                                                          {0, 128, 255}, {128, 128, 128}, {185, 170, 155}}};
+  std::ostringstream x;
+  x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?> <CaretExtension>  <Date><![CDATA[2013-07-14T05:45:09]]></Date>   "
+       "<VolumeInformation Index=\"0\">   <LabelTable>\n";
+  for (const auto& [key, name] : names) {
+    const auto& c = colors[std::size_t(((key % 12) + 12) % 12)];
+    x << "<Label Key=\"" << key << "\" Red=\"" << c[0] / 255.0 << "\" Green=\"" << c[1] / 255.0 << "\" Blue=\"" << c[2] / 255.0
+      << "\" Alpha=\"1\">";
+    if (name.find("]]>") == std::string::npos) x << "<![CDATA[" << name << "]]>";
+    else x << xmlEscape(name);
+    x << "</Label>\n";
+  }
+  x << "\n  </LabelTable>  <StudyMetaDataLinkSet>  </StudyMetaDataLinkSet>  <VolumeType><![CDATA[Label]]></VolumeType>   "
+       "</VolumeInformation></CaretExtension>\n";
+  return x.str();
+}
+
+}  // namespace
+
+void writeNifti(const LabelVolume& v, const std::string& path) {
+  const std::size_t n = checkNiftiOutput(v, path);
+  std::error_code ec;
+  std::int32_t lo = 0, hi = 0;
+  for (std::int32_t x : v.labels) { lo = std::min(lo, x); hi = std::max(hi, x); }
+  const bool small = lo >= std::numeric_limits<std::int16_t>::min() && hi <= std::numeric_limits<std::int16_t>::max();
+  const int64_t dims[8] = {3, v.dims[0], v.dims[1], v.dims[2], 1, 1, 1, 1};
+  quietNifti();
+  NimPtr nim(nifti_make_new_nim(dims, small ? DT_INT16 : DT_INT32, 1));
+  if (!nim || !nim->data) throw IOError("cannot write '" + path + "': out of memory");
+  if (small) {
+    auto* d = static_cast<std::int16_t*>(nim->data);
+    for (std::size_t i = 0; i < n; ++i) d[i] = std::int16_t(v.labels[i]);
+  } else {
+    std::memcpy(nim->data, v.labels.data(), n * sizeof(std::int32_t));
+  }
+  setNiftiGeometry(v, lo, hi, *nim);
   std::snprintf(nim->descrip, sizeof(nim->descrip), "label map");
   nim->nifti_type = NIFTI_FTYPE_NIFTI1_1;
   if (nifti_set_filenames(nim.get(), path.c_str(), 0, 1) != 0) throw IOError("cannot write '" + path + "': not a valid NIfTI file name");
   nifti_set_iname_offset(nim.get(), 1);
-
   if (!v.names.empty()) {
-    // TotalSegmentator's label table: a Caret XML extension (code 0)
-    static const std::array<std::array<int, 3>, 12> colors{{{255, 0, 0}, {0, 255, 0}, {0, 0, 255}, {255, 255, 0}, {255, 0, 255},
-                                                            {0, 255, 255}, {255, 128, 0}, {255, 0, 128}, {128, 255, 128},
-                                                            {0, 128, 255}, {128, 128, 128}, {185, 170, 155}}};
-    std::ostringstream x;
-    x << "<?xml version=\"1.0\" encoding=\"UTF-8\"?> <CaretExtension>  <Date><![CDATA[2013-07-14T05:45:09]]></Date>   "
-         "<VolumeInformation Index=\"0\">   <LabelTable>\n";
-    for (const auto& [key, name] : v.names) {
-      const auto& c = colors[std::size_t(((key % 12) + 12) % 12)];
-      x << "<Label Key=\"" << key << "\" Red=\"" << c[0] / 255.0 << "\" Green=\"" << c[1] / 255.0 << "\" Blue=\"" << c[2] / 255.0
-        << "\" Alpha=\"1\">";
-      if (name.find("]]>") == std::string::npos) x << "<![CDATA[" << name << "]]>";
-      else x << xmlEscape(name);
-      x << "</Label>\n";
-    }
-    x << "\n  </LabelTable>  <StudyMetaDataLinkSet>  </StudyMetaDataLinkSet>  <VolumeType><![CDATA[Label]]></VolumeType>   "
-         "</VolumeInformation></CaretExtension>\n";
-    const std::string xml = x.str();
+    const std::string xml = caretLabelTable(v.names);
     if (nifti_add_extension(nim.get(), xml.data(), int(xml.size()), NIFTI_ECODE_IGNORE) != 0)
       throw IOError("cannot write '" + path + "': the label table does not fit in a NIfTI extension");
   }
@@ -464,7 +483,6 @@ void writeNifti(const LabelVolume& v, const std::string& path) {
   nifti_image_write(nim.get());
   if (!fs::is_regular_file(path, ec) || fs::file_size(path, ec) == 0)
     throw IOError("cannot write '" + path + "': check that the folder is writable and the disk not full");
-  (void)niigz;
 }
 
 void extractLabelSurface(const LabelVolume& v, int label, CMeshO& out) {

@@ -218,25 +218,35 @@ Vec3 mean(const std::vector<Vec3>& v) {
   return v.empty() ? c : Vec3(c / double(v.size()));
 }
 
-// `given`: the codes of the user's points. A landmark that cannot be placed is refused unless the user gives it
-// (then the user's point, placed later, stands for it).
-std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, const std::set<int>& given,
-                                     std::vector<std::string>& log) {
+// What the landmarks are placed from, and the landmarks placed so far. `given`: the codes of the user's points.
+struct LandmarkPlacer {
+  const Anatomy& an;
+  double x0, yMid;  // the midline's x, the y of the cage's middle
+  const std::set<int>& given;
+  std::vector<std::string>& log;
   std::vector<Landmark> lms;
-  auto fail = [&](int code, const std::string& what, const std::string& why) {
-    if (given.count(code)) {
-      log.push_back("landmark " + std::to_string(code) + " (" + what + ") cannot be placed automatically (" + why +
+  std::map<int, Vec3> cvj;  // the costovertebral joints placed, by code
+};
+
+// A landmark that cannot be placed is refused unless the user gives it (then the user's point, placed later,
+// stands for it).
+void cannotPlace(LandmarkPlacer& c, int code, const std::string& what, const std::string& why) {
+  if (c.given.count(code)) {
+    c.log.push_back("landmark " + std::to_string(code) + " (" + what + ") cannot be placed automatically (" + why +
                     "): the user's point stands for it");
-      return;
-    }
-    throw InputError("Cannot place the landmark '" + what + "' (code " + std::to_string(code) + "): " + why + ". Pick it "
-                     "with Edit > PickPoints on the input layers and give the .pp file (parameter 'Picked points'), the "
-                     "point named " + std::to_string(code) + ".");
-  };
-  // costovertebral joints: the rib head, the centre of the rib's vertebral end. The heads line up along the
-  // spine: its axis (x0, yAxis) is where the ribs' medial-most posterior points lie (their median y); each
-  // rib's head is its point nearest that axis in the transverse plane, and the joint the centroid of the
-  // rib's surface within one joint radius (6 mm, as the FE analysis fixes) of it.
+    return;
+  }
+  throw InputError("Cannot place the landmark '" + what + "' (code " + std::to_string(code) + "): " + why + ". Pick it "
+                   "with Edit > PickPoints on the input layers and give the .pp file (parameter 'Picked points'), the "
+                   "point named " + std::to_string(code) + ".");
+}
+
+// costovertebral joints: the rib head, the centre of the rib's vertebral end. The heads line up along the
+// spine: its axis (x0, yAxis) is where the ribs' medial-most posterior points lie (their median y); each
+// rib's head is its point nearest that axis in the transverse plane, and the joint the centroid of the
+// rib's surface within one joint radius (6 mm, as the FE analysis fixes) of it.
+void placeJoints(LandmarkPlacer& c) {
+  const double x0 = c.x0, yMid = c.yMid;
   auto medialMost = [&](const std::vector<Vec3>& pts) {
     const Vec3* best = nullptr;
     for (const auto& p : pts)
@@ -244,17 +254,16 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
     return best;
   };
   std::vector<double> medialY;
-  for (const auto& [part, pts] : an.rib)
+  for (const auto& [part, pts] : c.an.rib)
     if (part >= 101 && part <= 212)
       if (const Vec3* m = medialMost(pts)) medialY.push_back(m->y());
   std::nth_element(medialY.begin(), medialY.begin() + long(medialY.size() / 2), medialY.end());
   const double yAxis = medialY.empty() ? yMid : medialY[medialY.size() / 2];
-  std::map<int, Vec3> cvj;
-  for (const auto& [part, pts] : an.rib) {
+  for (const auto& [part, pts] : c.an.rib) {
     if (part < 101 || part > 212) continue;
     if (!medialMost(pts)) {
-      fail(part, "costovertebral joint of the " + sideName(part / 100) + " rib " + std::to_string(part % 100),
-           "the rib has no part behind the cage's middle");
+      cannotPlace(c, part, "costovertebral joint of the " + sideName(part / 100) + " rib " + std::to_string(part % 100),
+                  "the rib has no part behind the cage's middle");
       continue;
     }
     const Vec3* tip = nullptr;
@@ -264,64 +273,87 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
     std::vector<Vec3> end;
     for (const auto& p : pts)
       if ((p - *tip).norm() < 6.0) end.push_back(p);
-    cvj[part] = mean(end);
-    lms.push_back({part, cvj[part]});
+    c.cvj[part] = mean(end);
+    c.lms.push_back({part, c.cvj[part]});
   }
-  // sternum ends
-  if (an.sternum.empty())  // every other landmark is placed from the sternum: no picked point stands for it
+}
+
+struct SternumEnds {
+  double zLo, zHi;    // the sternum's lowest and highest z
+  Vec3 lower, upper;  // its ends: the means of its points within 3 mm of them
+};
+
+// the sternum's ends
+SternumEnds placeSternumEnds(LandmarkPlacer& c) {
+  if (c.an.sternum.empty())  // every other landmark is placed from the sternum: no picked point stands for it
     throw InputError("Cannot place the landmarks: the joined cage has no sternum faces. Check the sternum's layer.");
   double zLo = 1e300, zHi = -1e300;
-  for (const auto& p : an.sternum) zLo = std::min(zLo, p.z()), zHi = std::max(zHi, p.z());
+  for (const auto& p : c.an.sternum) zLo = std::min(zLo, p.z()), zHi = std::max(zHi, p.z());
   std::vector<Vec3> lo, hi;
-  for (const auto& p : an.sternum) {
+  for (const auto& p : c.an.sternum) {
     if (p.z() < zLo + 3) lo.push_back(p);
     if (p.z() > zHi - 3) hi.push_back(p);
   }
-  const Vec3 lower = mean(lo), upper = mean(hi);
-  lms.push_back({kSternumLowerEnd, lower});
-  lms.push_back({kSternumUpperEnd, upper});
-  // the spine's front at height z: the vertebral column's most anterior midline point, else the joints'
-  auto spineFront = [&](double z, bool& measured) {
-    double y = -1e300;
-    for (const auto& p : an.spine)
-      if (std::abs(p.x() - x0) < 10 && std::abs(p.z() - z) < 5) y = std::max(y, p.y());
-    measured = y > -1e299;
-    if (measured) return y;
-    double best = 1e300, yb = 0;
-    for (const auto& [part, p] : cvj)
-      if (std::abs(p.z() - z) < best) best = std::abs(p.z() - z), yb = p.y();
-    return yb;
-  };
-  // deepest funnel point: the sternum level with the smallest distance between its front and the spine
-  const double L = zHi - zLo;
-  double bestAp = 1e300, zDeep = 0.5 * (zLo + zHi), yDeep = 0;
-  for (double z = zLo + 0.1 * L; z <= zHi - 0.1 * L; z += 2.0) {
+  const SternumEnds e{zLo, zHi, mean(lo), mean(hi)};
+  c.lms.push_back({kSternumLowerEnd, e.lower});
+  c.lms.push_back({kSternumUpperEnd, e.upper});
+  return e;
+}
+
+// the spine's front at height z: the vertebral column's most anterior midline point, else the joints'
+double spineFront(const LandmarkPlacer& c, double z, bool& measured) {
+  double y = -1e300;
+  for (const auto& p : c.an.spine)
+    if (std::abs(p.x() - c.x0) < 10 && std::abs(p.z() - z) < 5) y = std::max(y, p.y());
+  measured = y > -1e299;
+  if (measured) return y;
+  double best = 1e300, yb = 0;
+  for (const auto& [part, p] : c.cvj)
+    if (std::abs(p.z() - z) < best) best = std::abs(p.z() - z), yb = p.y();
+  return yb;
+}
+
+struct Deepest {
+  bool found;
+  double y, z;
+};
+
+// deepest funnel point: the sternum level with the smallest distance between its front and the spine; the
+// vertebra at its level
+Deepest placeDeepest(LandmarkPlacer& c, const SternumEnds& e) {
+  const double L = e.zHi - e.zLo, x0 = c.x0;
+  double bestAp = 1e300, zDeep = 0.5 * (e.zLo + e.zHi), yDeep = 0;
+  for (double z = e.zLo + 0.1 * L; z <= e.zHi - 0.1 * L; z += 2.0) {
     double yf = -1e300;
-    for (const auto& p : an.sternum)
+    for (const auto& p : c.an.sternum)
       if (std::abs(p.x() - x0) < 8 && std::abs(p.z() - z) < 1.0) yf = std::max(yf, p.y());
     if (yf < -1e299) continue;
     bool m = false;
-    const double ap = yf - spineFront(z, m);
+    const double ap = yf - spineFront(c, z, m);
     if (ap < bestAp) bestAp = ap, zDeep = z, yDeep = yf;
   }
   const bool deepFound = bestAp < 1e299;
-  if (!deepFound) fail(kFunnelDeepest, "deepest point of the funnel", "the sternum has no front surface near its midline");
-  else lms.push_back({kFunnelDeepest, Vec3(x0, yDeep, zDeep)});
+  if (!deepFound) cannotPlace(c, kFunnelDeepest, "deepest point of the funnel", "the sternum has no front surface near its midline");
+  else c.lms.push_back({kFunnelDeepest, Vec3(x0, yDeep, zDeep)});
   bool spineMeasured = false;
-  const double ySpine = spineFront(zDeep, spineMeasured);
-  if (spineMeasured && deepFound) lms.push_back({kVertebraAtDeepest, Vec3(x0, ySpine, zDeep)});
-  else if (!deepFound) log.push_back("landmark 503 (vertebra at the deepest level) not placed: the deepest point is the user's");
-  else log.push_back("no vertebral column in the input: landmark 503 (vertebra at the deepest level) not placed; the pectus "
-                     "index then measures to the costovertebral joints' line");
-  // bar exits at the mid-axillary line: halfway between the lateral-most points of ribs s and s+1
+  const double ySpine = spineFront(c, zDeep, spineMeasured);
+  if (spineMeasured && deepFound) c.lms.push_back({kVertebraAtDeepest, Vec3(x0, ySpine, zDeep)});
+  else if (!deepFound) c.log.push_back("landmark 503 (vertebra at the deepest level) not placed: the deepest point is the user's");
+  else c.log.push_back("no vertebral column in the input: landmark 503 (vertebra at the deepest level) not placed; the pectus "
+                       "index then measures to the costovertebral joints' line");
+  return {deepFound, yDeep, zDeep};
+}
+
+// bar exits at the mid-axillary line: halfway between the lateral-most points of ribs s and s+1; returns how many
+int placeBarExits(LandmarkPlacer& c) {
   auto lateral = [&](int part, Vec3& out) {
-    const auto it = an.rib.find(part);
-    if (it == an.rib.end()) return false;
+    const auto it = c.an.rib.find(part);
+    if (it == c.an.rib.end()) return false;
     double dmax = 0;
-    for (const auto& p : it->second) dmax = std::max(dmax, std::abs(p.x() - x0));
+    for (const auto& p : it->second) dmax = std::max(dmax, std::abs(p.x() - c.x0));
     std::vector<Vec3> side;
     for (const auto& p : it->second)
-      if (std::abs(p.x() - x0) > dmax - 3) side.push_back(p);
+      if (std::abs(p.x() - c.x0) > dmax - 3) side.push_back(p);
     out = mean(side);
     return true;
   };
@@ -329,30 +361,50 @@ std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, 
   for (int side = 1; side <= 2; ++side)
     for (int s = 1; s <= 9; ++s) {  // codes 600 + 10*side + s hold one digit of space
       Vec3 a, b;
-      if (lateral(100 * side + s, a) && lateral(100 * side + s + 1, b)) lms.push_back({barExitLandmark(side, s), 0.5 * (a + b)}), ++exits;
+      if (lateral(100 * side + s, a) && lateral(100 * side + s + 1, b)) c.lms.push_back({barExitLandmark(side, s), 0.5 * (a + b)}), ++exits;
     }
-  // diaphragm dome height: the lowest sternocostal junction (the xiphisternal level); lung apex: top of rib 1
-  double zDome = zLo + 0.15 * L;
-  if (!an.junction.empty()) {
+  return exits;
+}
+
+// diaphragm dome height: the lowest sternocostal junction (the xiphisternal level); lung apex: top of rib 1;
+// each midway between the sternum and the spine. Gives their heights (zApex -1e300: none).
+void placeDomeAndApex(LandmarkPlacer& c, const SternumEnds& e, double& zDome, double& zApex) {
+  zDome = e.zLo + 0.15 * (e.zHi - e.zLo);
+  if (!c.an.junction.empty()) {
     zDome = 1e300;
-    for (const auto& p : an.junction) zDome = std::min(zDome, p.z());
+    for (const auto& p : c.an.junction) zDome = std::min(zDome, p.z());
   } else {
-    log.push_back("the cartilages do not meet the sternum: the diaphragm dome height is taken 15 % of the sternum's "
-                  "length above its lower end");
+    c.log.push_back("the cartilages do not meet the sternum: the diaphragm dome height is taken 15 % of the sternum's "
+                    "length above its lower end");
   }
-  double zApex = -1e300;
+  zApex = -1e300;
   for (int side = 1; side <= 2; ++side)
-    if (const auto it = an.rib.find(100 * side + 1); it != an.rib.end())
+    if (const auto it = c.an.rib.find(100 * side + 1); it != c.an.rib.end())
       for (const auto& p : it->second) zApex = std::max(zApex, p.z());
-  if (zApex < -1e299) fail(kLungApex, "lung apex", "there is no first rib");
+  if (zApex < -1e299) cannotPlace(c, kLungApex, "lung apex", "there is no first rib");
   bool m = false;
-  lms.push_back({kDiaphragmDome, Vec3(x0, 0.5 * (lower.y() + spineFront(zDome, m)), zDome)});
-  if (zApex > -1e299) lms.push_back({kLungApex, Vec3(x0, 0.5 * (upper.y() + spineFront(zApex, m)), zApex)});
-  log.push_back("landmarks: " + std::to_string(cvj.size()) + " costovertebral joints, sternum ends at " + at(lower) + " and " +
-                at(upper) + ", deepest point " + (deepFound ? "at " + at(Vec3(x0, yDeep, zDeep)) : std::string("the user's")) + ", " +
+  c.lms.push_back({kDiaphragmDome, Vec3(c.x0, 0.5 * (e.lower.y() + spineFront(c, zDome, m)), zDome)});
+  if (zApex > -1e299) c.lms.push_back({kLungApex, Vec3(c.x0, 0.5 * (e.upper.y() + spineFront(c, zApex, m)), zApex)});
+}
+
+// the landmarks: the costovertebral joints, the sternum's ends, the funnel's deepest point and the vertebra at
+// its level, the bar exits, the diaphragm dome and the lung apex; what was placed goes into the log. `given`:
+// the codes of the user's points (cannotPlace).
+std::vector<Landmark> placeLandmarks(const Anatomy& an, double x0, double yMid, const std::set<int>& given,
+                                     std::vector<std::string>& log) {
+  LandmarkPlacer c{an, x0, yMid, given, log, {}, {}};
+  placeJoints(c);
+  const SternumEnds e = placeSternumEnds(c);
+  const Deepest deep = placeDeepest(c, e);
+  const int exits = placeBarExits(c);
+  double zDome = 0, zApex = 0;
+  placeDomeAndApex(c, e, zDome, zApex);
+  log.push_back("landmarks: " + std::to_string(c.cvj.size()) + " costovertebral joints, sternum ends at " + at(e.lower) +
+                " and " + at(e.upper) + ", deepest point " +
+                (deep.found ? "at " + at(Vec3(x0, deep.y, deep.z)) : std::string("the user's")) + ", " +
                 std::to_string(exits) + " bar exits, diaphragm dome z " + mm(zDome) + ", lung apex z " +
                 (zApex > -1e299 ? mm(zApex) : std::string("the user's")) + " (before centring)");
-  return lms;
+  return std::move(c.lms);
 }
 
 // relabels the faces of `m` from the nearest face of the labelled surface (pts, tris, labels)
