@@ -13,5 +13,7 @@ if [ ! -f "$ROOT/.hosts/$SUITE/.complete-pkgs" ] || [ ! -x "$ROOT/build-$REL/bin
   echo "skipped: the MeshLab $REL host is not made (scripts/host.sh $REL)"
   exit 77
 fi
+# function_length reads the sources with Universal Ctags, which the userland does not have; the bookworm build
+# runs it on the same sources
 exec "$ROOT/scripts/host.sh" "$REL" run ctest --test-dir "build-$REL" -L unit -j1 --output-on-failure --timeout 1500 \
-  -E '^(RibCage|RibCageCoarse|NussAnalysis|PatientPrepare|BarPlanner|TissueJoin)\.|^FeMesher\.Tetgen(BoxLabels|Assertion)'
+  -E '^(RibCage|RibCageCoarse|NussAnalysis|PatientPrepare|BarPlanner|TissueJoin)\.|^FeMesher\.Tetgen(BoxLabels|Assertion)|^function_length$'
