@@ -275,15 +275,6 @@ void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList&
                             "Empty: no files."));
 }
 
-namespace {
-/// a Location::describe() without its trailing " at (x, y, z) mm": the value *_where (the place is *_at_mm)
-std::string whereOf(std::string described) {
-  const auto k = described.rfind(" at (");
-  if (k != std::string::npos) described.resize(k);
-  return described;
-}
-}  // namespace
-
 void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   namespace nuss = pectus::nuss;
   MeshModel& cur = ctx.current();
@@ -405,14 +396,14 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   values.set("linear_compliance_mm_per_N", a.linearCompliance);
   auto place = [&](const std::string& key, double value, const nuss::Location& at) {
     values.set(key, value);
-    values.set(key.substr(0, key.rfind('_')) + "_where", whereOf(at.describe()));
+    values.set(key.substr(0, key.rfind('_')) + "_where", at.where());
     values.set(key.substr(0, key.rfind('_')) + "_at_mm", pectus::Results::Vec3{at.p.x(), at.p.y(), at.p.z()});
   };
   place("max_stress_MPa", a.maxStress, a.maxStressAt);
   values.set("max_stress_all_MPa", a.maxStressAll);
   place("max_stress_body_MPa", a.maxStressBody, a.maxStressBodyAt);
   values.set("max_strain", a.maxStrain);
-  values.set("max_strain_where", whereOf(a.maxStrainAt.describe()));
+  values.set("max_strain_where", a.maxStrainAt.where());
   values.set("max_strain_at_mm", pectus::Results::Vec3{a.maxStrainAt.p.x(), a.maxStrainAt.p.y(), a.maxStrainAt.p.z()});
   values.set("max_strain_cartilage", a.maxStrainCartilage);
   values.set("max_strain_bone", a.maxStrainBone);
@@ -515,9 +506,9 @@ void FilterNussFeaPlugin::runBarPlanner(FilterContext& ctx) {
     values.set(k + "force_N", r.force);
     values.set(k + "elevation_mm", r.elevation);
     values.set(k + "max_stress_MPa", r.maxStress);
-    values.set(k + "max_stress_where", whereOf(r.maxStressAt));
+    values.set(k + "max_stress_where", r.maxStressWhere);
     values.set(k + "max_strain", r.maxStrain);
-    values.set(k + "max_strain_where", whereOf(r.maxStrainAt));
+    values.set(k + "max_strain_where", r.maxStrainWhere);
     values.set(k + "slice_volume_change_cm3", r.sliceGain / 1000);
     values.set(k + "slice_volume_change_pct", r.slicePercent);
     values.set(k + "envelope_volume_change_cm3", r.envelopeGain / 1000);

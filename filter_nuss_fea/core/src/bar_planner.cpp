@@ -37,11 +37,6 @@ std::string csvField(const std::string& s) {
 }
 
 // "right rib 5 (bone), posterior near the spine, 25 mm from its costovertebral joint at (x, y, z) mm" -> without the point
-std::string withoutPoint(const std::string& where) {
-  const auto k = where.rfind(" at (");
-  return k == std::string::npos ? where : where.substr(0, k);
-}
-
 }  // namespace
 
 std::vector<int> parseLevels(const std::string& text) {
@@ -189,6 +184,8 @@ PlanRow analyseOption(const CageSurface& cage, const Model& model, const std::ve
   r.maxStrain = a.maxStrain;
   r.maxStressAt = a.maxStressBodyAt.describe();
   r.maxStrainAt = a.maxStrainAt.describe();
+  r.maxStressWhere = a.maxStressBodyAt.where();
+  r.maxStrainWhere = a.maxStrainAt.where();
 
   report(opt, p0 + (p1 - p0) * 4 / 5, r.option + ": volumes and pectus index after");
   const vol::Soup after = measuredSurface(cage, &a);
@@ -268,8 +265,8 @@ std::vector<std::string> planTable(const Plan& plan) {
     std::snprintf(b, sizeof b, "%-22s %8s %8s %9s %8s %10s %6s %10s %6s %7s  %s / %s", (r.option + (int(k) == plan.best ? " *" : "")).c_str(),
                   fixed(r.force, 2).c_str(), fixed(r.elevation, 2).c_str(), fixed(r.maxStress, 2).c_str(), fixed(r.maxStrain, 4).c_str(),
                   fixed(r.sliceGain / 1000.0, 2).c_str(), fixed(r.slicePercent, 2).c_str(), fixed(r.envelopeGain / 1000.0, 2).c_str(),
-                  fixed(r.envelopePercent, 2).c_str(), fixed(r.hallerAfter, 3).c_str(), withoutPoint(r.maxStressAt).c_str(),
-                  withoutPoint(r.maxStrainAt).c_str());
+                  fixed(r.envelopePercent, 2).c_str(), fixed(r.hallerAfter, 3).c_str(), r.maxStressWhere.c_str(),
+                  r.maxStrainWhere.c_str());
     out.push_back(b);
   }
   return out;

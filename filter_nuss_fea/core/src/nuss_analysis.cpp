@@ -42,13 +42,15 @@ std::string partName(int tissue, int part) {
   return std::string(tissueName(Tissue(tissue))) + " (part " + std::to_string(part) + ")";
 }
 
-std::string Location::describe() const {
+std::string Location::where() const {
   std::string s = partName(tissue, part) + " (" + tissueName(Tissue(tissue)) + ")";
   if (distanceToJoint >= 0)
     s += distanceToJoint <= kNearSpine ? ", posterior near the spine, " + mm(distanceToJoint, 0) + " mm from its costovertebral joint"
                                        : ", " + mm(distanceToJoint, 0) + " mm from its costovertebral joint";
-  return s + " at " + pointText(p);
+  return s;
 }
+
+std::string Location::describe() const { return where() + " at " + pointText(p); }
 
 CageSurface cageFromMesh(const CMeshO& m) {
   if (m.fn == 0) throw TopologyError("The layer has no faces: the Nuss FE analysis needs the closed, labelled rib cage surface.");

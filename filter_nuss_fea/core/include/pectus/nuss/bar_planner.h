@@ -50,7 +50,8 @@ struct PlanRow {
   /// the stress away from the joints, load patches and tissue junctions (Analysis::maxStressBody), the strain
   /// away from the joints and load patches (Analysis::maxStrain), as the FE filter's Log
   double maxStress = 0, maxStrain = 0;
-  std::string maxStressAt, maxStrainAt;  ///< Location::describe()
+  std::string maxStressAt, maxStrainAt;        ///< Location::describe()
+  std::string maxStressWhere, maxStrainWhere;  ///< Location::where(): the same without the place
   double sliceGain = 0, slicePercent = 0;        ///< mm^3, %
   double envelopeGain = 0, envelopePercent = 0;  ///< mm^3, %
   double hallerAfter = 0;

@@ -190,7 +190,9 @@ struct Location {
   Eigen::Vector3d p = Eigen::Vector3d::Zero();
   int tissue = 0, part = 0;
   double distanceToJoint = -1;  ///< mm to the joint of its rib (-1: not a rib)
-  std::string describe() const;  ///< e.g. "left rib 5 (bone), posterior, 12 mm from the costovertebral joint"
+  /// the part and how far from its joint: "left rib 5 (bone), 72 mm from its costovertebral joint"
+  std::string where() const;
+  std::string describe() const;  ///< where() and the place: "... at (12.3, 45.6, 78.9) mm"
 };
 
 /// The tet model of a cage (TetGen once; every load case of the same cage and mesh options reuses it)
