@@ -1,5 +1,7 @@
 #include "pectus/results.h"
 
+#include "pectus/format.h"
+
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -56,9 +58,7 @@ std::string Results::jsonString(const std::string& s) {
 
 std::string Results::jsonNumber(double v) {
   if (!std::isfinite(v)) return "null";
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.17g", v);
-  std::string s = buf;
+  std::string s = significantText(v, 17);
   if (s.find_first_of(".eE") == std::string::npos) s += ".0";  // a number, not a count, to the reader
   return s;
 }
@@ -74,9 +74,7 @@ std::string json(const Results::Value& v) {
 
 std::string short6(double v) {
   if (!std::isfinite(v)) return std::isnan(v) ? "nan" : (v > 0 ? "inf" : "-inf");
-  char buf[32];
-  std::snprintf(buf, sizeof buf, "%.6g", v);
-  return buf;
+  return significantText(v, 6);
 }
 
 std::string text(const Results::Value& v) {

@@ -7,6 +7,7 @@
 
 #include "pectus/nuss/nuss_output.h"
 #include "pectus/errors.h"
+#include "pectus/format.h"
 
 namespace pectus::nuss {
 
@@ -23,20 +24,12 @@ Eigen::Vector3d needLandmark(const std::vector<Landmark>& lms, int code, const c
   return *p;
 }
 
-std::string fixed(double v, int prec) {
-  char b[64];
-  std::snprintf(b, sizeof b, "%.*f", prec, v);
-  return b;
-}
-
 std::string csvField(const std::string& s) {
   if (s.find_first_of(",\"\n") == std::string::npos) return s;
   std::string q = "\"";
   for (char c : s) q += c == '"' ? std::string("\"\"") : std::string(1, c);
   return q + "\"";
 }
-
-// "right rib 5 (bone), posterior near the spine, 25 mm from its costovertebral joint at (x, y, z) mm" -> without the point
 }  // namespace
 
 std::vector<int> parseLevels(const std::string& text) {
@@ -263,9 +256,9 @@ std::vector<std::string> planTable(const Plan& plan) {
   for (size_t k = 0; k < plan.rows.size(); ++k) {
     const PlanRow& r = plan.rows[k];
     std::snprintf(b, sizeof b, "%-22s %8s %8s %9s %8s %10s %6s %10s %6s %7s  %s / %s", (r.option + (int(k) == plan.best ? " *" : "")).c_str(),
-                  fixed(r.force, 2).c_str(), fixed(r.elevation, 2).c_str(), fixed(r.maxStress, 2).c_str(), fixed(r.maxStrain, 4).c_str(),
-                  fixed(r.sliceGain / 1000.0, 2).c_str(), fixed(r.slicePercent, 2).c_str(), fixed(r.envelopeGain / 1000.0, 2).c_str(),
-                  fixed(r.envelopePercent, 2).c_str(), fixed(r.hallerAfter, 3).c_str(), r.maxStressWhere.c_str(),
+                  fixedText(r.force, 2).c_str(), fixedText(r.elevation, 2).c_str(), fixedText(r.maxStress, 2).c_str(), fixedText(r.maxStrain, 4).c_str(),
+                  fixedText(r.sliceGain / 1000.0, 2).c_str(), fixedText(r.slicePercent, 2).c_str(), fixedText(r.envelopeGain / 1000.0, 2).c_str(),
+                  fixedText(r.envelopePercent, 2).c_str(), fixedText(r.hallerAfter, 3).c_str(), r.maxStressWhere.c_str(),
                   r.maxStrainWhere.c_str());
     out.push_back(b);
   }
