@@ -262,6 +262,16 @@ MLRUN_HOSTS = tuple(userland_suites())
 HOSTS = ("2020.09",) + MLRUN_HOSTS
 
 
+def host_made(release: str) -> bool:
+    """the release can run here: 2020.09 always (bookworm's meshlabserver), a newer one when scripts/host.sh
+    made its userland and its build in this checkout"""
+    if release not in MLRUN_HOSTS:
+        return release == "2020.09"
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    return (os.path.exists(os.path.join(root, ".hosts", userland_suites()[release], ".complete-pkgs"))
+            and os.path.exists(os.path.join(root, f"build-{release}", "bin", "pectus-mlrun")))
+
+
 def default_host() -> str:
     """$PECTUS_MESHLAB_HOST, else 2020.09"""
     h = os.environ.get("PECTUS_MESHLAB_HOST", "2020.09")

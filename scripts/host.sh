@@ -6,7 +6,9 @@
 #  2. the suite's meshlab and the build dependencies installed there;
 #  3. MeshLab's headers (src/common + vcglib) from that version's orig tarball, taken from the mirror's pool
 #     (the matching .dsc is not always published, so `apt-get source` is not used), into
-#     .hosts/meshlab-<version>;
+#     .hosts/meshlab-<version>; and the source of the TetGen that bookworm installs (1.5.0, checked by its
+#     sha256) into .hosts/tetgen-1.5.0, built into every release's plugins so that one surface gives one
+#     tet mesh on every release (forky's own TetGen is 1.6, which meshes differently);
 #  4. the plugins, pectus-mlrun and the unit tests configured and built in build-<release>/ by the
 #     userland's compiler, the repository appearing there at its own path.
 # Every step is skipped when its result already exists; each step says what it does. .hosts is a link into
@@ -20,8 +22,11 @@ set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 . "$ROOT/scripts/cache.sh"   # .hosts and ccache outside the clone
 MLVER_WANT="${1:-}"
-# the release's Debian suite and TetGen package (scripts/meshlab_hosts.txt)
-read -r SUITE TETGEN < <(awk -v r="$MLVER_WANT" '$1 == r {print $2, $3}' "$ROOT/scripts/meshlab_hosts.txt") || true
+# the release's Debian suite (scripts/meshlab_hosts.txt)
+read -r SUITE < <(awk -v r="$MLVER_WANT" '$1 == r {print $2}' "$ROOT/scripts/meshlab_hosts.txt") || true
+# the TetGen every release is built with: the source of bookworm's libtet1.5-dev
+TETGEN_ORIG=tetgen_1.5.0.orig.tar.gz
+TETGEN_SHA256=4d114861d5ef2063afd06ef38885ec46822e90e7b4ea38c864f76493451f9cf3
 if [ -z "${MLVER_WANT}" ] || [ -z "${SUITE:-}" ]; then
   echo "host: which MeshLab? scripts/host.sh $(awk '!/^#/ && NF {printf "%s%s", s, $1; s="|"}' "$ROOT/scripts/meshlab_hosts.txt") [userland|shell|run CMD...]" >&2
   exit 2
@@ -99,7 +104,7 @@ fi
 
 # 2. MeshLab and the build dependencies (the same list as scripts/setup.sh's, less what only the
 #    bookworm benchmarks and docs need)
-PKGS=(meshlab g++ make cmake qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev $TETGEN
+PKGS=(meshlab g++ make cmake qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev
       libsuitesparse-dev libomp-dev libgtest-dev libcgal-dev liblemon-dev libnifti2-dev zlib1g-dev
       python3 xvfb xauth dpkg-dev file ccache)
 if [ ! -f "$HOSTDIR/.complete-pkgs" ] || ! in_root dpkg-query -W "${PKGS[@]}" >/dev/null 2>&1; then
@@ -142,11 +147,27 @@ if [ ! -f "$HDR/.complete" ]; then
   touch "$HDR/.complete"
 fi
 
+# 3b. TetGen's source (the orig tarball: Debian's patches only add a CMake file and a main())
+TET="$(dirname "$HOSTDIR")/tetgen-1.5.0"
+if [ ! -f "$TET/.complete" ]; then
+  mkdir -p "$(dirname "$HOSTDIR")/dl"
+  say "fetching TetGen 1.5.0's source from the mirror's pool"
+  dl="$(dirname "$HOSTDIR")/dl/$TETGEN_ORIG"
+  if command -v curl >/dev/null; then curl -fsSL -o "$dl" "$MIRROR/pool/main/t/tetgen/$TETGEN_ORIG"
+  else wget -q -O "$dl" "$MIRROR/pool/main/t/tetgen/$TETGEN_ORIG"; fi
+  echo "$TETGEN_SHA256  $dl" | sha256sum -c --quiet - || { say "$TETGEN_ORIG: not the expected sha256"; exit 1; }
+  tmp="$(mktemp -d)"
+  tar -xf "$dl" -C "$tmp"
+  [ -f "$tmp"/*/tetgen.cxx ] || { say "no tetgen.cxx in $TETGEN_ORIG"; exit 1; }
+  rm -rf "$TET"; mv "$tmp"/* "$TET"; rm -rf "$tmp" "$dl"
+  touch "$TET/.complete"
+fi
+
 [ "${1:-}" = userland ] && { say "userland ready: $HOSTDIR (meshlab $MLVER)"; exit 0; }
 
 # Inside the userland the repository, the headers and /tmp appear at their own paths (bind mounts in a
 # private mount namespace: they vanish with the command, nothing to unmount, parallel runs do not meet).
-BINDS=("$ROOT" "$(readlink -f "$HDR")" /tmp "$CCACHE_DIR")
+BINDS=("$ROOT" "$(readlink -f "$HDR")" "$(readlink -f "$TET")" /tmp "$CCACHE_DIR")
 in_ns() {
   $SUDO unshare --mount --propagation private bash -c '
     set -e; root=$1; n=$2; shift 2
@@ -171,6 +192,7 @@ fi
 t=$(date +%s)
 say "configuring and building into $BUILD/ (-j$JOBS)"
 in_ns bash -c "cd '$ROOT' && cmake -S . -B $BUILD -DCMAKE_BUILD_TYPE=Release \
-    -DMESHLAB_SOURCE_DIR='$(readlink -f "$HDR")' -DMESHLAB_VERSION=${UPVER%%[~+]*} >/dev/null && \
+    -DMESHLAB_SOURCE_DIR='$(readlink -f "$HDR")' -DMESHLAB_VERSION=${UPVER%%[~+]*} \
+    -DPECTUS_TETGEN_SOURCE_DIR='$(readlink -f "$TET")' >/dev/null && \
   cmake --build $BUILD -j$JOBS"
 say "built in $(( $(date +%s) - t )) s"

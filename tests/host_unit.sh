@@ -4,7 +4,7 @@
 # libmeshlab-common. ctest runs this as one test (unit_2025), beside the end-to-end tests; it exits 77
 # (skipped) when that host is not made.
 # Left out there: the suites that build whole rib cages (the bookworm build runs them; about 20 minutes on
-# 2 cores) and the two FE mesher tests that the newer TetGen does not meet (docs/hosts.md).
+# 2 cores).
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 REL="$1"
@@ -16,4 +16,4 @@ fi
 # function_length reads the sources with Universal Ctags, which the userland does not have; the bookworm build
 # runs it on the same sources
 exec "$ROOT/scripts/host.sh" "$REL" run ctest --test-dir "build-$REL" -L unit -j1 --output-on-failure --timeout 1500 \
-  -E '^(RibCage|RibCageCoarse|NussAnalysis|PatientPrepare|BarPlanner|TissueJoin)\.|^FeMesher\.Tetgen(BoxLabels|Assertion)|^function_length$'
+  -E '^(RibCage|RibCageCoarse|NussAnalysis|PatientPrepare|BarPlanner|TissueJoin)\.|^function_length$'

@@ -24,6 +24,8 @@
 #include <vcg/complex/algorithms/clean.h>
 #include <vcg/complex/algorithms/update/topology.h>
 #include <vcg/complex/algorithms/update/normal.h>
+#include <vcg/complex/algorithms/update/bounding.h>
+#include <vcg/complex/algorithms/update/flag.h>
 #include <vcg/container/simple_temporary_data.h>
 
 namespace pectus {
@@ -176,6 +178,65 @@ class Collapse : public vcg::tri::TriEdgeCollapseQuadric<CMeshO, VertexPair, Col
     TECQ::Execute(m, pp);
     if (guard()) guard()->moved(kept);
   }
+
+  // The start of the decimation, the same on every MeshLab release: vcglib's own Init weighs each face's
+  // plane by (twice) its area squared in the vcglib of MeshLab 2020.09 and by the area once in 2022.02 and
+  // later, so the collapses, and the generated cage, would differ by release. This is 2020.09's Init (the
+  // options used here: no boundary to preserve, optimal placement, so the collapses are symmetric).
+  static void Init(CMeshO& m, vcg::LocalOptimization<CMeshO>::HeapType& heap, vcg::BaseParameterClass* bp) {
+    auto* pp = static_cast<vcg::tri::TriEdgeCollapseQuadricParameter*>(bp);
+    pp->CosineThr = std::cos(pp->NormalThrRad);
+    heap.clear();
+    vcg::tri::UpdateTopology<CMeshO>::VertexFace(m);
+    vcg::tri::UpdateFlags<CMeshO>::FaceBorderFromVF(m);
+    initQuadrics(m, *pp);
+    pushEveryEdge(m, heap, bp);
+  }
+
+ private:
+  static void initQuadrics(CMeshO& m, vcg::tri::TriEdgeCollapseQuadricParameter& pp) {
+    for (auto& v : m.vert)
+      if (!v.IsD() && v.IsW()) QHelper::Qd(v).SetZero();
+    for (auto& f : m.face) {
+      if (f.IsD() || !f.IsR() || !f.V(0)->IsR() || !f.V(1)->IsR() || !f.V(2)->IsR()) continue;
+      vcg::Plane3<Scalarm, false> plane;  // not normalised: the quadric weighs by the area squared
+      plane.SetDirection((f.V(1)->cP() - f.V(0)->cP()) ^ (f.V(2)->cP() - f.V(0)->cP()));
+      plane.SetOffset(plane.Direction().dot(f.V(0)->cP()));
+      vcg::math::Quadric<double> q;
+      q.ByPlane(plane);
+      for (int j = 0; j < 3; ++j)
+        if (f.V(j)->IsW()) QHelper::Qd(f.V(j)) += q;
+      for (int j = 0; j < 3; ++j) {
+        if (!f.IsB(j)) continue;  // an open edge: the plane through it, square to the face, amplified
+        vcg::Plane3<Scalarm, false> border;
+        border.SetDirection(plane.Direction() ^ (f.V1(j)->cP() - f.V(j)->cP()).normalized());
+        border.SetDirection(border.Direction() * Scalarm(pp.BoundaryQuadricWeight));
+        border.SetOffset(border.Direction().dot(f.V(j)->cP()));
+        vcg::math::Quadric<double> bq;
+        bq.ByPlane(border);
+        if (f.V(j)->IsW()) QHelper::Qd(f.V(j)) += bq;
+        if (f.V1(j)->IsW()) QHelper::Qd(f.V1(j)) += bq;
+      }
+    }
+    if (pp.ScaleIndependent) {
+      vcg::tri::UpdateBounding<CMeshO>::Box(m);
+      pp.ScaleFactor = 1e8 * std::pow(1.0 / m.bbox.Diag(), 6);
+    }
+  }
+  static void pushEveryEdge(CMeshO& m, vcg::LocalOptimization<CMeshO>::HeapType& heap, vcg::BaseParameterClass* bp) {
+    using Mark = vcg::tri::TriEdgeCollapse<CMeshO, VertexPair, Collapse>;
+    for (auto& v : m.vert) {
+      if (v.IsD() || !v.IsRW()) continue;
+      vcg::face::VFIterator<CFaceO> x;
+      for (x.F() = v.VFp(), x.I() = v.VFi(); x.F() != nullptr; ++x) x.V1()->ClearV(), x.V2()->ClearV();
+      for (x.F() = v.VFp(), x.I() = v.VFi(); x.F() != nullptr; ++x)
+        for (CVertexO* w : {x.V1(), x.V2()})
+          if (x.V0() < w && w->IsRW() && !w->IsV()) {
+            w->SetV();
+            heap.push_back(vcg::LocalOptimization<CMeshO>::HeapElem(new Collapse(VertexPair(x.V0(), w), Mark::GlobalMark(), bp)));
+          }
+    }
+  }
 };
 }  // namespace
 
@@ -196,6 +257,7 @@ void decimateQuadric(CMeshO& m, int targetFaces, double embeddingCell, const std
   pp.HardQualityThr = 0.1;
   pp.OptimalPlacement = true;
   pp.QualityQuadric = false;
+  pp.QualityWeight = false;  // Init above has no per-vertex quality weight
 
   {
     vcg::math::Quadric<double> zero;

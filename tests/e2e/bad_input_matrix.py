@@ -469,11 +469,6 @@ HOST_DIFFERENCES = [
     # a file: the NaN and Inf cells are the filter on a cleaned layer, and the loader's warning says so
     (lambda host, kind, o: kind in ("nan", "inf") and "vertices with NAN coords" in o,
      "valid once the loader dropped the non-finite vertices"),
-    # forky's TetGen 1.6 meshes the coarse cage that 2025.07's vcglib decimates only without merging facets,
-    # and then, without quality refinement (the matrix's FE setting), with flat tets at its sliver faces, which
-    # leave the stiffness singular; bookworm's and trixie's TetGen 1.5 mesh it as it is (docs/hosts.md)
-    (lambda host, kind, o: host == "2025.07" and "nearly flat tets" in o,
-     "flat tets from TetGen 1.6 without quality refinement at this host's sliver faces"),
 ]
 
 

@@ -23,15 +23,9 @@ _passed = 0
 SUITES = mlx.userland_suites()  # the Debian suite whose userland runs each newer release
 
 
-def host_ready(release: str) -> bool:
-    """the userland and the build of a MeshLab release exist (scripts/host.sh made them)"""
-    return (os.path.exists(os.path.join(SOURCE, ".hosts", SUITES[release], ".complete-pkgs"))
-            and os.path.exists(os.path.join(SOURCE, f"build-{release}", "bin", "pectus-mlrun")))
-
-
 def need_host(release: str):
     """exit 77 (ctest: skipped) when the MeshLab host of that release is not made"""
-    if not host_ready(release):
+    if not mlx.host_made(release):
         print(f"skipped: the MeshLab {release} host is not made (scripts/host.sh {release})")
         sys.exit(77)
 
