@@ -149,6 +149,9 @@ def parse(res: mlx.Result) -> dict:
         "envelope_volumes": pair("volume_cm3", MEASURES["envelope"]),
         "haller": pair("haller_index", MEASURES["index"]),
         "fe_seconds": get("seconds", FE),
+        # 1 when the FE mesh is the converged one's (TET10, quality refinement, a 5 mm cage or finer), else 0
+        "reportable": get("reportable", FE),
+        "not_reportable_because": get("not_reportable_because", FE),
         "planner_table": [l.split("|", 1)[1][1:] for l in log if l.startswith("Planner |")],
         "planner_header": next((l for l in log if l.startswith("Nuss bar planner:")), ""),
         "planner_best": next((l for l in log if l.startswith("Planner best")), ""),
@@ -177,8 +180,12 @@ def table(r: dict, age: float, sex: str, target: float) -> str:
         ("8. increasing volume, Ferguson envelope (%)", f(r["envelope_change_pct"])),
     ]
     w = max(len(a) for a, _ in rows)
-    lines = ["Table 6-1 (this run; the thesis' patient 1: M/8, index 5.3, 4.47 cm, 4.49 cm, 140 N, 43.5 MPa, 0.93, 89.98 cm3, 6.09 %)",
-             "-" * (w + 50)]
+    lines = ["Table 6-1 (this run; the thesis' patient 1: M/8, index 5.3, 4.47 cm, 4.49 cm, 140 N, 43.5 MPa, 0.93, 89.98 cm3, 6.09 %)"]
+    if r.get("reportable") != 1:
+        lines = [f"NOT A RESULT TO REPORT: {r.get('not_reportable_because') or 'the FE analysis gave no result'}",
+                 "(quick settings, for tests; the main job without --quick runs the converged mesh)"] + \
+                [lines[0].replace("(this run;", "(this quick run;")]
+    lines.append("-" * (w + 50))
     lines += [f"{a:<{w}}  {b}" for a, b in rows]
     return "\n".join(lines)
 

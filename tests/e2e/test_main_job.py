@@ -20,6 +20,12 @@ rows = list(csv.DictReader(open(os.path.join(out, "summary.csv")))) if os.path.e
 check(len(rows) == 1, "summary.csv has one row")
 if rows:
     s = rows[0]
+    # quick settings say on their output that they are not a result to report: the table's first line and a
+    # column of summary.csv (the FE filter's own verdict on its mesh)
+    check(p.stdout.count("NOT A RESULT TO REPORT: linear TET4 locks in bending") == 1
+          and "tets without quality refinement" in p.stdout, "--quick: the table is marked not a result to report")
+    check(s.get("reportable") == "0" and "TET4" in s.get("not_reportable_because", ""),
+          f"--quick: summary.csv says reportable 0 ({s.get('reportable')!r}, {s.get('not_reportable_because')!r})")
     m = re.search(r"loading force at sternum end \(N\)\s+([0-9.]+)", p.stdout)
     check(m is not None and abs(float(m.group(1)) - float(s["force"])) < 0.051, f"printed force {m and m.group(1)} = summary {s['force']}")
     m = re.search(r"slice method \(cm3\)\s+([0-9.-]+)", p.stdout)

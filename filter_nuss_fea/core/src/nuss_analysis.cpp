@@ -467,6 +467,19 @@ double elevationOf(const Eigen::VectorXd& u, const Analysis& a, const Vector3d& 
 
 }  // namespace
 
+std::string notReportableBecause(const fe::TetgenOptions& mesh, const CageSurface& cage) {
+  std::vector<std::string> why;
+  if (mesh.order != 2) why.push_back("linear TET4 locks in bending (stiffer than the converged TET10 mesh)");
+  if (mesh.radiusEdgeRatio <= 0) why.push_back("tets without quality refinement (tet quality 0: about 12 % stiffer)");
+  const double edge = meanEdgeLength(cage.surface);
+  if (edge > kConvergedMeanEdgeMm)
+    why.push_back("surface edges of " + fixedText(edge, 1) + " mm on average, coarser than the " +
+                  fixedText(kConvergedMeanEdgeMm, 0) + " mm of the converged meshes");
+  std::string text;
+  for (const auto& w : why) text += (text.empty() ? "" : "; ") + w;
+  return text;
+}
+
 const char* calibrationMethodName(CalibrationMethod m) {
   return m == CalibrationMethod::DisplacementControl ? "displacement" : "force";
 }

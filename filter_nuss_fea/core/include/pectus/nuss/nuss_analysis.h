@@ -164,6 +164,15 @@ struct Options {
   std::function<void(int, const std::string&)> progress;  ///< (percent, what)
 };
 
+/// The mesh the convergence study found within 2 % of the converged one (docs/validation.md, FE mesh
+/// convergence; the thesis' criterion, Table 6-2: the sternal elevation changes by less than 1 % on
+/// refinement): TET10, TetGen's quality refinement, a cage of 5 mm edges (their mean 5.7 mm) or finer.
+inline constexpr double kConvergedMeanEdgeMm = 6.0;
+/// Why a result on these mesh settings is not one to report, or empty when it is: linear TET4 locks in
+/// bending, a mesh without quality refinement is about 12 % stiffer than the converged one, and a coarser
+/// surface than the study's was not shown to converge.
+std::string notReportableBecause(const fe::TetgenOptions& mesh, const CageSurface& cage);
+
 /// The target of a calibration, resolved before any mesh or solve: the chest line depth when
 /// opt.targetFromChestLine, else opt.targetElevation (0: a given force), which must not exceed the chest
 /// line's reach when the cage has a chest line. Throws InputError naming the reachable range.
