@@ -30,6 +30,11 @@ rib's own section) and ct (circular, twice the rib's area; "default, CT cartilag
 the sternum up instead of from the dome of the diaphragm (its lowerLimit), in the same script, and adds that
 gain as a column: how much of the slice method's gain its range decides.
 
+--thesis-modelling builds the force from the FE filter's defaults to the thesis' own modelling, one choice at a
+time on each case (THESIS_STEPS: the CT-based cartilage section, linear TET4, about 320,000 tets, each rib held
+at its head and its tubercle), and prints each step's force and its factor: the decomposition of the gap to the thesis.
+
+    bench/table_6_1.py --thesis-modelling [--cases 1,2,3,4,5]
     bench/table_6_1.py [--edge 5] [--cases 1,2,3,4,5] [--methods default] [--input generated|exports] [--funnel-z F]
                        [--cartilage-e 12.25[,24.5,...]] [--cartilage-section rib[,ct]] [--spine cut[,keep]]
                        [--slice-from dome|sternum] [--out /tmp/pectus-table61]
@@ -80,12 +85,15 @@ def cage_filters(case, age, index, edge, source, out, spine, generator):
     return [imp, pf.prepare_patient_rib_cage(spine=SPINE.index(spine))], n, n + 1  # the prepared cage and its landmarks follow the imports
 
 
-def run_case(case, sex, age, index, elevation, method, edge, out, source, cartilage_e, spine, generator, slice_from):
+def run_case(case, sex, age, index, elevation, method, edge, out, source, cartilage_e, spine, generator, slice_from,
+             fe_extra=None):
+    """one script: the cage, the FE analysis (METHODS[method], then fe_extra's parameters) and the measures"""
     make, cage, landmarks = cage_filters(case, age, index, edge, source, out, spine, generator)
     section = SECTIONS[generator.get("cartilageSection", 0)]
-    base = os.path.join(out, f"{case}_{source}_{method}_E{cartilage_e:g}_{spine}_{section}")
+    extra = "".join(f"_{k}{v:g}" for k, v in sorted((fe_extra or {}).items()))
+    base = os.path.join(out, f"{case}_{source}_{method}_E{cartilage_e:g}_{spine}_{section}{extra}")
     fe = pf.nuss_fea(landmarkLayer=landmarks, targetElevation=elevation, resultBase=mlx.SaveFile(base + ".vtu", ".vtu"),
-                     cartilageModulus=cartilage_e, **METHODS[method])
+                     cartilageModulus=cartilage_e, **{**METHODS[method], **(fe_extra or {})})
     volumes = pipeline.measure_filters(cage, landmarks)
     if slice_from == "sternum":  # the slice method once more, over the envelope's range; its Log line comes second
         volumes.append(pipeline.measure_filter("slice", cage, landmarks, lowerLimit=SLICE_FROM.index("sternum")))
@@ -101,6 +109,76 @@ def run_case(case, sex, age, index, elevation, method, edge, out, source, cartil
     r["rc"], r["wall"] = res.rc, wall
     r["error"] = next((l for l in res.log if "failed" in l.lower() or "no converged" in l.lower()), "")
     return r
+
+
+# --thesis-modelling: from the FE filter's defaults to the thesis' own modelling (6.1-6.2: linear SOLID185
+# tets, about 320,000 of them after its Table 6-2 convergence test, ANSYS' large-displacement static solver,
+# the moduli 11.5 GPa and 12.25 MPa, each rib held at its head and tubercle, the cage segmented from CT), one
+# choice at a time, each step on the cage and settings of the one before. The tissues stay neo-Hookean: at
+# these strains St Venant-Kirchhoff, the closest law to ANSYS' linear elasticity in large displacement, moves
+# the main job's force by 1.6 % (README), and on case 1's 345,000 linear tets its calibration had not finished
+# after 10 minutes, where the neo-Hookean one takes 1.
+THESIS_TETS = 320000
+# mm: the thesis holds each rib rigid at its head and its tubercle (6.2); the FE filter's default holds the nodes
+# within 6 mm of the head. The rib's neck, from the head to the tubercle, is about 2.5 cm long in an adult
+# (Gray's Anatomy); scaled by the chest's width (the generated chests of ages 5-8: 165-189 mm, against about
+# 270 mm in an adult) about 16 mm, so the nodes within 16 mm of the head hold both.
+THESIS_JOINT_RADIUS = 16.0
+THESIS_STEPS = [  # (column, the generator's cartilageSection, FE parameters; maxTetVolume None: chosen per case)
+    ("the FE filter's defaults", 0, {}),
+    ("+ the CT-based cartilage section", 1, {}),
+    ("+ linear TET4, the same mesh", 1, dict(order=1)),
+    ("+ about 320,000 tets", 1, dict(order=1, maxTetVolume=None)),
+    ("+ head and tubercle held = the thesis' modelling", 1, dict(order=1, maxTetVolume=None,
+                                                                  jointRadius=THESIS_JOINT_RADIUS)),
+]
+
+
+def thesis_volume(case, sex, age, index, elevation, edge, out, trial=3.0):
+    """the max tet volume (mm3) that gives about THESIS_TETS TET4 on the case's CT-section cage: one small-strain
+    trial at `trial` mm3, then the bound scaled by the tets it gave (the count goes about as 1/bound there)"""
+    r = run_case(case, sex, age, index, elevation, "default", edge, out, "generated", THESIS_CARTILAGE_E, "cut",
+                 dict(cartilageSection=1), "dome", fe_extra=dict(order=1, maxTetVolume=trial, analysis=1))
+    if r["rc"] != 0 or not r["tets"]:
+        raise SystemExit(f"{case}: the mesh trial failed: {r['error']}")
+    return round(trial * r["tets"] / THESIS_TETS, 3)
+
+
+def thesis_modelling(cases, edge, out):
+    """runs THESIS_STEPS on each case and prints the decomposition of the force gap; returns the exit status"""
+    rows = []
+    for case, sex, age, index, elevation in cases:
+        vol = thesis_volume(case, sex, age, index, elevation, edge, out)
+        steps = []
+        for name, section, fe in THESIS_STEPS:
+            fe = {k: (vol if k == "maxTetVolume" else v) for k, v in fe.items()}
+            r = run_case(case, sex, age, index, elevation, "default", edge, out, "generated", THESIS_CARTILAGE_E, "cut",
+                         dict(cartilageSection=section) if section else {}, "dome", fe_extra=fe)
+            steps.append(r)
+            print(f"{case} {name}: rc {r['rc']}, {f(r['tets'] and int(r['tets']), '{:,}')} {r['element']}, Fe "
+                  f"{f(r['force'], '{:.2f}')} N, {r['newton']} Newton iterations, {r['wall']:.0f} s"
+                  + (f"; {r['error']}" if r["rc"] else ""), flush=True)
+        rows.append((case, sex, age, elevation, vol, steps))
+    print(f"\nTable 6-1's force, from the FE filter's defaults to the thesis' modelling, one choice at a time (generated "
+          f"cages, {edge:g} mm edges; each step's factor on the step before); {platform.node()}, {os.cpu_count()} cores, "
+          f"{time.strftime('%Y-%m-%d')}")
+    print("| case | sex/age | target mm | " + " | ".join(f"Fe N, {n}" for n, _, _ in THESIS_STEPS) +
+          " | tets, thesis' modelling (max tet volume mm³) | thesis Fe N | thesis / thesis' modelling |")
+    print("|---|---|---:|" + "---:|" * len(THESIS_STEPS) + "---:|---:|---:|")
+    failed = 0
+    for case, sex, age, elevation, vol, steps in rows:
+        cells, prev = [], None
+        for r in steps:
+            ok = r["rc"] == 0 and r["force"]
+            failed += not ok
+            cells.append(f(r["force"] if ok else None, "{:.2f}") + (f" (× {r['force'] / prev:.2f})" if ok and prev else ""))
+            prev = r["force"] if ok else None
+        last = steps[-1]
+        tf = THESIS_RESULTS[case][0]
+        print(f"| {case[-1]} | {sex}/{age} | {elevation} | " + " | ".join(cells) +
+              f" | {f(last['tets'] and int(last['tets']), '{:,}')} ({vol:g}) | {tf} | "
+              f"{f(tf / last['force'] if last['rc'] == 0 and last['force'] else None, '× {:.2f}')} |")
+    return 1 if failed else 0
 
 
 def f(v, spec="{:.1f}"):
@@ -120,10 +198,14 @@ def main():
                     help="the generator's funnelCenterZ for every cage (default: the generator's own)")
     ap.add_argument("--slice-from", choices=SLICE_FROM, default="dome",
                     help="sternum: also the slice method's gain from the lower sternum end up")
+    ap.add_argument("--thesis-modelling", action="store_true",
+                    help="the force from the FE filter's defaults to the thesis' own modelling, one choice at a time")
     ap.add_argument("--out", default="/tmp/pectus-table61")
     a = ap.parse_args()
     os.makedirs(a.out, exist_ok=True)
     cases = [THESIS[int(k) - 1] for k in a.cases.split(",")]
+    if a.thesis_modelling:
+        return thesis_modelling(cases, a.edge, a.out)
     methods = a.methods.split(",")
     rows = []
     moduli = [float(e) for e in a.cartilage_e.split(",")]

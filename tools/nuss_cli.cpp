@@ -127,6 +127,7 @@ int main(int argc, char** argv) {
     else if (a == "--linear") o.nonlinear = false;
     else if (a == "--space") o.place.intercostalSpace = std::atoi(next());
     else if (a == "--sc-radius") o.place.sternoclavicularRadius = std::atof(next());
+    else if (a == "--joint-radius") o.place.jointRadius = std::atof(next());
     else if (a == "--vtu") vtu = next();
     else if (a == "--layers") layers = true;
     else if (a == "--inp") inp = next();
@@ -156,7 +157,7 @@ int main(int argc, char** argv) {
     else if (a == "--help" || a == "-h") {
       std::printf(
           "pectus_nuss_cli [--edge mm] [--haller h] [--age y] [--order 1|2] [--maxvol mm3] [--quality q]\n"
-          "                [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--sc-radius mm] [--vtu out.vtu] [--layers] [--inp deck.inp]\n"
+          "                [--target mm|chest | --force N] [--chest-line] [--linear] [--space s] [--sc-radius mm] [--joint-radius mm] [--vtu out.vtu] [--layers] [--inp deck.inp]\n"
           "                [--blend mm] [--funnel-z f] [--material svk|neo-hookean|neo-hookean-ccx] [--calibration force|displacement]\n"
           "                [--line-search] [--adaptive-steps] [--plain-newton] [--bone-e MPa] [--cartilage-e MPa]\n"
           "                [--cartilage rib|ct] [--rib-stress]\n"
