@@ -480,3 +480,25 @@ TEST(NussOutput, OneWriterForTheFilesAndTheDeformedSurface) {
   EXPECT_GT(moved, 0.0);
   EXPECT_TRUE(readFaceLabels(out).has_value());  // the tissue labels stay
 }
+
+// The analysis names what keeps a result from being one to report: the FE filter logs it and returns
+// reportable 0. The converged settings (TET10, quality refinement) on a surface of the convergence study's
+// edges say nothing; each coarser choice is named.
+TEST(NussAnalysis, ResultOnACoarserMeshThanTheConvergedOneSaysWhy) {
+  auto surf = nuss::cageFromMesh(cage().mesh);  // 6 mm edges: coarser than the study's 5 mm cage
+  fe::TetgenOptions converged;
+  converged.order = 2;
+  converged.radiusEdgeRatio = 2.0;
+  const std::string coarseSurface = nuss::notReportableBecause(converged, surf);
+  EXPECT_NE(coarseSurface.find("surface edges of"), std::string::npos) << coarseSurface;
+  EXPECT_EQ(coarseSurface.find("TET4"), std::string::npos) << coarseSurface;
+
+  for (auto& v : surf.surface.V) v *= 0.5;  // the same cage at half the size: edges of about 3.4 mm
+  EXPECT_EQ(nuss::notReportableBecause(converged, surf), "");
+  fe::TetgenOptions quick = converged;
+  quick.order = 1;
+  quick.radiusEdgeRatio = 0;
+  const std::string why = nuss::notReportableBecause(quick, surf);
+  EXPECT_NE(why.find("linear TET4 locks in bending"), std::string::npos) << why;
+  EXPECT_NE(why.find("tet quality 0"), std::string::npos) << why;
+}
