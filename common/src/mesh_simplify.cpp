@@ -180,9 +180,10 @@ class Collapse : public vcg::tri::TriEdgeCollapseQuadric<CMeshO, VertexPair, Col
   }
 
   // The start of the decimation, the same on every MeshLab release: vcglib's own Init weighs each face's
-  // plane by (twice) its area squared in the vcglib of MeshLab 2020.09 and by the area once in 2022.02 and
-  // later, so the collapses, and the generated cage, would differ by release. This is 2020.09's Init (the
-  // options used here: no boundary to preserve, optimal placement, so the collapses are symmetric).
+  // plane by (twice) its area squared in the vcglib of MeshLab 2020.09 and by the area once in 2025.07, so
+  // the collapses, and the generated cage, would differ by release (the rest of the collapse is the same
+  // code in both). This is 2020.09's Init for the options used here: no boundary to preserve, optimal
+  // placement, so the collapses are symmetric.
   static void Init(CMeshO& m, vcg::LocalOptimization<CMeshO>::HeapType& heap, vcg::BaseParameterClass* bp) {
     auto* pp = static_cast<vcg::tri::TriEdgeCollapseQuadricParameter*>(bp);
     pp->CosineThr = std::cos(pp->NormalThrRad);
