@@ -180,13 +180,14 @@ def table(r: dict, age: float, sex: str, target: float) -> str:
         ("8. increasing volume, Ferguson envelope (%)", f(r["envelope_change_pct"])),
     ]
     w = max(len(a) for a, _ in rows)
-    lines = ["Table 6-1 (this run; the thesis' patient 1: M/8, index 5.3, 4.47 cm, 4.49 cm, 140 N, 43.5 MPa, 0.93, 89.98 cm3, 6.09 %)"]
-    if r.get("reportable") != 1:
+    thesis = "the thesis' patient 1: M/8, index 5.3, 4.47 cm, 4.49 cm, 140 N, 43.5 MPa, 0.93, 89.98 cm3, 6.09 %"
+    if r.get("reportable") == 1:
+        lines = [f"Table 6-1 (this run; {thesis})"]
+    else:
         lines = [f"NOT A RESULT TO REPORT: {r.get('not_reportable_because') or 'the FE analysis gave no result'}",
-                 "(quick settings, for tests; the main job without --quick runs the converged mesh)"] + \
-                [lines[0].replace("(this run;", "(this quick run;")]
-    lines.append("-" * (w + 50))
-    lines += [f"{a:<{w}}  {b}" for a, b in rows]
+                 "(quick settings, for tests; the main job without --quick runs the converged mesh)",
+                 f"Table 6-1 (this quick run; {thesis})"]
+    lines += ["-" * (w + 50)] + [f"{a:<{w}}  {b}" for a, b in rows]
     return "\n".join(lines)
 
 

@@ -63,3 +63,11 @@ def check_range(r, name: str, pattern: str, lo: float, hi: float, what: str):
     check(v is not None and lo <= v <= hi, f"{name}: {what} {v} in [{lo}, {hi}]",
           "\n".join(l for l in r.log if "LOG" in l or l)[-1500:] if v is None else "")
     return v
+
+
+def check_converged(r, name: str, filter_name: str):
+    """a shipped FE example runs on the converged mesh: the filter's own verdict (reportable 1), and no warning in
+    the Log"""
+    check(r.get("reportable", filter_name) == 1 and not any(l.startswith("Not a result to report") for l in r.log),
+          f"{name}: a result to report (TET10 on the converged mesh)",
+          str(r.get("not_reportable_because", filter_name)))
