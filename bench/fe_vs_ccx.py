@@ -2,9 +2,9 @@
 """pectus_fe vs CalculiX (ccx) on the same tetrahedral mesh: the 10 x 10 x 100 mm cantilever
 (clamped at z = 0, tip shear load along y), TET4/TET10 (C3D4/C3D10), linear and NLGEOM.
 
-  bench/fe_vs_ccx.py --tool build/tools/pectus_fe_cantilever [--cases small|bench|cage|all] [--check]
+  bench/fe_vs_ccx.py --tool build/tools/pectus_fe_cantilever [--cases small|bench|cage|cage-nl|all] [--check]
                      [--cage-tool build/tools/pectus_nuss_cli] [--solve-tool build/tools/pectus_fe_solve]
-                     [--cage-maxvol 2.5]
+                     [--cage-maxvol 2.5] [--deck nuss.inp]
 
 small: accuracy on small meshes (tip-centre displacement within 0.5%, --check makes it an exit code): linear,
        NLGEOM St Venant-Kirchhoff (*ELASTIC) and NLGEOM neo-Hookean (*HYPERELASTIC, NEO HOOKE);
@@ -17,6 +17,9 @@ cage:  the same on the Nuss model itself: the default rib cage (thesis patient 1
        (reads the deck, solves, writes a .vtu with displacements, stresses and strains) and ccx (reads the
        deck, solves, writes .dat/.frd). Compared: the mean displacement of the sternal load patch's nodes
        (the quantity the calibration works on), wall time and peak memory.
+cage-nl: the main job's own deck (nuss.inp of python/run_main.py: 64k TET10, neo-Hookean, NLGEOM, 10 fixed
+       increments; made by a run of the main job, not timed, or given with --deck), both programs on it as
+       for cage; also the Newton iterations of each (ours: pectus_fe_solve's count; ccx: its .sta file).
 """
 import argparse
 import os
@@ -111,14 +114,55 @@ def run_cage_case(a, work, env):
                 solve_s=float(kv["setup_s"]) + float(kv["solve_s"]))
 
 
+def ccx_iterations(work, name):
+    """Newton iterations of a ccx run: the ITRS column of its .sta file, summed over the increments"""
+    total = 0
+    for line in open(os.path.join(work, name + ".sta")):
+        f = line.split()
+        if len(f) >= 4 and all(x.isdigit() for x in f[:4]):
+            total += int(f[3])
+    return total
+
+
+def main_job_deck(a, work, env):
+    """the main job's CalculiX deck (nuss.inp: TET10, neo-Hookean, NLGEOM, 10 increments), from --deck or a
+    fresh run of python/run_main.py through the build's MeshLab (not timed)"""
+    if a.deck:
+        return os.path.abspath(a.deck)
+    out = os.path.join(work, "main_job")
+    root = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..")
+    run_env = dict(env, PECTUS_PREFIX=env.get("PECTUS_PREFIX", os.path.join(root, "build", "prefix")))
+    subprocess.run([sys.executable, os.path.join(root, "python", "run_main.py"), out], check=True,
+                   capture_output=True, text=True, env=run_env)
+    return os.path.join(out, "nuss.inp")
+
+
+def run_cage_nl_case(a, work, env):
+    """both programs on the main job's own deck, whole process against whole process"""
+    name = "cage_nl_tet10"
+    shutil.copy(main_job_deck(a, work, env), os.path.join(work, name + ".inp"))
+    out, t_ours, m_ours = timed([a.solve_tool, name + ".inp", "--vtu", name + "_ours.vtu"], work, env)
+    kv = parse_kv(out.strip().splitlines()[-1])
+    u_ours = tuple(float(kv[k]) for k in ("mean_ux", "mean_uy", "mean_uz"))
+    _, t_ccx, m_ccx = timed([a.ccx, "-i", name], work, env)
+    u_ccx, _ = ccx_mean_disp(os.path.join(work, name + ".dat"))
+    diff = sum((x - y) ** 2 for x, y in zip(u_ours, u_ccx)) ** 0.5
+    rel = diff / sum(y * y for y in u_ccx) ** 0.5
+    return dict(name=name, tets=int(kv["tets"]), dofs=int(kv["dofs"]), ours=u_ours[1], ccx=u_ccx[1], rel=rel,
+                t_ours=t_ours, t_ccx=t_ccx, m_ours=m_ours, m_ccx=m_ccx,
+                solve_s=float(kv["setup_s"]) + float(kv["solve_s"]), it=int(kv["newton_it"]),
+                it_ccx=ccx_iterations(work, name))
+
+
 def main():
     ap = argparse.ArgumentParser()
     ap.add_argument("--tool", required=True)
     ap.add_argument("--ccx", default=shutil.which("ccx") or "ccx")
-    ap.add_argument("--cases", default="small", choices=["small", "bench", "cage", "all"])
+    ap.add_argument("--cases", default="small", choices=["small", "bench", "cage", "cage-nl", "all"])
     ap.add_argument("--cage-tool", help="pectus_nuss_cli (default: beside --tool, ../pectus_nuss_cli)")
     ap.add_argument("--solve-tool", help="pectus_fe_solve (default: beside --tool)")
     ap.add_argument("--cage-maxvol", type=float, default=2.5, help="TetGen maximum tet volume (mm3) of the cage case")
+    ap.add_argument("--deck", help="cage-nl: the main job's nuss.inp (default: made by a run of python/run_main.py)")
     ap.add_argument("--check", action="store_true", help="exit 1 if a tip displacement differs by more than 0.5%%")
     ap.add_argument("--threads", type=int, default=2)
     ap.add_argument("--keep", help="keep the decks and results in this folder")
@@ -150,6 +194,9 @@ def main():
     if a.cases in ("cage", "all"):
         rows.append(run_cage_case(a, work, env))
         failed |= not rows[-1]["rel"] <= 0.005
+    if a.cases in ("cage-nl", "all"):
+        rows.append(run_cage_nl_case(a, work, env))
+        failed |= not rows[-1]["rel"] <= 0.005
     print("%-22s %8s %8s %12s %12s %9s %9s %9s %9s %9s %8s %8s" % (
         "case", "tets", "dofs", "tip_uy_ours", "tip_uy_ccx", "rel_diff", "ours_s", "ccx_s", "ratio", "solve_s",
         "ours_MB", "ccx_MB"))
@@ -158,10 +205,14 @@ def main():
             r["name"], r["tets"], r["dofs"], r["ours"], r["ccx"], r["rel"], r["t_ours"], r["t_ccx"],
             r["t_ours"] / r["t_ccx"], r["solve_s"], r["m_ours"], r["m_ccx"]))
     for r in rows:
+        if "it_ccx" in r:
+            print("%-22s Newton iterations: ours %d, ccx %d (%.2f x); wall time ours / ccx %.2f"
+                  % (r["name"], r["it"], r["it_ccx"], r["it"] / r["it_ccx"], r["t_ours"] / r["t_ccx"]))
+    for r in rows:
         if "deck_rel" in r:
             print("%-22s deck read back by pectus_fe_solve: tip uy differs by %.2e (relative) from the model in memory"
                   % (r["name"], r["deck_rel"]))
-    print("(tip_uy: the cantilever's tip centre, or for cage_lin_tet4 the sternal patch's mean uy, rel_diff there "
+    print("(tip_uy: the cantilever's tip centre, or for the cage rows the sternal patch's mean uy, rel_diff there "
           "over the mean displacement vector; ours_s/ccx_s: wall time of the whole process incl. meshing/assembly/IO "
           "(the cage row: both read the same deck and write their results); solve_s: our setup + solve; "
           "threads=%d; files in %s)" % (a.threads, work))

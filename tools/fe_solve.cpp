@@ -1,11 +1,15 @@
 // pectus_fe_solve: solves a CalculiX deck of the kind the Nuss FE filter writes (BASE.inp, or
 // pectus_nuss_cli --inp) with pectus_fe, so the same deck can be run by both programs and timed whole
 // process against whole process (bench/fe_vs_ccx.py --cases cage).
-//   pectus_fe_solve deck.inp [--vtu out.vtu]
-// Linear unless the deck's *STEP says NLGEOM (then Newton with the deck's increments). Prints one line of
-// key=value figures (tets, dofs, phase times) and the mean displacement of the *NODE PRINT nodes.
+//   pectus_fe_solve deck.inp [--vtu out.vtu] [--trace] [--no-predictor] [--tolerances residual displacement]
+// Linear unless the deck's *STEP says NLGEOM (then Newton with the deck's increments and the library's
+// defaults; --trace prints each iteration's relative residual to stderr, --no-predictor starts each
+// increment from the converged state, --tolerances sets NewtonOptions' tolResidual and tolDisplacement).
+// Prints one line of key=value figures (tets, dofs, phase times) and the mean displacement of the
+// *NODE PRINT nodes.
 #include <chrono>
 #include <cstdio>
+#include <cstdlib>
 #include <string>
 
 #include "pectus/errors.h"
@@ -16,17 +20,22 @@ using namespace pectus::fe;
 
 int main(int argc, char** argv) {
   std::string deck, vtu;
+  bool trace = false, predictor = true;
+  double tolR = 0, tolD = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--vtu" && i + 1 < argc) vtu = argv[++i];
+    else if (a == "--trace") trace = true;
+    else if (a == "--no-predictor") predictor = false;
+    else if (a == "--tolerances" && i + 2 < argc) tolR = std::atof(argv[++i]), tolD = std::atof(argv[++i]);
     else if (deck.empty() && !a.empty() && a[0] != '-') deck = a;
     else {
-      std::fprintf(stderr, "usage: pectus_fe_solve deck.inp [--vtu out.vtu] (unknown argument %s)\n", a.c_str());
+      std::fprintf(stderr, "usage: pectus_fe_solve deck.inp [--vtu out.vtu] [--trace] [--no-predictor] [--tolerances r d] (unknown argument %s)\n", a.c_str());
       return 2;
     }
   }
   if (deck.empty()) {
-    std::fprintf(stderr, "usage: pectus_fe_solve deck.inp [--vtu out.vtu]\n");
+    std::fprintf(stderr, "usage: pectus_fe_solve deck.inp [--vtu out.vtu] [--trace] [--no-predictor] [--tolerances r d]\n");
     return 2;
   }
   using Clock = std::chrono::steady_clock;
@@ -41,11 +50,18 @@ int main(int argc, char** argv) {
     const auto t2 = Clock::now();
     NewtonOptions no;
     no.loadSteps = model->options.increments;
+    no.extrapolate = predictor;
+    if (tolR > 0) no.tolResidual = tolR;
+    if (tolD > 0) no.tolDisplacement = tolD;
+    if (trace)
+      no.onIteration = [](int inc, int it, double rn, double ref) {
+        std::fprintf(stderr, "increment %d iteration %d |r|/ref %.3e\n", inc + 1, it, rn / ref);
+      };
     const Result r = model->options.nlgeom ? s.solveNonlinear(no) : s.solveLinear();
     const double tSolve = secs(t2);
-    std::printf("tets=%d nodes=%d order=%d dofs=%d nlgeom=%d read_s=%.3f setup_s=%.3f solve_s=%.3f last_factor_s=%.3f newton_it=%d",
+    std::printf("tets=%d nodes=%d order=%d dofs=%d nlgeom=%d read_s=%.3f setup_s=%.3f solve_s=%.3f last_factor_s=%.3f newton_it=%d factorizations=%d",
                 model->mesh.numTets(), model->mesh.numNodes(), model->mesh.order, s.numFreeDofs(),
-                model->options.nlgeom ? 1 : 0, tRead, tSetup, tSolve, s.lastSolveSeconds(), r.newtonIterations);
+                model->options.nlgeom ? 1 : 0, tRead, tSetup, tSolve, s.lastSolveSeconds(), r.newtonIterations, r.factorizations);
     const auto& out = model->options.printNodes;
     if (!out.empty()) {
       Eigen::Vector3d mean = Eigen::Vector3d::Zero();

@@ -104,6 +104,10 @@ void FilterContext::log(const std::string& line) const {
   if (logger_) logger_(line);
 }
 
+void FilterContext::debug(const std::string& line) const {
+  if (debugLogger_) debugLogger_(line);
+}
+
 void FilterContext::progress(int percent, const char* what) const {
   if (cb_) cb_(std::max(0, std::min(100, percent)), what);
 }
@@ -307,13 +311,16 @@ std::string FilterPluginBase::runFilter(int id, MeshDocument& md, const RichPara
   const QString name = filterName(id);
 #if PECTUS_MESHLAB_API >= 2021
   auto logger = [this](const std::string& s) { log(GLLogStream::FILTER, s); };
+  auto debugLogger = [this](const std::string& s) { log(GLLogStream::DEBUG, s); };
 #else
   auto logger = [this](const std::string& s) { Log(GLLogStream::FILTER, s.c_str()); };
+  auto debugLogger = [this](const std::string& s) { Log(GLLogStream::DEBUG, s.c_str()); };
 #endif
   results.clear();
   std::string failure;
   {
     FilterContext ctx(md, par, cb, logger, name, &ranges_[id]);
+    ctx.setDebugLogger(debugLogger);
     try {
       if (!declared_.count(id)) {  // the host may run a script without asking for the parameters first
         RichParameterList declared;

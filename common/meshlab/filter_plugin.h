@@ -80,6 +80,9 @@ class FilterContext {
   MeshModel& current();
 
   void log(const std::string& line) const;
+  /// a line at the Log's debug level (solver histories: for those who look into a run, not its result)
+  void debug(const std::string& line) const;
+  void setDebugLogger(std::function<void(const std::string&)> logger) { debugLogger_ = std::move(logger); }
   /// The figures this run returns (force_N, elevation_mm, ...; keys in snake_case with the unit as suffix).
   /// The plugin base hands them to the host when the run succeeds, and drops them when it fails.
   pectus::Results& results() { return results_; }
@@ -124,7 +127,7 @@ class FilterContext {
   MeshDocument& md_;
   const RichParameterList& par_;
   vcg::CallBackPos* cb_;
-  std::function<void(const std::string&)> logger_;
+  std::function<void(const std::string&)> logger_, debugLogger_;
   QString filterName_;
   const DeclaredRanges* ranges_;
   pectus::Results results_;

@@ -41,6 +41,10 @@ struct Solver::Impl::NewtonPath {
   const double maxStep;
   double L = 0;  // displacement control: load factor of the converged state
   int cut = 0;
+  // the converged state before u (the predictor extrapolates through it and u)
+  Eigen::VectorXd uPrev;
+  double lamPrev = 0, LPrev = 0;
+  bool hasPrev = false;
   Eigen::VectorXd uLast;  // the last state evaluated (the failure report looks for an inverted tet there)
   std::string inversion;  // the first inverted tet met at a non-finite residual since the last converged increment
 
@@ -57,8 +61,8 @@ struct Solver::Impl::NewtonPath {
   // one increment: Newton iterations towards the next load factor; taken if they converge, else the step is cut
   void increment() {
     const double target = nextTarget();
-    Eigen::VectorXd uTrial = trialStart(target);
     double Lt = L;  // load factor of the trial state (displacement control)
+    Eigen::VectorXd uTrial = trialStart(target, Lt);
     int it = 0;
     if (iterate(target, uTrial, Lt, it)) accept(target, uTrial, Lt, it);
     else cutBack(target);
@@ -72,9 +76,16 @@ struct Solver::Impl::NewtonPath {
     return target;
   }
 
-  // the converged state with the prescribed displacements at the target (none under displacement control)
-  Eigen::VectorXd trialStart(double target) const {
+  // the increment's first state: the converged one, moved along the path the last increment took in
+  // proportion to the step (the predictor), with the prescribed displacements at the target (none under
+  // displacement control); Lt, the load factor, extrapolated alike
+  Eigen::VectorXd trialStart(double target, double& Lt) const {
     Eigen::VectorXd uTrial = u;
+    if (opt.extrapolate && hasPrev && lam - lamPrev > 1e-12) {
+      const double s = (target - lam) / (lam - lamPrev);
+      uTrial += s * (u - uPrev);
+      Lt = L + s * (L - LPrev);
+    }
     for (size_t d = 0; d < I.freeIndex.size(); ++d)
       if (I.isConstrained[d]) uTrial(d) = ctrl ? 0.0 : target * scale * I.prescribed(d);
     return uTrial;
@@ -88,34 +99,45 @@ struct Solver::Impl::NewtonPath {
   }
   double factorAt(double Lc, double target) const { return ctrl ? Lc : target * scale; }
 
-  // Newton iterations from uTrial (load factor Lt) at the target; true if they converged (it: their count)
+  // the residual's reference: the applied forces (or, under displacement control, the load factor's) or the
+  // reactions (the internal forces at the fixed dofs, after residual()), whichever is larger
+  double referenceForce(double Lt, double target) const {
+    double reactions = 0;
+    for (size_t d = 0; d < I.freeIndex.size(); ++d)
+      if (I.isConstrained[d]) reactions += fint(d) * fint(d);
+    return std::max({ctrl ? std::abs(Lt) * fFree.norm() : target * fextNorm, std::sqrt(reactions), 1e-30});
+  }
+
+  // Newton iterations from uTrial (load factor Lt) at the target; true if they converged (it: their count).
+  // Converged: the residual within tolResidual of its reference, and the correction the factor in hand
+  // gives for it (one back-substitution, no factorisation: the step modified Newton would take) within
+  // tolDisplacement of the largest displacement. The state taken is the one whose residual was checked.
   bool iterate(double target, Eigen::VectorXd& uTrial, double& Lt, int& it) {
-    double duNorm = 0, lastRn = 1e300;
+    double lastRn = 1e300;
     for (; it <= opt.maxIterations; ++it) {
       const Eigen::VectorXd r = residual(uTrial, factorAt(Lt, target), true);
-      double reactions = 0;
-      for (size_t d = 0; d < I.freeIndex.size(); ++d)
-        if (I.isConstrained[d]) reactions += fint(d) * fint(d);
-      const double ref = std::max({ctrl ? std::abs(Lt) * fFree.norm() : target * fextNorm, std::sqrt(reactions), 1e-30});
-      const double rn = r.norm();
-      if (opt.onIteration) opt.onIteration(res.increments, it, rn);
+      const double ref = referenceForce(Lt, target), rn = r.norm();
+      if (opt.onIteration) opt.onIteration(res.increments, it, rn, ref);
       if (!std::isfinite(rn)) {
         if (inversion.empty()) inversion = I.invertedAt(uTrial);
         return false;
       }
       const double g = ctrl ? ctrl->dot(I.freePart(uTrial)) - target * dTarget : 0.0;  // constraint violation
-      if (rn <= opt.tolResidual * ref && std::abs(g) <= opt.tolDisplacement * std::abs(dTarget) &&
-          (it == 0 || duNorm <= opt.tolDisplacement * std::max(uTrial.norm(), 1e-30))) {
-        fintConverged = fint;
-        return true;
-      }
+      const bool balanced = rn <= opt.tolResidual * ref && std::abs(g) <= opt.tolDisplacement * std::abs(dTarget);
+      if (balanced && res.factorizations == 0) return converged();  // no factor yet: balanced at the start
       if (it == opt.maxIterations) return false;
       const bool refactor = !opt.modified || it == 0 || !(rn < lastRn / 3);
       lastRn = rn;
       Eigen::VectorXd du;
       double dL = 0;
-      if (!newtonStep(refactor, it, uTrial, r, g, du, dL)) return false;
-      duNorm = du.norm();
+      if (balanced) {  // the correction with the factor in hand decides
+        if (!newtonStep(false, it, uTrial, r, g, du, dL)) return false;
+        if (du.lpNorm<Eigen::Infinity>() <= opt.tolDisplacement * std::max(uTrial.lpNorm<Eigen::Infinity>(), 1e-30))
+          return converged();
+        if (refactor && !newtonStep(true, it, uTrial, r, g, du, dL)) return false;
+      } else if (!newtonStep(refactor, it, uTrial, r, g, du, dL)) {
+        return false;
+      }
       const double a = opt.lineSearch ? lineSearch(uTrial, Lt, target, r, du, dL) : 1;
       for (size_t d = 0; d < I.freeIndex.size(); ++d)
         if (I.freeIndex[d] >= 0) uTrial(d) += a * du(I.freeIndex[d]);
@@ -123,6 +145,11 @@ struct Solver::Impl::NewtonPath {
       ++res.newtonIterations;
     }
     return false;
+  }
+
+  bool converged() {
+    fintConverged = fint;
+    return true;
   }
 
   // the Newton correction du (and dL of the load factor) at residual r, constraint violation g; false
@@ -188,6 +215,10 @@ struct Solver::Impl::NewtonPath {
 
   // the converged trial becomes the state; automatic steps grow or shrink with the iterations it took
   void accept(double target, const Eigen::VectorXd& uTrial, double Lt, int it) {
+    uPrev.swap(u);
+    lamPrev = lam;
+    LPrev = L;
+    hasPrev = true;
     u = uTrial;
     L = Lt;
     lam = target;

@@ -15,6 +15,8 @@
 
 #include "pectus/errors.h"
 #include "pectus/fe/solver.h"
+#include "../src/element.h"
+#include "../src/materials/material.h"
 
 using namespace pectus::fe;
 using Eigen::Vector3d;
@@ -385,6 +387,58 @@ TEST(FeSolver, MaterialTangentIsTheDerivativeOfTheStress) {
   }
 }
 
+// Each element's stiffness is the derivative of its internal forces: on one curved TET4 and TET10 (its mid-edge
+// nodes moved off the edges) at a large random displacement (strains of ~20 %), every column of Ke
+// against central differences of fe, for every material, and the small-strain element (Ke u = fe)
+template <int NEN>
+double elementTangentError(const TetMesh& m, const Material& mat, bool nonlinear, const Eigen::VectorXd& u) {
+  ReferenceTet ref;
+  ref.setOrder(m.order);
+  const Eigen::Matrix<double, 6, 6> D = linearElasticity(mat);
+  Eigen::Matrix<double, 3 * NEN, 3 * NEN> Ke, scratch;
+  Eigen::Matrix<double, 3 * NEN, 1> fe, fp, fm;
+  tetTangent<NEN>(m, 0, ref, mat, D, u, nonlinear, true, Ke, fe);
+  if (!nonlinear) return (Ke * u - fe).norm() / fe.norm();
+  Eigen::Matrix<double, 3 * NEN, 3 * NEN> Kn;
+  const double h = 1e-6;
+  for (int j = 0; j < 3 * NEN; ++j) {
+    Eigen::VectorXd up = u, um = u;
+    up(j) += h, um(j) -= h;
+    tetTangent<NEN>(m, 0, ref, mat, D, up, true, false, scratch, fp);
+    tetTangent<NEN>(m, 0, ref, mat, D, um, true, false, scratch, fm);
+    Kn.col(j) = (fp - fm) / (2 * h);
+  }
+  EXPECT_TRUE(Ke.isApprox(Ke.transpose(), 1e-10)) << materialModelName(mat.model) << " TET" << NEN;
+  return (Kn - Ke).norm() / Ke.norm();
+}
+
+TEST(FeSolver, ElementStiffnessIsTheDerivativeOfTheInternalForces) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> d(-1.0, 1.0);
+  TetMesh m4;
+  m4.order = 1;
+  m4.nodes = {Vector3d(0, 0, 0), Vector3d(2, 0.1, 0), Vector3d(0.3, 1.8, 0.2), Vector3d(0.2, 0.4, 2.1)};
+  m4.tets = {{0, 1, 2, 3}};
+  m4.tissue = {1};
+  TetMesh m10 = toQuadratic(m4);
+  for (int n = 4; n < 10; ++n) m10.nodes[n] += 0.05 * Vector3d(d(rng), d(rng), d(rng));  // a curved TET10
+  for (const TetMesh* m : {&m4, &m10}) {
+    Eigen::VectorXd u(3 * m->numNodes());
+    for (int i = 0; i < u.size(); ++i) u(i) = 0.2 * d(rng);  // displacement gradients of ~0.2
+    const bool tet10 = m->order == 2;
+    for (MaterialModel model : {MaterialModel::StVenantKirchhoff, MaterialModel::NeoHookean, MaterialModel::NeoHookeanDecoupled}) {
+      const Material mat{12.25, 0.4, model};
+      const double err = tet10 ? elementTangentError<10>(*m, mat, true, u) : elementTangentError<4>(*m, mat, true, u);
+      std::printf("[element tangent] TET%d %s: |Ke - dfe/du| / |Ke| = %.2e\n", tet10 ? 10 : 4, materialModelName(model), err);
+      EXPECT_LT(err, 1e-7) << materialModelName(model) << (tet10 ? " TET10" : " TET4");
+    }
+    const Material lin{11500.0, 0.3};
+    const double err = tet10 ? elementTangentError<10>(*m, lin, false, u) : elementTangentError<4>(*m, lin, false, u);
+    std::printf("[element tangent] TET%d small strain: |Ke u - fe| / |fe| = %.2e\n", tet10 ? 10 : 4, err);
+    EXPECT_LT(err, 1e-12);
+  }
+}
+
 // a 1 x 1 x 2 block stretched or compressed along z by a prescribed top displacement, symmetry planes
 // x = 0, y = 0, z = 0, lateral faces free: homogeneous uniaxial stress, which TET4 and TET10 represent exactly
 TEST(FeSolver, UniaxialBlockMatchesTheEnergysClosedForm) {
@@ -458,8 +512,9 @@ TEST(FeSolver, NeoHookeanNewtonConvergesQuadratically) {
     o.loadSteps = 4;
     o.tolResidual = 1e-12;
     o.tolDisplacement = 1e-12;
+    o.extrapolate = false;  // each increment from the converged state: the rate from a residual far above the floor
     std::vector<std::vector<double>> rs;
-    o.onIteration = [&](int inc, int, double rn) {
+    o.onIteration = [&](int inc, int, double rn, double) {
       if (int(rs.size()) <= inc) rs.resize(std::size_t(inc) + 1);
       rs[std::size_t(inc)].push_back(rn);
     };
@@ -487,6 +542,42 @@ TEST(FeSolver, NeoHookeanNewtonConvergesQuadratically) {
   }
 }
 
+// The default convergence criteria against a solve converged to round-off, on the stubby neo-Hookean cantilever
+// at a linear tip deflection of 40 % of its length: the displacements agree to 2e-5 (max norm, relative),
+// as NewtonOptions states; the predictor (each increment starting from the last increment's path
+// extrapolated) saves iterations against starting from the converged state, and ends on the same solution
+TEST(FeSolver, DefaultCriteriaAndThePredictor) {
+  const double L = 30;
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, L, 2, 2, 6, 1));
+  Problem p;
+  p.mesh = &q;
+  p.materials = {{1, {kE, kNu, MaterialModel::NeoHookean}}};
+  std::vector<BoundaryFace> tip;
+  for (const auto& f : boundaryFaces(q))
+    if (q.nodes[f.n[0]].z() > L - 1e-9 && q.nodes[f.n[1]].z() > L - 1e-9 && q.nodes[f.n[2]].z() > L - 1e-9) tip.push_back(f);
+  for (int i = 0; i < q.numNodes(); ++i)
+    if (q.nodes[i].z() < 1e-9) p.fixNode(i);
+  p.force = tractionLoads(q, tip, Vector3d(0, 1.0 / (kB * kB), 0));
+  Solver unit(p);
+  const double compliance = tipDeflection(q, unit.solveLinear(), L);
+  for (auto& f : p.force) f *= 0.4 * L / compliance;
+  Solver s(p);
+  NewtonOptions tight;
+  tight.tolResidual = tight.tolDisplacement = 1e-12;
+  NewtonOptions plainStart;
+  plainStart.extrapolate = false;
+  const Result ref = s.solveNonlinear(tight), byDefault = s.solveNonlinear(NewtonOptions()), plain = s.solveNonlinear(plainStart);
+  const double err = (byDefault.u - ref.u).lpNorm<Eigen::Infinity>() / ref.u.lpNorm<Eigen::Infinity>();
+  const double errPlain = (plain.u - ref.u).lpNorm<Eigen::Infinity>() / ref.u.lpNorm<Eigen::Infinity>();
+  std::printf("[criteria] defaults: %d iterations, error %.1e; without the predictor: %d iterations, error %.1e; "
+              "to round-off: %d iterations\n", byDefault.newtonIterations, err, plain.newtonIterations, errPlain,
+              ref.newtonIterations);
+  EXPECT_LT(err, 2e-5);
+  EXPECT_LT(errPlain, 2e-5);
+  EXPECT_LT(byDefault.newtonIterations, plain.newtonIterations);
+  EXPECT_LT(byDefault.newtonIterations, ref.newtonIterations);
+}
+
 // Line search and automatic steps -------------------------------------------------------------------
 
 // a neo-Hookean cantilever loaded in one increment to a linear tip deflection of 1.2 x its length: full
@@ -499,6 +590,7 @@ TEST(FeSolver, LineSearchAndStepControlFollowAHardPath) {
   NewtonOptions plain;
   plain.loadSteps = 1;
   plain.maxCutbacks = 2;
+  plain.tolResidual = plain.tolDisplacement = 1e-10;  // both paths to the same solution, far below the defaults' error
   EXPECT_THROW(solveNonlinear(p, plain), NewtonDidNotConverge);
   NewtonOptions robust = plain;
   robust.lineSearch = true;
@@ -507,7 +599,7 @@ TEST(FeSolver, LineSearchAndStepControlFollowAHardPath) {
   std::vector<double> factors;
   robust.onIncrement = [&](double f, const Eigen::VectorXd&) { factors.push_back(f); };
   const Result r = solveNonlinear(p, robust);
-  NewtonOptions fine;
+  NewtonOptions fine = plain;
   fine.loadSteps = 20;
   const Result ref = solveNonlinear(p, fine);
   const double d = tipDeflection(q, r), dref = tipDeflection(q, ref);
@@ -597,6 +689,7 @@ TEST(FeSolver, DisplacementControlFindsTheLoadOfADeflection) {
     Solver s(p);
     NewtonOptions o;
     o.loadSteps = 5;
+    o.tolResidual = o.tolDisplacement = 1e-10;  // the two solves agree far below the defaults' error
     std::vector<std::pair<double, double>> path;
     o.onIncrement = [&](double L, const Eigen::VectorXd& u) { path.emplace_back(L, w.dot(u)); };
     const Result r = s.solveControlled(w, target, o);
@@ -605,6 +698,7 @@ TEST(FeSolver, DisplacementControlFindsTheLoadOfADeflection) {
     for (std::size_t k = 1; k < path.size(); ++k) EXPECT_GT(path[k].first, path[k - 1].first);  // stiffening: force rises
     NewtonOptions lc;
     lc.loadSteps = 5;
+    lc.tolResidual = lc.tolDisplacement = 1e-10;
     const Result byForce = s.solveNonlinear(lc, r.loadFactor);
     const double d = tipDeflection(q, r), dForce = tipDeflection(q, byForce);
     std::printf("[control] %s: target %.3f mm -> load %.4f N, deflection %.6f; that load as a force: %.6f mm; iterations %d / %d\n",

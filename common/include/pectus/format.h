@@ -27,4 +27,14 @@ inline std::string significantText(double v, int digits = 6) {
   return s.str();
 }
 
+/// v in scientific notation with `decimals` digits after the point: scientificText(0.012345, 1) = "1.2e-02"
+inline std::string scientificText(double v, int decimals = 1) {
+  std::ostringstream s;
+  s.imbue(std::locale::classic());
+  s.setf(std::ios::scientific);
+  s.precision(decimals);
+  s << v;
+  return s.str();
+}
+
 }  // namespace pectus

@@ -467,6 +467,19 @@ double elevationOf(const Eigen::VectorXd& u, const Analysis& a, const Vector3d& 
 
 }  // namespace
 
+std::string newtonHistoryText(const Analysis& a) {
+  std::string s;
+  for (std::size_t k = 0; k < a.newtonHistory.size(); ++k) {
+    const auto& h = a.newtonHistory[k];
+    const bool first = k == 0 || a.newtonHistory[k - 1].increment != h.increment;
+    if (first) s += (k ? "; " : "") + std::to_string(h.increment + 1) + ":";
+    s += " " + scientificText(h.relativeResidual);
+    if (!first && a.newtonHistory[k - 1].relativeResidual > 0)
+      s += " (x" + scientificText(h.relativeResidual / a.newtonHistory[k - 1].relativeResidual) + ")";
+  }
+  return s;
+}
+
 std::string notReportableBecause(const fe::TetgenOptions& mesh, const CageSurface& cage) {
   std::vector<std::string> why;
   if (mesh.order != 2) why.push_back("linear TET4 locks in bending (stiffer than the converged TET10 mesh)");
@@ -695,11 +708,23 @@ fe::Result linearAt(const Solves& s, double F, Curve* curve) {
   return r;
 }
 
+// the Newton options of a solve that records each iteration's relative residual into a.newtonHistory
+// (increments numbered on from the solves before)
+fe::NewtonOptions withHistory(const fe::NewtonOptions& o, Analysis& a) {
+  fe::NewtonOptions no = o;
+  const int first = a.newtonHistory.empty() ? 0 : a.newtonHistory.back().increment + 1;
+  no.onIteration = [&a, first, user = o.onIteration](int inc, int it, double rn, double ref) {
+    a.newtonHistory.push_back({first + inc, rn / ref});
+    if (user) user(inc, it, rn, ref);
+  };
+  return no;
+}
+
 // the nonlinear solve at F, its increments stopping at every curveStep; each converged increment is
 // observed and goes into the curve
 fe::Result nonlinearAt(Solves& s, double F, Curve* curve, const fe::Observer& observe) {
   Analysis& a = s.a;
-  fe::NewtonOptions no = s.opt.newton;
+  fe::NewtonOptions no = withHistory(s.opt.newton, a);
   no.stops.clear();
   for (double f = s.opt.curveStep; f < F - 1e-9; f += s.opt.curveStep) no.stops.push_back(f / F);
   no.loadSteps = std::max(no.loadSteps, static_cast<int>(std::ceil(F / s.opt.curveStep)));
@@ -744,7 +769,7 @@ void calibrateByDisplacement(Solves& s) {
   report(opt, 30, "Driving the sternum to " + mm(opt.targetElevation) + " mm");
   Eigen::VectorXd w = Eigen::VectorXd::Zero(3 * a.mesh.numNodes());
   for (int n : a.sternumNodes) w.segment<3>(3 * n) = dir / double(a.sternumNodes.size());
-  fe::NewtonOptions no = opt.newton;
+  fe::NewtonOptions no = withHistory(opt.newton, a);
   no.stops.clear();
   no.loadSteps = std::max(no.loadSteps, static_cast<int>(std::ceil(opt.targetElevation / (a.linearCompliance * opt.curveStep))));
   a.curve.assign(1, {0.0, 0.0});

@@ -74,8 +74,12 @@ struct Problem {
 struct NewtonOptions {
   int loadSteps = 10;         ///< equal load increments
   int maxIterations = 25;     ///< per increment
-  double tolResidual = 1e-8;  ///< ||r_free|| <= tolResidual * max(||f_ext||, ||reactions||, 1e-12)
-  double tolDisplacement = 1e-8;  ///< and ||du|| <= tolDisplacement * ||u||
+  /// An increment has converged when the residual ||r_free|| <= tolResidual * max(||f_ext||, ||reactions||)
+  /// and the correction the factor in hand gives for it (one back-substitution: the step modified Newton
+  /// would take) has max |du| <= tolDisplacement * max |u|; under displacement control also
+  /// |w . u - target| <= tolDisplacement * |target|. The state taken is the one whose residual was checked.
+  double tolResidual = 1e-4;
+  double tolDisplacement = 1e-5;
   int maxCutbacks = 4;        ///< halve a failing increment at most this many times
   /// modified Newton: keep the factorisation while the residual falls at least 3x per iteration,
   /// refactorise otherwise (a factorisation costs ~20 solves on a 100k-dof TET10 model)
@@ -84,8 +88,12 @@ struct NewtonOptions {
   std::vector<double> stops;
   /// called after every converged increment with (load factor, displacements)
   std::function<void(double, const Eigen::VectorXd&)> onIncrement;
-  /// called at every Newton iteration with (increment, iteration, ||r_free||) before the convergence test
-  std::function<void(int, int, double)> onIteration;
+  /// called at every Newton iteration with (increment, iteration, ||r_free||, the residual's reference
+  /// max(||f_ext||, ||reactions||)) before the convergence test
+  std::function<void(int, int, double, double)> onIteration;
+  /// predictor: each increment starts from the converged state extrapolated along the last increment's
+  /// path (u_n + s (u_n - u_n-1), s the ratio of the steps); off: from the converged state
+  bool extrapolate = true;
 
   /// Line search along each Newton step du: back off (a quarter each time) while the residual at
   /// u + a du is not finite (an element inverted: the neo-Hookean energy is infinite there), then secant
