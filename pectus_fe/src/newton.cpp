@@ -45,6 +45,8 @@ struct Solver::Impl::NewtonPath {
   Eigen::VectorXd uPrev;
   double lamPrev = 0, LPrev = 0;
   bool hasPrev = false;
+  Eigen::VectorXd b;  // displacement control: K^-1 f_ext with the factor of the path's factorisation bFactor
+  int bFactor = -1;
   Eigen::VectorXd uLast;  // the last state evaluated (the failure report looks for an inverted tet there)
   std::string inversion;  // the first inverted tet met at a non-finite residual since the last converged increment
 
@@ -170,7 +172,10 @@ struct Solver::Impl::NewtonPath {
     }
     du = I.chol.solve(r);
     if (ctrl) {  // bordered system: du = a + dL b, w . (u + du) = target
-      const Eigen::VectorXd b = I.chol.solve(fFree);
+      if (bFactor != res.factorizations) {  // b = K^-1 f once per factor: modified Newton reuses it
+        b = I.chol.solve(fFree);
+        bFactor = res.factorizations;
+      }
       const double wb = ctrl->dot(b);
       if (!(std::abs(wb) > 0) || !std::isfinite(wb)) return false;
       dL = (-g - ctrl->dot(du)) / wb;
