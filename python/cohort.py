@@ -14,6 +14,7 @@ the vertex quality; labels.h).
 """
 from __future__ import annotations
 
+import argparse
 import csv
 import os
 import sys
@@ -112,27 +113,28 @@ def collect(folder: str, outdir: str) -> int:
     return 0 if rows else 1
 
 
-def _option(args: list[str], name: str, default: str) -> tuple[list[str], str]:
-    """Removes '--name VALUE' from args; returns (rest, value)."""
-    if name in args:
-        i = args.index(name)
-        return args[:i] + args[i + 2:], args[i + 1]
-    return args, default
-
-
 def main(argv: list[str]) -> int:
-    quick = "--quick" in argv
-    a = [x for x in argv[1:] if x != "--quick"]
-    a, edge = _option(a, "--edge", "5.0")
-    a, cases = _option(a, "--cases", str(len(THESIS)))
-    if len(a) >= 2 and a[0] == "demo":
-        return demo(a[1], float(edge), int(cases))
-    if len(a) >= 4 and a[0] == "run":
-        return run_one(a[1], a[2], a[3], quick)
-    if len(a) >= 3 and a[0] == "collect":
-        return collect(a[1], a[2])
-    print(__doc__, file=sys.stderr)
-    return 2
+    ap = argparse.ArgumentParser(prog="cohort.py", description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    sub = ap.add_subparsers(dest="command", required=True)
+    d = sub.add_parser("demo", help="write synthetic patients shaped like the thesis' Table 6-1 into DIR")
+    d.add_argument("dir")
+    d.add_argument("--edge", type=float, default=5.0, help="the cages' surface edge length, mm (default 5)")
+    d.add_argument("--cases", type=int, default=len(THESIS), help=f"how many patients (default {len(THESIS)})")
+    r = sub.add_parser("run", help="one patient of DIR into OUTDIR/CASE/")
+    r.add_argument("dir")
+    r.add_argument("case")
+    r.add_argument("outdir")
+    r.add_argument("--quick", action="store_true", help="coarse TET4 small strain: not results to report")
+    c = sub.add_parser("collect", help="OUTDIR/cohort_summary.csv from every OUTDIR/*/summary.csv")
+    c.add_argument("dir")
+    c.add_argument("outdir")
+    a = ap.parse_args(argv[1:])
+    if a.command == "demo":
+        return demo(a.dir, a.edge, a.cases)
+    if a.command == "run":
+        return run_one(a.dir, a.case, a.outdir, a.quick)
+    return collect(a.dir, a.outdir)
 
 
 if __name__ == "__main__":

@@ -10,6 +10,7 @@ FE settings, and prints its table (planner.csv in the output folder). Full mode 
 """
 from __future__ import annotations
 
+import argparse
 import datetime
 import os
 import sys
@@ -18,7 +19,6 @@ HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import pipeline  # noqa: E402
-from pectus_meshes import saddle_mesh, write_ply  # noqa: E402,F401  (kept importable from here for older scripts)
 
 
 def plot_histograms(path: str, hists: list[list[int]], labels: list[str]):
@@ -44,18 +44,6 @@ def plot_histograms(path: str, hists: list[list[int]], labels: list[str]):
     return path
 
 
-def option_value(args: list[str], name: str, default: str) -> str:
-    """The value after `name` in args (removed from args with it), or default."""
-    if name not in args:
-        return default
-    k = args.index(name)
-    if k + 1 >= len(args):
-        raise SystemExit(f"{name} needs a value")
-    value = args[k + 1]
-    del args[k:k + 2]
-    return value
-
-
 def print_planner(r: dict, out: str):
     print(f"\nNuss bar planner ({r['planner_header'].split(': ', 1)[-1]})")
     for line in r["planner_table"]:
@@ -63,14 +51,24 @@ def print_planner(r: dict, out: str):
     print(f"{r['planner_best']}\n(* = best; table in {os.path.join(out, 'planner.csv')})")
 
 
+def parse_args(argv: list[str]) -> argparse.Namespace:
+    ap = argparse.ArgumentParser(prog="run_main.py", description=__doc__.split("\n\n")[0],
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("outdir", nargs="?", help="output folder (default: out/main-<date>-<time> in the clone)")
+    ap.add_argument("--quick", action="store_true",
+                    help="a coarse TET4 small-strain model in seconds: its figures are not results to report")
+    ap.add_argument("--planner", action="store_true", help="add the Nuss Bar Planner to the same script")
+    ap.add_argument("--planner-levels", default="3,4,5", help="planner: intercostal spaces, comma-separated (default 3,4,5)")
+    ap.add_argument("--planner-bars", default="both", choices=["both", "one", "two"],
+                    help="planner: one bar, two bars or both (default both)")
+    return ap.parse_args(argv[1:])
+
+
 def main(argv: list[str]) -> int:
-    args = argv[1:]
-    levels = option_value(args, "--planner-levels", "3,4,5")
-    bars = {"both": 0, "one": 1, "two": 2}[option_value(args, "--planner-bars", "both")]
-    quick, with_planner = "--quick" in args, "--planner" in args
-    args = [a for a in args if a not in ("--quick", "--planner")]
+    a = parse_args(argv)
+    levels, bars, quick, with_planner = a.planner_levels, {"both": 0, "one": 1, "two": 2}[a.planner_bars], a.quick, a.planner
     stamp = datetime.datetime.now().strftime("%Y%m%d-%H%M%S")
-    out = os.path.abspath(args[0] if args else os.path.join(ROOT, "out", f"main-{stamp}"))
+    out = os.path.abspath(a.outdir or os.path.join(ROOT, "out", f"main-{stamp}"))
     print("pectus-meshlab main job: create the rib cage of the thesis' patient 1 (M/8, pectus index 5.3) -> element "
           "quality -> MGA smoothing -> Nuss FE with the force calibrated to 44.7 mm -> thoracic volume (slice, "
           "envelope) and pectus index before/after, through MeshLab " + pipeline.mlx.default_host() + " headless ...", flush=True)

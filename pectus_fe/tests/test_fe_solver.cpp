@@ -487,6 +487,24 @@ TEST(FeSolver, UniaxialBlockMatchesTheEnergysClosedForm) {
   std::printf("[uniaxial] worst relative error %.1e\n", worst);
 }
 
+// the stubby cantilever q (length L along z, clamped at z = 0) under a tip shear traction scaled to a linear
+// tip deflection of 40 % of its length
+Problem stubbyCantilever(const TetMesh& q, double L, MaterialModel model) {
+  Problem p;
+  p.mesh = &q;
+  p.materials = {{1, {kE, kNu, model}}};
+  std::vector<BoundaryFace> tip;
+  for (const auto& f : boundaryFaces(q))
+    if (q.nodes[f.n[0]].z() > L - 1e-9 && q.nodes[f.n[1]].z() > L - 1e-9 && q.nodes[f.n[2]].z() > L - 1e-9) tip.push_back(f);
+  for (int i = 0; i < q.numNodes(); ++i)
+    if (q.nodes[i].z() < 1e-9) p.fixNode(i);
+  p.force = tractionLoads(q, tip, Vector3d(0, 1.0 / (kB * kB), 0));
+  Solver unit(p);
+  const double compliance = tipDeflection(q, unit.solveLinear(), L);
+  for (auto& f : p.force) f *= 0.4 * L / compliance;
+  return p;
+}
+
 // Newton on a neo-Hookean stubby cantilever (10 x 10 x 30 mm, TET10, clamped at z = 0, tip shear) at large
 // deflection (linear tip deflection 40 % of the length): in every increment the residual falls
 // quadratically at the end (rate log(r_k+1 / r_k) / log(r_k / r_k-1) near 2). A stubby beam keeps the
@@ -496,18 +514,7 @@ TEST(FeSolver, NeoHookeanNewtonConvergesQuadratically) {
   const double L = 30;
   const TetMesh q = toQuadratic(structuredBox(kB, kB, L, 2, 2, 6, 1));
   for (MaterialModel model : {MaterialModel::StVenantKirchhoff, MaterialModel::NeoHookean, MaterialModel::NeoHookeanDecoupled}) {
-    Problem p;
-    p.mesh = &q;
-    p.materials = {{1, {kE, kNu, model}}};
-    std::vector<BoundaryFace> tip;
-    for (const auto& f : boundaryFaces(q))
-      if (q.nodes[f.n[0]].z() > L - 1e-9 && q.nodes[f.n[1]].z() > L - 1e-9 && q.nodes[f.n[2]].z() > L - 1e-9) tip.push_back(f);
-    for (int i = 0; i < q.numNodes(); ++i)
-      if (q.nodes[i].z() < 1e-9) p.fixNode(i);
-    p.force = tractionLoads(q, tip, Vector3d(0, 1.0 / (kB * kB), 0));
-    Solver unit(p);
-    const double compliance = tipDeflection(q, unit.solveLinear(), L);
-    for (auto& f : p.force) f *= 0.4 * L / compliance;
+    const Problem p = stubbyCantilever(q, L, model);
     NewtonOptions o;
     o.loadSteps = 4;
     o.tolResidual = 1e-12;
@@ -549,18 +556,7 @@ TEST(FeSolver, NeoHookeanNewtonConvergesQuadratically) {
 TEST(FeSolver, DefaultCriteriaAndThePredictor) {
   const double L = 30;
   const TetMesh q = toQuadratic(structuredBox(kB, kB, L, 2, 2, 6, 1));
-  Problem p;
-  p.mesh = &q;
-  p.materials = {{1, {kE, kNu, MaterialModel::NeoHookean}}};
-  std::vector<BoundaryFace> tip;
-  for (const auto& f : boundaryFaces(q))
-    if (q.nodes[f.n[0]].z() > L - 1e-9 && q.nodes[f.n[1]].z() > L - 1e-9 && q.nodes[f.n[2]].z() > L - 1e-9) tip.push_back(f);
-  for (int i = 0; i < q.numNodes(); ++i)
-    if (q.nodes[i].z() < 1e-9) p.fixNode(i);
-  p.force = tractionLoads(q, tip, Vector3d(0, 1.0 / (kB * kB), 0));
-  Solver unit(p);
-  const double compliance = tipDeflection(q, unit.solveLinear(), L);
-  for (auto& f : p.force) f *= 0.4 * L / compliance;
+  const Problem p = stubbyCantilever(q, L, MaterialModel::NeoHookean);
   Solver s(p);
   NewtonOptions tight;
   tight.tolResidual = tight.tolDisplacement = 1e-12;

@@ -1,7 +1,7 @@
 """The README's main job (python/run_main.py, here with --quick: the same one-script pipeline with a
 small-strain TET4 FE) runs, names its output folder, and its printed Table 6-1 agrees with summary.csv
 and the files it writes. With --planner (one bar at space 4, the FE's own level) the planner's row needs the
-force of the table."""
+force of the table. --help prints the usage."""
 import csv
 import os
 import re
@@ -10,6 +10,11 @@ import subprocess
 from harness import SOURCE, check, finish, workdir
 
 out = workdir("main")
+# --help prints the usage and runs nothing (no folder named '--help')
+h = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "python", "run_main.py"), "--help"], cwd=out,
+                   stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=60)
+check(h.returncode == 0 and h.stdout.startswith("usage: run_main.py") and "--quick" in h.stdout
+      and not os.path.exists(os.path.join(out, "--help")), "run_main.py --help prints the usage and runs nothing", h.stdout[-800:])
 p = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "python", "run_main.py"), out, "--quick",
                     "--planner", "--planner-levels", "4", "--planner-bars", "one"],
                    stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=1800)
