@@ -41,10 +41,9 @@ struct Solver::Impl::NewtonPath {
   const double maxStep;
   double L = 0;  // displacement control: load factor of the converged state
   int cut = 0;
-  // the converged state before u (the predictor extrapolates through it and u)
+  // the converged state before u (the predictor extrapolates through it and u, once lam > lamPrev)
   Eigen::VectorXd uPrev;
   double lamPrev = 0, LPrev = 0;
-  bool hasPrev = false;
   Eigen::VectorXd b;  // displacement control: K^-1 f_ext with the factor of the path's factorisation bFactor
   int bFactor = -1;
   Eigen::VectorXd uLast;  // the last state evaluated (the failure report looks for an inverted tet there)
@@ -83,7 +82,7 @@ struct Solver::Impl::NewtonPath {
   // displacement control); Lt, the load factor, extrapolated alike
   Eigen::VectorXd trialStart(double target, double& Lt) const {
     Eigen::VectorXd uTrial = u;
-    if (opt.extrapolate && hasPrev && lam - lamPrev > 1e-12) {
+    if (opt.extrapolate && lam - lamPrev > 1e-12) {
       const double s = (target - lam) / (lam - lamPrev);
       uTrial += s * (u - uPrev);
       Lt = L + s * (L - LPrev);
@@ -223,7 +222,6 @@ struct Solver::Impl::NewtonPath {
     uPrev.swap(u);
     lamPrev = lam;
     LPrev = L;
-    hasPrev = true;
     u = uTrial;
     L = Lt;
     lam = target;
