@@ -11,6 +11,9 @@
 //                                                            # of the second: "quality N min mean"
 //   bench_mga_smooth distance    ref.off test.off            # "distance max mean" over test's vertices to
 //                                                            # ref's surface, divided by ref's bbox diagonal
+//   bench_mga_smooth folds       elements.off positions.off  # "folds IN OUT NEW": folds (pectus/folds.h) of
+//                                                            # the first file's elements at its positions,
+//                                                            # at the second's, and those of the second only
 // Border vertices are constrained in both smoothers (as in our filters). Prints "seconds T" for the
 // smoothing alone (no file IO).
 #include <CGAL/AABB_face_graph_triangle_primitive.h>
@@ -30,6 +33,7 @@
 #include <vector>
 
 #include "off_reader.h"
+#include "pectus/folds.h"
 #include "pectus/quality.h"
 
 using K = CGAL::Exact_predicates_inexact_constructions_kernel;
@@ -68,7 +72,7 @@ double timed(F&& f) {
 int main(int argc, char** argv) try {
   if (argc < 4) {
     std::cerr << "usage: " << argv[0] << " tangential|angle_area in.off out.off iterations | quality elements.off "
-                                         "positions.off | distance ref.off test.off\n";
+                                         "positions.off | distance ref.off test.off | folds elements.off positions.off\n";
     return 2;
   }
   const std::string mode = argv[1];
@@ -130,6 +134,26 @@ int main(int argc, char** argv) try {
       sum += d;
     }
     std::printf("distance %.8g %.8g\n", mx / diag, sum / double(t.V.size()) / diag);
+  } else if (mode == "folds") {
+    const Off e = readOff(argv[2]), p = readOff(argv[3]);
+    if (e.V.size() != p.V.size()) throw std::runtime_error("vertex counts differ");
+    std::vector<pectus::Element> elements;
+    for (const auto& f : e.F) {
+      if (f.size() != 3 && f.size() != 4) throw std::runtime_error("faces must be triangles or quads");
+      pectus::Element el;
+      el.nv = int(f.size());
+      for (std::size_t k = 0; k < f.size(); ++k) el.v[k] = f[k];
+      elements.push_back(el);
+    }
+    const pectus::Folds folds(elements, e.V.size());
+    const std::vector<char> in = folds.all(e.V), out = folds.all(p.V);
+    std::size_t nIn = 0, nOut = 0, nNew = 0;
+    for (std::size_t i = 0; i < in.size(); ++i) {
+      nIn += in[i];
+      nOut += out[i];
+      nNew += out[i] && !in[i];
+    }
+    std::printf("folds %zu %zu %zu\n", nIn, nOut, nNew);
   } else {
     throw std::runtime_error("unknown mode " + mode);
   }

@@ -106,9 +106,10 @@ int main(int argc, char** argv) try {
   std::printf("fixed: %zu boundary, %zu feature, %zu singular; free %zu; threads %d\n", r.boundaryNodes, r.featureNodes,
               r.singularNodes, r.freeNodes, omp_get_max_threads());
   if (o.features == sm::FeatureDetection::Creases) std::printf("features: %s\n", r.featureSummary.c_str());
-  std::printf("mean %.5f -> %.5f  min %.4f -> %.4f  folded %zu -> %zu  sweeps %d+%d  searches %zu  evaluations %zu  "
+  std::printf("mean %.5f -> %.5f  min %.4f -> %.4f  folded %zu -> %zu  folds %zu -> %zu (new %zu, undone %zu+%zu)  put back (crossings) %zu  sweeps %d+%d  searches %zu  evaluations %zu  "
               "wall %.2f s (setup %.2f)  cpu %.2f s\n",
-              r.before.mean, r.after.mean, r.before.min, r.after.min, r.foldedBefore, r.foldedAfter, r.sweeps,
+              r.before.mean, r.after.mean, r.before.min, r.after.min, r.foldedBefore, r.foldedAfter, r.foldsBefore,
+              r.foldsAfter, r.foldsNew, r.movesUndoneForFolds, r.nodesPutBackFolds, r.nodesPutBack, r.sweeps,
               r.minPassSweeps, r.searches, r.evaluations, wall, r.setupSeconds, cpu);
   if (kv.count("out")) {
     std::ofstream out(kv["out"]);

@@ -8,7 +8,7 @@ angle_and_area_smoothing (Delaunay flips off, projection on).
 Inputs: the jittered saddle z = x^2/10 - y^2/4 on [-5,5]^2 (611 nodes, triangles; the lattice of the unit
 test), a jittered 25x25 quad grid on the same saddle (576 quads; triangle-only peers smooth its
 triangulation, the quads are measured); from Debian's libcgal-demo the organic (CT and scanned) meshes
-femur.off, bunny00.off, elephant.off and hand.off, and the CAD parts fandisk.off, anchor_dense.off and
+femur.off, bunny00.off, elephant.off, hand.off and cow.off, and the CAD parts fandisk.off, anchor_dense.off and
 cube-meshed.off.
 Columns: element quality (alpha for triangles, Knupp's beta for quads, the project's own code for every
 row), max deviation from the exact saddle (|z - saddle(x, y)|) or, for the CGAL meshes, max distance to the
@@ -18,7 +18,7 @@ file; OpenMesh: the process), and on the CAD
 parts the largest change of the dihedral angle of a crease edge (an edge of the input bent by 20 degrees or
 more; these parts have no noise) and how many crease nodes moved.
 
-    bench/mga_smooth.py [--build build-mga] [--only saddle,quad,femur,bunny,elephant,hand,fandisk,anchor,cube]
+    bench/mga_smooth.py [--build build-mga] [--only saddle,quad,femur,bunny,elephant,hand,cow,fandisk,anchor,cube]
                         [--repeat N]
 
 --repeat N runs every row N times and prints its fastest time (the results are the same each time): on a
@@ -144,7 +144,10 @@ SEARCH = ["Every adjacent element (thesis)", "Guided (faster)", "Guided, local (
 FEATURES = ["Crease chains", "Feature and singular angles"]
 
 
-def ours(mga, sweeps, guard=0.35, min_pass=0.0, feature=None, singular=None, guided=False, search=None, generations=20):
+GUARD = 0.7  # the filters' default worst-element guard
+
+
+def ours(mga, sweeps, guard=GUARD, min_pass=0.0, feature=None, singular=None, guided=False, search=None, generations=20):
     """search: 0 every element, 1 guided, 2 guided local (default: guided -> 1, else 0); feature, singular:
     angles (feature detection by angles), None: crease chains (the default)"""
     angles = feature is not None or singular is not None
@@ -196,15 +199,11 @@ def crease_change(V, W, F, creases):
 
 
 def run_row(b, how, out):
-    """one run of a row: its time in seconds, and for our rows the elements folded in the input and in the
-    result (from the Log; else None)"""
+    """one run of a row: its time in seconds"""
     if how[0] == "ml":
         secs, r = b.meshlab(how[1], out, how[2])
         own = r.get("seconds")  # our filters time their own call, as the CGAL driver does
-        if own is not None:
-            secs = own
-        folded = r.get("folded_before"), r.get("folded_after")
-        return secs, (str(folded[0]), str(folded[1])) if None not in folded else None
+        return own if own is not None else secs
     if how[0] == "om":
         t0 = time.perf_counter()
         p = subprocess.run(["OpenMesh-Smoothing", "-t", "10", how[1], out], stdout=subprocess.PIPE,
@@ -212,14 +211,14 @@ def run_row(b, how, out):
         secs = time.perf_counter() - t0
         if p.returncode != 0 or not os.path.exists(out):
             raise RuntimeError(p.stdout[-300:])
-        return secs, None
-    return float(re.search(r"seconds (\S+)", b.tool_out(how[2], how[1], out, "10")).group(1)), None
+        return secs
+    return float(re.search(r"seconds (\S+)", b.tool_out(how[2], how[1], out, "10")).group(1))
 
 
 def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--build", default=os.path.join(ROOT, "build-mga"))
-    ap.add_argument("--only", default="saddle,quad,femur,bunny,elephant,hand,fandisk,anchor,cube")
+    ap.add_argument("--only", default="saddle,quad,femur,bunny,elephant,hand,cow,fandisk,anchor,cube")
     ap.add_argument("--mga-sweeps-large", type=int, default=10,
                     help="MGA/CG default-row sweeps on meshes over 10k nodes (10: MGA's default; the gradient's is 15)")
     ap.add_argument("--repeat", type=int, default=1, help="runs per row; the fastest time is printed")
@@ -241,7 +240,7 @@ def main():
         inputs.append(("saddle, quads", V, F, True))
     data = "/usr/share/doc/libcgal-dev/data.tar.gz"
     cgal = [("femur", "femur", False), ("bunny", "bunny00", False), ("elephant", "elephant", False),
-            ("hand", "hand", False), ("fandisk", "fandisk", True), ("anchor", "anchor_dense", True),
+            ("hand", "hand", False), ("cow", "cow", False), ("fandisk", "fandisk", True), ("anchor", "anchor_dense", True),
             ("cube", "cube-meshed", True)]
     for key, name, cad in cgal:
         if key not in args.only.split(","):
@@ -254,7 +253,7 @@ def main():
         V, F = read_off(os.path.join(work, "data", "meshes", f"{name}.off"))
         inputs.append((name + (" (CAD)" if cad else ""), V, F, False))
 
-    rows, folded_input = [], {}  # folded_input: the input's folded elements, from our rows' Log
+    rows = []
     load0 = os.getloadavg()
     for label, V, F, is_saddle in inputs:
         base = os.path.join(work, re.sub(r"\W+", "_", label))
@@ -296,20 +295,19 @@ def main():
                       ("ml", elems, ours(True, 30, 0.0, 0.2, 180, 180, guided=True)))]
         for name, how in runs:
             out = base + "_" + re.sub(r"\W+", "_", name) + ".off"
-            secs, folded = 0.0, "-"
+            secs = 0.0
             try:
                 if how is None:
                     out = elems
                 else:
-                    runs_of_row = [run_row(b, how, out) for _ in range(args.repeat)]
-                    secs = min(t for t, _ in runs_of_row)
-                    if runs_of_row[-1][1]:
-                        folded_input[label], folded = runs_of_row[-1][1]
+                    secs = min(run_row(b, how, out) for _ in range(args.repeat))
                 W = read_off(out)[0]
                 if W.shape != V.shape:
                     raise RuntimeError(f"vertex count changed {V.shape} -> {W.shape}")
                 q = b.tool_out("quality", elems, out).split()
                 qmin, qmean = float(q[2]), float(q[3])
+                fo = b.tool_out("folds", elems, out).split()  # folds IN OUT NEW
+                folded = fo[2] if how is None else f"{fo[3]} / {fo[2]}"
                 if is_saddle:
                     dev = float(np.max(np.abs(W[:, 2] - saddle(W[:, 0], W[:, 1]))))
                 else:
@@ -326,7 +324,7 @@ def main():
 
     print(f"load average before/after the run: {load0[0]:.1f} / {os.getloadavg()[0]:.1f} ({os.cpu_count()} cores; "
           "other jobs on the machine inflate the times)")
-    print(f"{'method':48s} {'q min':>7s} {'q mean':>7s} {'max dev':>9s} {'time s':>8s} {'folded':>6s} {'crease':>11s}")
+    print(f"{'method':48s} {'q min':>7s} {'q mean':>7s} {'max dev':>9s} {'time s':>8s} {'folds':>9s} {'crease':>11s}")
     last = None
     for r in rows:
         if r[0] != last:
@@ -335,10 +333,9 @@ def main():
         if r[2] is None:
             print(f"  {r[1]:46s} failed: {r[10]}")
         else:
-            folded = folded_input.get(r[0], "-") if r[1] == "input" else r[8]
-            print(f"  {r[1]:46s} {r[2]:7.4f} {r[3]:7.4f} {r[4]:9.2e} {r[5]:8.2f} {folded:>6s} {r[9]:>11s}")
+            print(f"  {r[1]:46s} {r[2]:7.4f} {r[3]:7.4f} {r[4]:9.2e} {r[5]:8.2f} {r[8]:>9s} {r[9]:>11s}")
     print("max dev: saddle rows |z - saddle(x, y)|; libcgal-demo rows distance to the input surface / bbox diagonal")
-    print("folded: input and our rows, elements folded against the C1 surface normal at one of their nodes (our Log)")
+    print("folds: elements facing against the mean normal of their edge neighbours; input: how many, others: new / left")
     print(f"crease (CAD parts): largest change of a crease edge's dihedral angle in degrees (crease edges: bent "
           f"{CREASE_DEG:g} degrees or more in the input) / crease nodes moved")
     for r in rows:

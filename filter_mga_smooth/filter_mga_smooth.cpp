@@ -332,6 +332,11 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
           ", mean " + q + " " + fmt(r.before.mean) + " -> " + fmt(r.after.mean) + "; nodes moved " +
           std::to_string(r.nodesMoved) + " of " + std::to_string(r.freeNodes) + " free" +
           (r.nodesPutBack ? " (" + std::to_string(r.nodesPutBack) + " put back: the surface crossed itself there)" : std::string()) +
+          "; folds (elements facing against their edge neighbours) " + std::to_string(r.foldsBefore) + " -> " +
+          std::to_string(r.foldsAfter) + ", " + std::to_string(r.foldsNew) + " new" +
+          (r.movesUndoneForFolds + r.nodesPutBackFolds
+               ? " (" + std::to_string(r.movesUndoneForFolds + r.nodesPutBackFolds) + " moves undone: they folded an element)"
+               : std::string()) +
           "; sweeps " +
           std::to_string(r.sweeps) +
           (r.minPassSweeps ? " + " + std::to_string(r.minPassSweeps) + " worst-element" : std::string()) + "; time " + fmt(r.seconds, 2) + " s");
@@ -361,6 +366,10 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
   res.set("fitness_evaluations", r.evaluations);
   res.set("folded_before", r.foldedBefore);
   res.set("folded_after", r.foldedAfter);
+  res.set("folds_before", r.foldsBefore);
+  res.set("folds_after", r.foldsAfter);
+  res.set("folds_new", r.foldsNew);
+  res.set("moves_undone_for_folds", r.movesUndoneForFolds + r.nodesPutBackFolds);
   res.set("seconds", r.seconds);
 }
 

@@ -158,7 +158,7 @@ TEST(MgaSmooth, SaddleTriangles) {
               "%d sweeps, %d colours, max |z - saddle| %.5f, %.2f s\n",
               t.V.size(), t.F.size(), r.before.mean, r.after.mean, r.before.min, r.after.min, r.nodesMoved, r.sweeps,
               r.colours, dev, r.seconds);
-  EXPECT_GT(r.after.mean, 0.865);  // measured 0.868 (seed 11, 15 sweeps, guard 0.35)
+  EXPECT_GT(r.after.mean, 0.85);  // measured 0.853 (seed 11, 15 sweeps, guard 0.7)
   EXPECT_GT(r.after.min, r.before.min);
   // the bound of this mesh is 0.3133, two corner triangles whose three nodes are boundary nodes (a minimum
   // of 0.40 cannot be reached while the boundary stays fixed; bench/saddle_bound.py); the search is

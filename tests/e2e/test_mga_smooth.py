@@ -61,7 +61,8 @@ for ex in EXAMPLES:
     check(wa is not None and ma is not None, f"{ex}: Log line with worst/mean alpha before and after", log)
     if ma:
         check(abs(ma[0] - before.mean()) < 1e-3 and abs(ma[1] - after.mean()) < 1e-3, f"{ex}: Log mean matches", log)
-    check(re.search(r"nodes moved \d+ of 81 free; sweeps \d+; time", log) is not None, f"{ex}: Log: nodes moved, sweeps, time", log)
+    check(re.search(r"nodes moved \d+ of 81 free; folds \(elements facing against their edge neighbours\) 0 -> 0, "
+                    r"0 new; sweeps \d+; time", log) is not None, f"{ex}: Log: nodes moved, folds, sweeps, time", log)
     check(re.search(ex + r" smoothing: fixed nodes: 40 boundary, 0 feature, 0 singular, 0 by the selection", log)
           is not None, f"{ex}: Log: fixed nodes by class", log)
     check(re.search(r"elements folded against a node's surface normal 0 -> 0", log) is not None,

@@ -15,6 +15,7 @@
 #include "pectus/c1/surface.h"
 #include "pectus/element_quality.h"
 #include "pectus/errors.h"
+#include "pectus/folds.h"
 #include "pectus/mesh_checks.h"
 #include "pectus/self_intersections.h"
 
@@ -862,15 +863,17 @@ std::vector<std::vector<int>> colourClasses(const Mesh& M, const std::vector<int
 }
 
 /// The sweeps over the free nodes (thesis steps 2-9): the colours one after the other, the nodes of a
-/// colour in parallel, each searched from where it is and moved to its best point on the C1 surface.
+/// colour in parallel, each searched from where it is and moved to its best point on the C1 surface; then
+/// the colour's moves are kept one after the other, each only if it folds no element (folds.h) that was
+/// not folded before it.
 class Sweeps {
  public:
   Sweeps(Mesh& M, std::vector<Loc>& loc, const C1Surface& S, const Projector& proj, const Options& opt,
          const std::vector<int>& toM, const std::vector<std::vector<int>>& classes, const std::vector<int>& freeNodes,
-         const std::vector<char>& fixed)
+         const std::vector<char>& fixed, const Folds& folds)
       : M_(M), loc_(loc), S_(S), proj_(proj), opt_(opt), toM_(toM), classes_(classes), freeNodes_(freeNodes),
-        fixed_(fixed), projDist_(M.X.size(), 0.0), evaluations_(M.X.size(), 0), active_(M.X.size(), 0),
-        gained_(M.X.size(), 0) {
+        fixed_(fixed), folds_(folds), projDist_(M.X.size(), 0.0), evaluations_(M.X.size(), 0), active_(M.X.size(), 0),
+        gained_(M.X.size(), 0), from_(M.X.size()) {
     mo_.population = opt.population;
     mo_.accuracy = opt.accuracy;
     mo_.maxRestarts = opt.restarts;
@@ -908,6 +911,8 @@ class Sweeps {
   }
 
   std::size_t evaluations() const { return std::accumulate(evaluations_.begin(), evaluations_.end(), std::size_t(0)); }
+  /// moves undone because they folded an element
+  std::size_t movesUndone() const { return movesUndone_; }
   double maxProjectionDistance() const { return *std::max_element(projDist_.begin(), projDist_.end()); }
 
  private:
@@ -922,6 +927,39 @@ class Sweeps {
         if (!maxMin && !active_[std::size_t(n)]) continue;
         searchNode(n, maxMin, sweepSeed);
       }
+      keepUnfolding(cls);
+    }
+  }
+
+  // The moves of one colour, taken again one after the other in node order from where the colour started;
+  // a move that folds an element (Folds) that was not folded before it is undone. The fold test of an
+  // element reads the nodes of its edge neighbours too, which may share the colour: hence in order, after
+  // the parallel search. A folded element can unfold, and no element folds anew.
+  void keepUnfolding(const std::vector<int>& cls) {
+    std::vector<int> moved;
+    for (int n : cls)
+      if (M_.X[std::size_t(n)] != from_[std::size_t(n)].x) moved.push_back(n);
+    std::vector<Vec3> to(moved.size());
+    for (std::size_t i = 0; i < moved.size(); ++i) {
+      to[i] = M_.X[std::size_t(moved[i])];
+      M_.X[std::size_t(moved[i])] = from_[std::size_t(moved[i])].x;
+    }
+    for (std::size_t i = 0; i < moved.size(); ++i) {
+      const int n = moved[i];
+      const std::vector<int> readers = folds_.readers(n);
+      std::vector<char> before(readers.size());
+      for (std::size_t k = 0; k < readers.size(); ++k) before[k] = folds_.folded(readers[k], M_.X);
+      M_.X[std::size_t(n)] = to[i];
+      bool folds = false;
+      for (std::size_t k = 0; k < readers.size() && !folds; ++k) folds = !before[k] && folds_.folded(readers[k], M_.X);
+      if (!folds) continue;
+      const From& f = from_[std::size_t(n)];
+      M_.X[std::size_t(n)] = f.x;
+      M_.N[std::size_t(n)] = f.normal;
+      loc_[std::size_t(n)] = f.loc;
+      projDist_[std::size_t(n)] = f.projDist;
+      gained_[std::size_t(n)] = 0;
+      ++movesUndone_;
     }
   }
 
@@ -968,6 +1006,7 @@ class Sweeps {
     }
     // the node moves after its own search: neighbours of the same colour do not see it, and
     // no node of this colour reads it (they share no element)
+    from_[std::size_t(n)] = From{x0, n0, l0, projDist_[std::size_t(n)]};
     M_.X[std::size_t(n)] = ns.bestX;
     M_.N[std::size_t(n)] = nrm;
     loc_[std::size_t(n)] = ns.bestLoc;
@@ -1002,11 +1041,48 @@ class Sweeps {
   const std::vector<std::vector<int>>& classes_;
   const std::vector<int>& freeNodes_;
   const std::vector<char>& fixed_;
+  const Folds& folds_;
   mga::Options mo_;
   std::vector<double> projDist_;         ///< per node: the largest candidate-to-surface distance of its moves
   std::vector<std::size_t> evaluations_; ///< per node: fitness evaluations
   std::vector<char> active_, gained_;    ///< per node: searched in the next sweep; gained in its last search
+  struct From {                          ///< a node's state before its last search (keepUnfolding)
+    Vec3 x, normal;
+    Loc loc;
+    double projDist = 0;
+  };
+  std::vector<From> from_;
+  std::size_t movesUndone_ = 0;
 };
+
+// puts back the moved nodes of every element folded now and not in the input, and of its edge neighbours
+// (whose normals its fold test reads), until no element is folded that was not: at the latest with the
+// input. The nodes put back get their input normals N0 again. Returns how many were put back
+std::size_t putBackFolds(Mesh& M, const Folds& folds, const std::vector<char>& foldedInput,
+                         const std::vector<Vec3>& input, const std::vector<Vec3>& N0) {
+  std::size_t back = 0;
+  for (bool changed = true; changed;) {
+    changed = false;
+    const std::vector<char> now = folds.all(M.X);
+    for (int e = 0; e < int(now.size()); ++e) {
+      if (!now[std::size_t(e)] || foldedInput[std::size_t(e)]) continue;
+      std::vector<int> around = folds.neighbours(e);
+      around.push_back(e);
+      for (int g : around) {
+        const Element& el = folds.element(g);
+        for (int k = 0; k < el.nv; ++k) {
+          const std::size_t v = std::size_t(el.v[std::size_t(k)]);
+          if (M.X[v] == input[v]) continue;
+          M.X[v] = input[v];
+          M.N[v] = N0[v];
+          ++back;
+          changed = true;
+        }
+      }
+    }
+  }
+  return back;
+}
 
 // undoes the moves that make the surface cross itself (restoreCrossings); the nodes put back get their
 // input normals N0 again. Returns how many were put back
@@ -1112,15 +1188,30 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
 
   const std::vector<std::vector<int>> classes = colourClasses(M, freeNodes);
   res.colours = int(classes.size());
-  Sweeps sweeps(M, loc, S, proj, opt, toM, classes, freeNodes, fixed);
+  const Folds folds(M.E, M.X.size());
+  const std::vector<char> foldedInput = folds.all(M.X);
+  res.foldsBefore = std::size_t(std::count(foldedInput.begin(), foldedInput.end(), char(1)));
+  Sweeps sweeps(M, loc, S, proj, opt, toM, classes, freeNodes, fixed, folds);
   res.foldedBefore = foldedElements(M);
   const std::vector<Vec3> N0 = M.N;  // the input's normals, for the nodes restoreCrossings puts back
   res.setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   sweeps.run(res);
 
-  res.nodesPutBack = putBackCrossings(M, tm.V, N0);
+  // the surface must not cross itself where the input did not, nor fold: put back until neither happens
+  for (;;) {
+    res.nodesPutBack += putBackCrossings(M, tm.V, N0);
+    const std::size_t back = putBackFolds(M, folds, foldedInput, tm.V, N0);
+    res.nodesPutBackFolds += back;
+    if (back == 0) break;
+  }
   res.after = stats(M);
   res.foldedAfter = foldedElements(M);
+  const std::vector<char> foldedOutput = folds.all(M.X);
+  for (std::size_t e = 0; e < foldedOutput.size(); ++e) {
+    res.foldsAfter += foldedOutput[e];
+    res.foldsNew += foldedOutput[e] && !foldedInput[e];
+  }
+  res.movesUndoneForFolds = sweeps.movesUndone();
   res.evaluations = sweeps.evaluations();
   res.maxProjectionDistance = sweeps.maxProjectionDistance();
   collectPositions(m, M, tm, toM, res);

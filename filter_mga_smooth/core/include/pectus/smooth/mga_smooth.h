@@ -20,6 +20,9 @@
 // therefore never drops below min(initial minimum, worstGuard). The guard comes before the fold rule: a
 // node whose star is folded may unfold only without dropping its worst element below the guard.
 // worstGuard = 0: the thesis' plain sum.
+// Folds (not in the thesis): after each colour's parallel search its moves are taken again one after the
+// other, and a move that makes an element face against its edge neighbours (pectus/folds.h) where it did
+// not is undone; a folded element may unfold. So no smoothing folds the surface anew.
 // Optional final pass (not in the thesis; off by default): after the sweeps, up to minPassSweeps sweeps
 // over the nodes whose worst element is below minPassBelow, each maximising that worst element (ties
 // broken by the sum), with the same search, projection and fold rules.
@@ -62,7 +65,7 @@
 
 namespace pectus::smooth {
 
-constexpr double kMinQualityGuard = 0.35;  ///< default guard (bench/mga_smooth.py: 0.5 costs mean, 0.3 min)
+constexpr double kMinQualityGuard = 0.7;  ///< default guard (bench/mga_smooth.py: the worst element ahead of CGAL on smooth scans)
 
 // Valid ranges of the Options validateOptions checks (the integer counts and the tolerance only at their
 // lower end); the filters declare their parameters with the same constants.
@@ -137,6 +140,11 @@ struct Result {
   std::size_t elements = 0, quads = 0;
   /// elements folded against the C1 surface normal at one of their nodes, before and after
   std::size_t foldedBefore = 0, foldedAfter = 0;
+  /// folds (pectus/folds.h: an element facing against its edge neighbours) in the input and the result,
+  /// and those of the result that the input did not have (0: such moves are undone, see smoothMesh)
+  std::size_t foldsBefore = 0, foldsAfter = 0, foldsNew = 0;
+  std::size_t movesUndoneForFolds = 0;  ///< moves undone in the sweeps because they folded an element
+  std::size_t nodesPutBackFolds = 0;    ///< moved nodes returned to their input position at the end: a fold there
   std::size_t freeNodes = 0, boundaryNodes = 0, featureNodes = 0, singularNodes = 0, userFixedNodes = 0;
   std::size_t creaseChains = 0;      ///< FeatureDetection::Creases: crease chains found
   std::string featureSummary;        ///< FeatureDetection::Creases: Creases::summary()
@@ -160,7 +168,9 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
                                   std::vector<Vec3>& after);
 
 /// Smooths with opt.method. Nodes are the live vertices of `m`. `userFixed` (per m.vert index, empty = none): 1 = keep fixed.
-/// Moves that make the surface cross itself are undone at the end (restoreCrossings).
+/// Moves that make the surface cross itself are undone at the end (restoreCrossings); a move that folds an
+/// element (pectus/folds.h) that was not folded is undone in the sweep, and any fold left at the end by the
+/// nodes put back is put back too, so the result has no fold its input did not have.
 /// Throws InputError for bad parameters, NaN coordinates or a mesh with no free node, TopologyError
 /// (requireMesh, buildElements) for a mesh without faces, non-manifold input (edge or vertex) or invalid quads.
 /// Fixed-node classes are counted once, in the order boundary, feature, singular, user.

@@ -1,0 +1,40 @@
+// Folds of a surface mesh: an element whose normal points against the mean of its edge neighbours' unit
+// normals (n_e . sum_g n_g < 0, g over the elements that share an edge with e). A triangle's normal is its
+// cross product, a quad's the cross product of its diagonals. Degenerate elements (no normal) and elements
+// whose neighbours' normals cancel are not folds. The definition the smoothers' Log and
+// bench/mga_smooth.py count by.
+#pragma once
+#include <cstddef>
+#include <vector>
+
+#include "pectus/elements.h"
+#include "pectus/quality.h"
+
+namespace pectus {
+
+class Folds {
+ public:
+  /// the edge neighbours of each element (elements with nodes outside [0, nodes) are refused by an assert)
+  Folds(const std::vector<Element>& elements, std::size_t nodes);
+
+  /// whether element e is folded with the nodes at X
+  bool folded(int e, const std::vector<Vec3>& X) const;
+  /// per element, 1 if folded (in parallel; the same for any thread count)
+  std::vector<char> all(const std::vector<Vec3>& X) const;
+  std::size_t count(const std::vector<Vec3>& X) const;
+  /// the elements whose fold test reads node n: its elements and their edge neighbours (sorted)
+  std::vector<int> readers(int n) const;
+  /// element e's edge neighbours
+  const std::vector<int>& neighbours(int e) const { return nb_[std::size_t(e)]; }
+  const std::vector<int>& elementsOf(int n) const { return vE_[std::size_t(n)]; }
+  const Element& element(int e) const { return E_[std::size_t(e)]; }
+
+ private:
+  const std::vector<Element>& E_;
+  std::vector<std::vector<int>> nb_, vE_;
+};
+
+/// unit normal of an element (a quad: of its diagonals' cross product); zero if degenerate
+Vec3 elementNormal(const Element& e, const std::vector<Vec3>& X);
+
+}  // namespace pectus
