@@ -8,6 +8,7 @@
 
 #include "pectus/element_quality.h"
 #include "pectus/errors.h"
+#include "pectus/folds.h"
 #include "pectus/mesh_checks.h"
 
 namespace {
@@ -143,4 +144,49 @@ TEST(MeshChecks, DetectsBadInput) {
   } catch (const pectus::InputError& e) {
     EXPECT_NE(std::string(e.what()).find("1 duplicate faces"), std::string::npos) << e.what();
   }
+}
+
+TEST(Folds, AnElementFacingAgainstItsEdgeNeighboursIsAFold) {
+  // a 4 x 4 grid of triangles in z = 0: no fold; one interior node pushed past a neighbour flips the
+  // triangles on that side, each facing against its neighbours; quads: the normal of the diagonals
+  const int n = 4;
+  std::vector<pectus::Vec3> X;
+  for (int j = 0; j <= n; ++j)
+    for (int i = 0; i <= n; ++i) X.emplace_back(i, j, 0);
+  std::vector<pectus::Element> tris, quads;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const int a = j * (n + 1) + i, b = a + 1, c = a + n + 2, d = a + n + 1;
+      pectus::Element t1, t2, q;
+      t1.v = {a, b, c, -1};
+      t2.v = {a, c, d, -1};
+      q.nv = 4;
+      q.v = {a, b, c, d};
+      tris.push_back(t1);
+      tris.push_back(t2);
+      quads.push_back(q);
+    }
+  const pectus::Folds ft(tris, X.size()), fq(quads, X.size());
+  EXPECT_EQ(ft.count(X), 0u);
+  EXPECT_EQ(fq.count(X), 0u);
+  const int v = 2 * (n + 1) + 2;  // the centre node (2, 2)
+  EXPECT_EQ(ft.readers(v).size(), 6u + 6u);  // its 6 triangles and the 6 across their outer edges
+  std::vector<pectus::Vec3> Y = X;
+  Y[std::size_t(v)] = pectus::Vec3(3.6, 2, 0);  // past its neighbour (3, 2)
+  const std::vector<char> f = ft.all(Y);
+  std::size_t folded = 0;
+  for (std::size_t e = 0; e < f.size(); ++e)
+    if (f[e]) {
+      ++folded;
+      const pectus::Element& el = tris[e];
+      EXPECT_TRUE(el.v[0] == v || el.v[1] == v || el.v[2] == v) << "a fold away from the moved node";
+      EXPECT_LT(pectus::elementNormal(el, Y).z(), 0);
+    }
+  EXPECT_GE(folded, 2u);
+  Y[std::size_t(v)] = pectus::Vec3(4.5, 2, 0);  // a quad's diagonals cross over further out
+  EXPECT_GE(fq.count(Y), 2u);
+  // lifted out of the plane by a little: tilted, not folded
+  Y = X;
+  Y[std::size_t(v)].z() = 0.3;
+  EXPECT_EQ(ft.count(Y), 0u);
 }

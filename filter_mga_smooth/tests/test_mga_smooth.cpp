@@ -9,6 +9,7 @@
 #include <random>
 
 #include "pectus/smooth/mga_smooth.h"
+#include "pectus/folds.h"
 #include "pectus/c1/surface.h"
 #include "pectus/surface_cmesh.h"
 #include "pectus/errors.h"
@@ -338,6 +339,44 @@ TEST(MgaSmooth, FoldedElementsNeverIncrease) {
       if (sweeps > 1) EXPECT_LE(r.foldedAfter, last);
       last = r.foldedAfter;
     }
+  }
+}
+
+TEST(MgaSmooth, NoNewFoldsOnAFoldedSurface) {
+  // a gently curved grid with every 11th node (of the interior) pushed 1.6 times the way to its right-hand neighbour,
+  // past it: the triangles there face against their edge neighbours (folds, pectus/folds.h). Neither method
+  // may fold an element that was not folded, and the folds, counted again here from the result, may only fall
+  TriMesh t = grid(16, 0.25, 5);
+  for (auto& p : t.V) p.z() = 0.02 * ((p.x() - 7.5) * (p.x() - 7.5) + (p.y() - 7.5) * (p.y() - 7.5));
+  for (int v = 18; v < int(t.V.size()); v += 11)
+    if (v % 16 > 0 && v % 16 < 14 && v / 16 > 0 && v / 16 < 15) t.V[std::size_t(v)] += 1.6 * (t.V[std::size_t(v + 1)] - t.V[std::size_t(v)]);
+  std::vector<pectus::Element> E;
+  for (const auto& f : t.F) {
+    pectus::Element e;
+    e.v = {f[0], f[1], f[2], -1};
+    E.push_back(e);
+  }
+  const pectus::Folds folds(E, t.V.size());
+  const std::vector<char> in = folds.all(t.V);
+  const std::size_t nIn = std::size_t(std::count(in.begin(), in.end(), char(1)));
+  ASSERT_GE(nIn, 10u);
+  const auto mp = toMesh(t);
+  for (auto method : {sm::Method::MicroGA, sm::Method::ConjugateGradient}) {
+    sm::Options o = fastOptions();
+    o.method = method;
+    const auto r = sm::smoothMesh(*mp, o);
+    const std::vector<char> out = folds.all(r.positions);
+    std::size_t nOut = 0, nNew = 0;
+    for (std::size_t e = 0; e < in.size(); ++e) nOut += out[e], nNew += out[e] && !in[e];
+    std::printf("folded grid (%s): folds %zu -> %zu, %zu new, %zu moves undone; alpha mean %.4f -> %.4f\n",
+                method == sm::Method::MicroGA ? "MGA" : "CG", nIn, nOut, nNew,
+                r.movesUndoneForFolds + r.nodesPutBackFolds, r.before.mean, r.after.mean);
+    EXPECT_EQ(nNew, 0u);
+    EXPECT_LT(nOut, nIn);
+    EXPECT_EQ(r.foldsBefore, nIn);
+    EXPECT_EQ(r.foldsAfter, nOut);
+    EXPECT_EQ(r.foldsNew, 0u);
+    EXPECT_GT(r.after.mean, r.before.mean);
   }
 }
 
