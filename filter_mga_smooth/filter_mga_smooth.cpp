@@ -332,6 +332,9 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
           ", mean " + q + " " + fmt(r.before.mean) + " -> " + fmt(r.after.mean) + "; nodes moved " +
           std::to_string(r.nodesMoved) + " of " + std::to_string(r.freeNodes) + " free" +
           (r.nodesPutBack ? " (" + std::to_string(r.nodesPutBack) + " put back: the surface crossed itself there)" : std::string()) +
+          (r.nodesPutBackGuard ? " (" + std::to_string(r.nodesPutBackGuard) +
+                                     " put back beside them: an element fell below the guard)"
+                               : std::string()) +
           "; folds (elements facing against their edge neighbours) " + std::to_string(r.foldsBefore) + " -> " +
           std::to_string(r.foldsAfter) + ", " + std::to_string(r.foldsNew) + " new" +
           (r.movesUndoneForFolds + r.nodesPutBackFolds
@@ -370,6 +373,7 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
   res.set("folds_after", r.foldsAfter);
   res.set("folds_new", r.foldsNew);
   res.set("moves_undone_for_folds", r.movesUndoneForFolds + r.nodesPutBackFolds);
+  res.set("nodes_put_back_guard", r.nodesPutBackGuard);
   res.set("seconds", r.seconds);
 }
 

@@ -1,6 +1,6 @@
 // Fuzz target: MGA / conjugate-gradient smoothing (triangles and quads) on small, possibly broken meshes.
-// Properties (mga_smooth.h): finite positions stay finite, and the worst element never drops below
-// min(initial worst, worstGuard).
+// Properties (mga_smooth.h): finite positions stay finite, the worst element never drops below
+// min(initial worst, worstGuard), and no element is folded (pectus/folds.h) that was not.
 #include "fuzz_mesh.h"
 #include "pectus/smooth/mga_smooth.h"
 #include "pectus/errors.h"
@@ -44,6 +44,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
       PECTUS_FUZZ_CHECK(res.positions[i].allFinite() || !toEigen(m.vert[i].cP()).allFinite());
     if (res.before.count > 0)
       PECTUS_FUZZ_CHECK(res.after.min >= std::min(res.before.min, o.worstGuard) - 1e-9);
+    PECTUS_FUZZ_CHECK(res.foldsNew == 0 && res.foldsAfter <= res.foldsBefore);
   } catch (const InputError&) {
   }
   return 0;

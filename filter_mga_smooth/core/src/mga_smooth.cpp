@@ -1055,21 +1055,24 @@ class Sweeps {
   std::size_t movesUndone_ = 0;
 };
 
-// puts back the moved nodes of every element folded now and not in the input, and of its edge neighbours
-// (whose normals its fold test reads), until no element is folded that was not: at the latest with the
-// input. The nodes put back get their input normals N0 again. Returns how many were put back
-std::size_t putBackFolds(Mesh& M, const Folds& folds, const std::vector<char>& foldedInput,
-                         const std::vector<Vec3>& input, const std::vector<Vec3>& N0) {
+// puts the moved nodes of elements back to their input positions (and input normals N0), round after round:
+// in each, `flagged(X)` names the elements to mend and `around(e, nodes)` adds the elements whose nodes go
+// back for e. Ends when a round puts nothing back: at the latest at the input, which flags nothing.
+// Returns how many nodes were put back
+template <class Flagged, class Around>
+std::size_t putBack(Mesh& M, const std::vector<Vec3>& input, const std::vector<Vec3>& N0, Flagged flagged,
+                    Around around) {
   std::size_t back = 0;
   for (bool changed = true; changed;) {
     changed = false;
-    const std::vector<char> now = folds.all(M.X);
+    const std::vector<char> now = flagged(M.X);
+    std::vector<int> elements;
     for (int e = 0; e < int(now.size()); ++e) {
-      if (!now[std::size_t(e)] || foldedInput[std::size_t(e)]) continue;
-      std::vector<int> around = folds.neighbours(e);
-      around.push_back(e);
-      for (int g : around) {
-        const Element& el = folds.element(g);
+      if (!now[std::size_t(e)]) continue;
+      elements.clear();
+      around(e, elements);
+      for (int g : elements) {
+        const Element& el = M.E[std::size_t(g)];
         for (int k = 0; k < el.nv; ++k) {
           const std::size_t v = std::size_t(el.v[std::size_t(k)]);
           if (M.X[v] == input[v]) continue;
@@ -1082,6 +1085,36 @@ std::size_t putBackFolds(Mesh& M, const Folds& folds, const std::vector<char>& f
     }
   }
   return back;
+}
+
+// folds the input did not have: the element and its edge neighbours (whose normals its test reads) go back
+std::size_t putBackFolds(Mesh& M, const Folds& folds, const std::vector<char>& foldedInput,
+                         const std::vector<Vec3>& input, const std::vector<Vec3>& N0) {
+  return putBack(
+      M, input, N0,
+      [&](const std::vector<Vec3>& X) {
+        std::vector<char> f = folds.all(X);
+        for (std::size_t e = 0; e < f.size(); ++e) f[e] = f[e] && !foldedInput[e];
+        return f;
+      },
+      [&](int e, std::vector<int>& out) {
+        out = folds.neighbours(e);
+        out.push_back(e);
+      });
+}
+
+// elements below `floor` (min(the input's worst, the guard)): the sweeps keep every element there or above,
+// and the nodes put back beside moved ones must too
+std::size_t putBackBelow(Mesh& M, double floor, const std::vector<Vec3>& input, const std::vector<Vec3>& N0) {
+  return putBack(
+      M, input, N0,
+      [&](const std::vector<Vec3>& X) {
+        const std::vector<double> q = elementQualities(M.E, X);
+        std::vector<char> f(q.size());
+        for (std::size_t e = 0; e < q.size(); ++e) f[e] = q[e] < floor;
+        return f;
+      },
+      [](int e, std::vector<int>& out) { out.push_back(e); });
 }
 
 // undoes the moves that make the surface cross itself (restoreCrossings); the nodes put back get their
@@ -1197,12 +1230,16 @@ Result smoothMesh(const CMeshO& m, const Options& opt, const std::vector<char>& 
   res.setupSeconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   sweeps.run(res);
 
-  // the surface must not cross itself where the input did not, nor fold: put back until neither happens
+  // the surface must not cross itself where the input did not, nor fold, nor fall below the worst element
+  // the sweeps keep: put back until none of these happens
+  const double floor = std::min(res.before.min, opt.worstGuard);
   for (;;) {
     res.nodesPutBack += putBackCrossings(M, tm.V, N0);
-    const std::size_t back = putBackFolds(M, folds, foldedInput, tm.V, N0);
-    res.nodesPutBackFolds += back;
-    if (back == 0) break;
+    const std::size_t folded = putBackFolds(M, folds, foldedInput, tm.V, N0);
+    const std::size_t poor = putBackBelow(M, floor, tm.V, N0);
+    res.nodesPutBackFolds += folded;
+    res.nodesPutBackGuard += poor;
+    if (folded + poor == 0) break;
   }
   res.after = stats(M);
   res.foldedAfter = foldedElements(M);

@@ -145,6 +145,9 @@ struct Result {
   std::size_t foldsBefore = 0, foldsAfter = 0, foldsNew = 0;
   std::size_t movesUndoneForFolds = 0;  ///< moves undone in the sweeps because they folded an element
   std::size_t nodesPutBackFolds = 0;    ///< moved nodes returned to their input position at the end: a fold there
+  /// moved nodes returned to their input position at the end: beside a node put back, an element fell below
+  /// min(the input's worst, worstGuard)
+  std::size_t nodesPutBackGuard = 0;
   std::size_t freeNodes = 0, boundaryNodes = 0, featureNodes = 0, singularNodes = 0, userFixedNodes = 0;
   std::size_t creaseChains = 0;      ///< FeatureDetection::Creases: crease chains found
   std::string featureSummary;        ///< FeatureDetection::Creases: Creases::summary()
@@ -170,7 +173,8 @@ std::vector<int> restoreCrossings(const std::vector<std::vector<int>>& faces, co
 /// Smooths with opt.method. Nodes are the live vertices of `m`. `userFixed` (per m.vert index, empty = none): 1 = keep fixed.
 /// Moves that make the surface cross itself are undone at the end (restoreCrossings); a move that folds an
 /// element (pectus/folds.h) that was not folded is undone in the sweep, and any fold left at the end by the
-/// nodes put back is put back too, so the result has no fold its input did not have.
+/// nodes put back is put back too, so the result has no fold its input did not have; so is any element that
+/// the nodes put back leave below min(the input's worst, worstGuard).
 /// Throws InputError for bad parameters, NaN coordinates or a mesh with no free node, TopologyError
 /// (requireMesh, buildElements) for a mesh without faces, non-manifold input (edge or vertex) or invalid quads.
 /// Fixed-node classes are counted once, in the order boundary, feature, singular, user.
