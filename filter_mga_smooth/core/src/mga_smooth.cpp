@@ -921,6 +921,8 @@ class Sweeps {
   void sweepOnce(int sweep, bool maxMin) {
     const std::uint64_t sweepSeed = mga::itemSeed(opt_.seed, std::uint64_t(sweep));
     for (const auto& cls : classes_) {
+      for (int n : cls)
+        from_[std::size_t(n)] = From{M_.X[std::size_t(n)], M_.N[std::size_t(n)], loc_[std::size_t(n)], projDist_[std::size_t(n)]};
 #pragma omp parallel for schedule(dynamic, 8)
       for (int ci = 0; ci < int(cls.size()); ++ci) {
         const int n = cls[std::size_t(ci)];
@@ -1006,7 +1008,6 @@ class Sweeps {
     }
     // the node moves after its own search: neighbours of the same colour do not see it, and
     // no node of this colour reads it (they share no element)
-    from_[std::size_t(n)] = From{x0, n0, l0, projDist_[std::size_t(n)]};
     M_.X[std::size_t(n)] = ns.bestX;
     M_.N[std::size_t(n)] = nrm;
     loc_[std::size_t(n)] = ns.bestLoc;
@@ -1046,7 +1047,7 @@ class Sweeps {
   std::vector<double> projDist_;         ///< per node: the largest candidate-to-surface distance of its moves
   std::vector<std::size_t> evaluations_; ///< per node: fitness evaluations
   std::vector<char> active_, gained_;    ///< per node: searched in the next sweep; gained in its last search
-  struct From {                          ///< a node's state before its last search (keepUnfolding)
+  struct From {                          ///< a node's state before its colour's search (keepUnfolding)
     Vec3 x, normal;
     Loc loc;
     double projDist = 0;
