@@ -91,10 +91,19 @@ void Solver::Impl::factorize(double& seconds) {
                  : chol.cholmod().selected >= 0 ? chol.cholmod().method[chol.cholmod().selected].ordering
                                                 : -1,
                  orderByNodes ? " on the nodes" : "", orderSeconds, analyseSeconds, seconds);
-  if (chol.info() != Eigen::Success)
-    throw SolverFailure(
-        "The stiffness matrix is singular or not positive definite: the model is not held enough (fix more "
-        "nodes so that every part of the mesh is connected to a fixed node), or an element is inverted.");
+  if (chol.info() != Eigen::Success) {
+    std::ostringstream s;
+    s << "The stiffness matrix is singular or not positive definite: the model is not held enough (fix more "
+         "nodes so that every part of the mesh is connected to a fixed node), or an element is inverted.";
+    const int col = chol.failedColumn();
+    const auto dof = std::find(freeIndex.begin(), freeIndex.end(), col);
+    if (col >= 0 && dof != freeIndex.end()) {
+      const int node = int(dof - freeIndex.begin()) / 3;
+      const Eigen::Vector3d& x = m->nodes[std::size_t(node)];
+      s << " The factorisation stopped at node " << node << " (" << x.x() << ", " << x.y() << ", " << x.z() << ").";
+    }
+    throw SolverFailure(s.str());
+  }
   const double rc = chol.rcond();
   if (!(rc > 1e-15)) {
     std::ostringstream s;

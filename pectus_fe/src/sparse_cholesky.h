@@ -12,6 +12,12 @@ namespace pectus::fe {
 class Cholmod : public Eigen::CholmodSupernodalLLT<Eigen::SparseMatrix<double>, Eigen::Lower> {
  public:
   double rcond() { return m_cholmodFactor ? cholmod_rcond(m_cholmodFactor, &cholmod()) : 0.0; }
+  // after a failed factorisation: the column (in K's numbering) whose pivot was not positive, or -1
+  int failedColumn() const {
+    const cholmod_factor* L = m_cholmodFactor;
+    if (!L || L->minor >= L->n) return -1;
+    return L->Perm ? static_cast<const int*>(L->Perm)[L->minor] : static_cast<int>(L->minor);
+  }
 
   // Fill-reducing ordering of the graph of the nodes (lower-triangular pattern `outer`/`inner`, compact
   // node numbers) instead of the dofs: the graph is 3x smaller (9x fewer edges), and no separator cuts
