@@ -28,12 +28,12 @@ for row, pat in zip(rows, patients):
     case = pat["case"]
     check(row["case"] == case, f"row order follows patients.csv ({row['case']})")
     target = float(pat["elevation_mm"])
-    check(abs(float(row["elevation"]) - target) <= 0.1, f"{case}: elevation {row['elevation']} mm = target {target} mm")
-    check(0 < float(row["force"]) < 500, f"{case}: calibrated force {row['force']} N is positive and finite")
+    check(abs(float(row["elevation_mm"]) - target) <= 0.1, f"{case}: elevation {row['elevation_mm']} mm = target {target} mm")
+    check(0 < float(row["force_N"]) < 500, f"{case}: calibrated force {row['force_N']} N is positive and finite")
     one = list(csv.DictReader(open(os.path.join(out, case, "summary.csv"))))
     check(len(one) == 1 and one[0] == row, f"{case}: cohort row equals the case's summary.csv")
 if len(rows) == 2:
-    check(rows[0]["force"] != rows[1]["force"], "the two patients need different forces")
+    check(rows[0]["force_N"] != rows[1]["force_N"], "the two patients need different forces")
 
 env_array = dict(env, TASK="2")
 p = subprocess.run(["sh", os.path.join(SOURCE, "scripts", "cohort_array.sh"), cohort, out_array, "--quick"], env=env_array,
@@ -43,6 +43,6 @@ arr = os.path.join(out_array, "case2", "summary.csv")
 check(not os.path.exists(os.path.join(out_array, "case1")), "array task 2 ran only case2")
 if os.path.exists(arr) and len(rows) == 2:
     a = list(csv.DictReader(open(arr)))[0]
-    check(abs(float(a["force"]) - float(rows[1]["force"])) <= 1e-6 * max(1.0, float(a["force"])),
-          f"array job force {a['force']} N = parallel run {rows[1]['force']} N")
+    check(abs(float(a["force_N"]) - float(rows[1]["force_N"])) <= 1e-6 * max(1.0, float(a["force_N"])),
+          f"array job force {a['force_N']} N = parallel run {rows[1]['force_N']} N")
 finish()
