@@ -1,7 +1,7 @@
 """Cohort scripts: a two-patient demo cohort at a coarse edge length runs through
 scripts/cohort.sh (GNU parallel) in quick mode; cohort_summary.csv has one row per patient, each reaching
-its own target elevation, rows equal to the per-case summaries; the job-array script run for task 2 alone
-gives the same calibrated force as the parallel run."""
+its own target elevation, rows equal to the per-case summaries; collect reads a summary.csv with the older
+column names too; the job-array script run for task 2 alone gives the same calibrated force as the parallel run."""
 import csv
 import os
 import subprocess
@@ -34,6 +34,29 @@ for row, pat in zip(rows, patients):
     check(len(one) == 1 and one[0] == row, f"{case}: cohort row equals the case's summary.csv")
 if len(rows) == 2:
     check(rows[0]["force_N"] != rows[1]["force_N"], "the two patients need different forces")
+
+# collect reads a case's summary.csv with the older columns too (no units in the names, counts as floats,
+# figures unrounded) and writes it in the new ones
+if len(rows) == 2:
+    old_out = os.path.join(d, "out_old")
+    os.makedirs(os.path.join(old_out, "case1"), exist_ok=True)
+    new = rows[0]
+    old = {"case": new["case"], "sex": new["sex"], "age": str(float(new["age_years"])),
+           "target_elevation_mm": new["target_elevation_mm"], "tets": str(float(new["fe_tets"])), "element": new["fe_element"],
+           "force": str(float(new["force_N"]) + 0.0001234), "elevation": new["elevation_mm"] + "000321", "reportable": new["reportable"],
+           "haller_before": new["haller_index_before"], "seconds": "12.345678901234"}
+    with open(os.path.join(old_out, "case1", "summary.csv"), "w", newline="") as fh:
+        w = csv.DictWriter(fh, fieldnames=list(old))
+        w.writeheader()
+        w.writerow(old)
+    p = subprocess.run(["/usr/bin/python3", os.path.join(SOURCE, "python", "cohort.py"), "collect", cohort, old_out],
+                       stdout=subprocess.PIPE, stderr=subprocess.STDOUT, text=True, timeout=60)
+    got = list(csv.DictReader(open(os.path.join(old_out, "cohort_summary.csv")))) if p.returncode == 0 else []
+    want = {k: new[k] for k in ("case", "sex", "age_years", "target_elevation_mm", "fe_tets", "fe_element", "force_N",
+                                "elevation_mm", "reportable", "haller_index_before")}
+    check(len(got) == 1 and {k: got[0][k] for k in want} == want and got[0]["pipeline_time_s"] == "12.3"
+          and list(got[0]) == list(rows[0]), "collect reads a summary.csv with the older columns into the new ones",
+          p.stdout[-1500:] + (str(got[0]) if got else ""))
 
 env_array = dict(env, TASK="2")
 p = subprocess.run(["sh", os.path.join(SOURCE, "scripts", "cohort_array.sh"), cohort, out_array, "--quick"], env=env_array,
