@@ -10,6 +10,7 @@ Needs build/prefix (scripts/setup.sh) and, for a newer release, its userland and
 """
 import argparse
 import csv
+import json
 import os
 import platform
 import subprocess
@@ -25,8 +26,8 @@ FE = "Nuss Procedure FE Analysis"
 EXAMPLE = os.path.join(ROOT, "filter_nuss_fea", "examples", "nuss_fea.mlx")
 FE_KEYS = (("tets", "tets", "{:,.0f}"), ("force_N", "Fe N", "{:.4f}"), ("max_strain", "max strain", "{:.4f}"),
            ("newton_iterations", "Newton it.", "{:.0f}"))
-MAIN_KEYS = (("tets", "tets", "{:,.0f}"), ("force", "Fe N", "{:.4f}"), ("slice_change_cm3", "slice gain cm³", "{:.2f}"),
-             ("envelope_change_cm3", "envelope gain cm³", "{:.2f}"), ("haller_after", "index after", "{:.3f}"))
+MAIN_KEYS = (("fe_tets", "tets", "{:,.0f}"), ("force_N", "Fe N", "{:.4f}"), ("slice_change_cm3", "slice gain cm³", "{:.2f}"),
+             ("envelope_change_cm3", "envelope gain cm³", "{:.2f}"), ("haller_index_after", "index after", "{:.3f}"))
 
 
 def fe_example(host: str, out: str) -> dict:
@@ -50,6 +51,9 @@ def main_job(host: str, out: str) -> dict:
                        env=dict(os.environ, PECTUS_MESHLAB_HOST=host))
     rows = list(csv.DictReader(open(os.path.join(folder, "summary.csv")))) if p.returncode == 0 else [{}]
     values = {k: float(rows[0][k]) if rows[0].get(k) not in (None, "") else None for k, _, _ in MAIN_KEYS}
+    if p.returncode == 0:  # the force unrounded (summary.csv has it to 0.01 N): the FE filter's own results file
+        with open(os.path.join(folder, "nuss_results.json")) as fh:
+            values["force_N"] = json.load(fh)["results"]["force_N"]
     values["wall"] = time.time() - t0
     values["rc"] = p.returncode
     return values

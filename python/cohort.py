@@ -18,6 +18,7 @@ import argparse
 import csv
 import os
 import sys
+import time
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 sys.path.insert(0, HERE)
@@ -64,14 +65,16 @@ def run_one(folder: str, case: str, outdir: str, quick: bool = False) -> int:
     # inputs: landmarks (layer 0), then the cage (layer 1, current); the FE adds layers 2 and 3
     script = mlx.Script(pipeline.analysis_filters(out, elev, quick, cage=1, landmarks=0))
     path = script.write(os.path.join(out, "analysis.mlx"))
+    t0 = time.time()
     res = mlx.run([os.path.join(folder, f"{case}_landmarks.ply"), os.path.join(folder, f"{case}.ply")], path,
                   [(os.path.join(out, "nuss_result.ply"), "vq vc fc fq", 2)])
     with open(os.path.join(out, "meshlabserver.log"), "w") as fh:
         fh.write(res.stdout)
     r = pipeline.parse(res)
+    r["seconds"] = time.time() - t0
     summary = os.path.join(out, "summary.csv")
     if res.rc == 0:
-        pipeline.write_summary(summary, r, row["sex"], float(row["age"]), elev, case)
+        pipeline.write_summary(summary, r, row["sex"], float(row["age"]), elev, case, pipeline.run_settings(script, quick))
     else:  # no summary row for a failed case (collect reports it); the reason is in meshlabserver.log
         if os.path.exists(summary):
             os.remove(summary)
@@ -86,29 +89,27 @@ def run_one(folder: str, case: str, outdir: str, quick: bool = False) -> int:
 
 
 def collect(folder: str, outdir: str) -> int:
-    rows, header = [], None
+    """OUTDIR/cohort_summary.csv: every case's summary.csv in patients.csv's order, in pipeline.SUMMARY_COLUMNS
+    (a case's summary.csv may have these columns or the older ones: pipeline.read_summary reads both)"""
+    rows = []
     for p in patients(folder):
         s = os.path.join(outdir, p["case"], "summary.csv")
         if not os.path.exists(s):
             print(f"{p['case']}: no summary (failed or not run)", file=sys.stderr)
             continue
-        with open(s) as fh:
-            rd = list(csv.reader(fh))
-        header = header or rd[0]
-        rows.append(rd[1])
+        rows.append(pipeline.read_summary(s))
     path = os.path.join(outdir, "cohort_summary.csv")
+    header = [name for name, _, _ in pipeline.SUMMARY_COLUMNS]
     with open(path, "w", newline="") as fh:
-        w = csv.writer(fh)
-        if header:
-            w.writerow(header)
+        w = csv.DictWriter(fh, fieldnames=header)
+        w.writeheader()
         w.writerows(rows)
-    keys = ["case", "sex", "age", "target_elevation_mm", "force", "elevation", "max_stress", "max_strain",
-            "slice_change_pct", "envelope_change_pct", "haller_before", "haller_after"]
-    if header:
-        idx = [header.index(k) for k in keys]
+    keys = ["case", "sex", "age_years", "target_elevation_mm", "force_N", "elevation_mm", "max_stress_MPa", "max_strain",
+            "slice_change_pct", "envelope_change_pct", "haller_index_before", "haller_index_after"]
+    if rows:
         print(" ".join(f"{k:>12.12s}" for k in keys))
         for r in rows:
-            print(" ".join(f"{r[i][:12]:>12s}" for i in idx))
+            print(" ".join(f"{r[k][:12]:>12s}" for k in keys))
     print(f"cohort summary: {path} ({len(rows)} cases)")
     return 0 if rows else 1
 

@@ -22,10 +22,12 @@ from __future__ import annotations
 
 import json
 import os
+import re
 import shutil
 import signal
 import subprocess
 import tempfile
+import threading
 from dataclasses import dataclass, field
 from typing import Iterable, Sequence
 from xml.sax.saxutils import quoteattr
@@ -285,6 +287,94 @@ def mlrun_script() -> str:
     return os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "scripts", "mlrun.sh")
 
 
+# The progress messages of the project's filters (their ctx.progress / progress callbacks), as regular expressions.
+# meshlabserver 2020.09 prints each one with printf("%s") and no newline, so a filter's messages and the first line
+# of the Log it prints after the filter arrive run together ("calibrating funnel depthextracting the surface...");
+# _tidy_stdout cuts them apart by these. Longer messages first where one begins another.
+_NUM = r"-?\d+(?:\.\d+)?"
+_FE_PROGRESS = [r"TetGen \(after checking the surface\)", r"Factorising \(CHOLMOD\)", rf"Driving the sternum to {_NUM} mm",
+                rf"Calibrating the force: Fe = {_NUM} N", "Solving", "Stress and strain", "Done"]
+PROGRESS_MESSAGES = [
+    # Create Pectus Excavatum Rib Cage (one layer per tissue: the tissue's name)
+    "calibrating funnel depth", "extracting the surface", "labelling", "bone", "cartilage", "sternum",
+    # element quality, MGA smoothing, C1 surface, quad conversion
+    "measuring elements", "writing quality", "building the C1 surface", rf"sweep \d+, mean quality {_NUM}",
+    "refining", "writing the mesh", "projecting", "pairing triangles", "writing quads", "structure operators",
+    # thoracic volumes and pectus index
+    "cutting the planes", "slice regions", "rasterising", "envelope samples", "envelope convergence", "pectus index",
+    # Nuss FE analysis, and the bar planner (its options' FE messages after the option's name)
+    *_FE_PROGRESS, "Volumes and pectus index before", r"TetGen \(once for every option\)",
+    r"(?:1 bar, space \d+|2 bars, spaces \d+ \+ \d+): (?:" + "|".join(_FE_PROGRESS + ["volumes and pectus index after"]) + ")",
+    # CT import (each file's name) and patient preparation
+    r"[^/\s]+?\.(?:nii\.gz|nii|stl|ply|obj|off|vtk)",
+    "classifying the layers", "the structures' solids on one grid", "separating the structures", "numbering the ribs",
+    "joining the tissues and the vertebral column", "joining the tissues", "decimating", "landmarks",
+    # every filter's last
+    "done",
+]
+PROGRESS = re.compile("|".join(f"(?:{m})" for m in PROGRESS_MESSAGES))
+
+
+def split_progress(text: str, log_lines: set) -> list[str]:
+    """A line of meshlabserver's stdout printed during a filter: the progress messages run together, maybe followed
+    by a line of the Log (one of `log_lines`, which meshlabserver prints after the filter): one item per message,
+    then the Log's line. A message PROGRESS does not know ends the cutting: it and the rest stay one item."""
+    cut = next((i for i in range(len(text)) if text[i:] in log_lines), len(text))
+    head, parts = text[:cut], []
+    while head:
+        m = PROGRESS.match(head)
+        if not m or not m.group(0):
+            parts.append(head)
+            break
+        parts.append(m.group(0))
+        head = head[m.end():]
+    return parts + ([text[cut:]] if cut < len(text) else [])
+
+
+def _tidy_stdout(line: str, after_filter: bool, log_lines: set) -> list[str]:
+    """meshlabserver 2020.09's stdout line as lines: 'Starting Script of N actions' apart from the first
+    'filter: NAME', and a line printed during a filter (`after_filter`) cut by split_progress"""
+    m = re.match(r"(Starting Script of \d+ actions)(filter: .*)", line)
+    if m:
+        return [m.group(1), m.group(2)]
+    return split_progress(line, log_lines) if after_filter and line else [line]
+
+
+def _output(p: subprocess.Popen, timeout: float) -> str:
+    """Everything `p` prints, stdout and stderr read apart and merged by whole lines in the order they came (the
+    filters' 'LOG: ' lines on stderr never cut a line of stdout), each progress message on a line of its own
+    (_tidy_stdout). On a timeout the process group is killed and subprocess.TimeoutExpired raised."""
+    lines, lock = [], threading.Lock()
+
+    def pump(stream, name):
+        for line in iter(stream.readline, ""):
+            with lock:
+                lines.append((name, line.rstrip("\n")))
+
+    readers = [threading.Thread(target=pump, args=(s, n), daemon=True) for s, n in ((p.stdout, "out"), (p.stderr, "err"))]
+    for t in readers:
+        t.start()
+    try:
+        p.wait(timeout=timeout)
+    except subprocess.TimeoutExpired:
+        os.killpg(p.pid, signal.SIGKILL)
+        p.wait()
+        raise
+    finally:
+        for t in readers:
+            t.join()
+    log_lines = {re.sub(r"^LOG: \d+ ", "", l) for n, l in lines if n == "err" and l.startswith("LOG: ")}
+    out, after_filter = [], False
+    for name, line in lines:
+        if name == "err":
+            out.append(line)
+            continue
+        for piece in _tidy_stdout(line, after_filter, log_lines):
+            out.append(piece)
+            after_filter = piece.startswith("filter: ")
+    return "\n".join(out) + "\n" if out else ""
+
+
 def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tuple] = (),
         prefix: str | None = None, timeout: float = 3600, cwd: str | None = None, env: dict | None = None,
         host: str | None = None) -> Result:
@@ -329,15 +419,10 @@ def run(inputs: Iterable[str], script: Script | str | None, outputs: Sequence[tu
         for attempt in range(3):
             open(results_file, "w").close()  # a repeated run starts from an empty file
             # own process group: on a timeout meshlabserver (a grandchild under xvfb-run) is killed too
-            with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.STDOUT, cwd=cwd, text=True,
+            with subprocess.Popen(cmd, stdout=subprocess.PIPE, stderr=subprocess.PIPE, cwd=cwd, text=True,
                                   errors="replace", env=run_env,
                                   start_new_session=True) as p:
-                try:
-                    out, _ = p.communicate(timeout=timeout)
-                except subprocess.TimeoutExpired:
-                    os.killpg(p.pid, signal.SIGKILL)
-                    p.communicate()
-                    raise
+                out = _output(p, timeout)
             # xvfb-run exits 5 when it cannot remove its own temporary folder (seen under parallel load);
             # meshlabserver's exit code is then lost, so run again (the filters are deterministic)
             if not (p.returncode == 5 and XVFB_CLEANUP_ERROR in out):

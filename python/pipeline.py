@@ -12,7 +12,7 @@ Load filter script... > pipeline.mlx, Apply). Results: the layers as PLY, the FE
 the force-displacement CSV/PNG, the rib strain CSV, quality histograms, summary.csv, and a table
 shaped like the thesis' Table 6-1 on stdout.
 
-    python3 python/pipeline.py [OUTDIR] [--age 8] [--haller 5.3] [--elevation 44.7] [--quick]
+    python3 python/pipeline.py [OUTDIR] [--age 8] [--haller 5.3] [--elevation 44.7] [--quick] [--case NAME]
 """
 from __future__ import annotations
 
@@ -133,11 +133,20 @@ def parse(res: mlx.Result) -> dict:
         "histograms": [[q["results"][f"histogram_{i}"] for i in range(10)]
                        for q in res.results if q["filter"] == QUALITY and "histogram_0" in q["results"]],
         "mga": next((l for l in log if l.startswith("MGA smoothing")), ""),
-        "tets": None if tets is None else float(tets),  # as summary.csv has always had it
+        "mga_sweeps": get("sweeps", MGA),
+        "mga_nodes_moved": get("nodes_moved", MGA),
+        "tets": tets,
+        "nodes": get("nodes", FE),
         "element": get("element", FE),
+        "analysis": get("analysis", FE),
         "force": get("force_N", FE),
         "elevation": get("elevation_mm", FE),
         "solves": get("solves", FE),
+        "nonlinear_solves": get("nonlinear_solves", FE),
+        "newton_iterations": get("newton_iterations", FE),
+        # the FE filter returns its figures only from an equilibrium state: every Newton solve it ends on met its
+        # residual and displacement tolerances (it fails when Newton does not converge); the small-strain solve is direct
+        "fe_converged": 0 if get("force_N", FE) is None else 1,
         "max_stress": get("max_stress_MPa", FE),
         "max_stress_where": get("max_stress_where", FE),
         "max_stress_body": get("max_stress_body_MPa", FE),
@@ -194,17 +203,130 @@ def table(r: dict, age: float, sex: str, target: float) -> str:
     return "\n".join(lines)
 
 
-def write_summary(path: str, r: dict, sex: str, age: float, elevation: float, case: str = ""):
-    keys = [k for k in r if not isinstance(r[k], (list, tuple)) and not k.startswith("planner")]
+def run_settings(script: mlx.Script, quick: bool) -> dict:
+    """The analysis settings of `script` that summary.csv records: the run mode, the generated cage's surface edge
+    (empty when the cage is read from a file) and the FE filter's analysis, material, load model and tet mesh."""
+    by_name = {f.name: f for f in script.filters}
+    edge = by_name[RIBCAGE].params["edgeLength"].value if RIBCAGE in by_name else None
+    s = {"run_mode": "quick" if quick else "full", "surface_edge": edge}
+    fe = by_name.get(FE)
+    if fe is None:
+        return s
+    p = {k: v.value for k, v in fe.params.items()}
+    label = {k: v.values[v.value] for k, v in fe.params.items() if isinstance(v, mlx.Enum)}
+    small_strain = label["analysis"].startswith("Small strain")
+    s.update({
+        "analysis": "small strain" if small_strain else "large displacement",
+        "material": "linear elastic" if small_strain else label["material"],
+        "element": label["order"].split()[1],  # "Quadratic TET10 (no locking)" -> TET10
+        "load": label["mode"], "calibration": label["calibration"], "bar_space": p["intercostalSpace"],
+        "sternum_load_radius": p["sternumLoadRadius"], "rib_support_radius": p["ribSupportRadius"],
+        "joint_radius": p["jointRadius"], "bone_E": p["boneModulus"], "bone_nu": p["nuBone"],
+        "cartilage_E": p["cartilageModulus"], "cartilage_nu": p["nuCartilage"],
+        "tet_quality": p["tetQuality"], "max_tet_volume": p["maxTetVolume"]})
+    return s
+
+
+# summary.csv, one column per entry: (header with the unit, where the value comes from, format). Sources: "r:KEY"
+# parse()'s figure, "s:KEY" run_settings(), "run:KEY" the case itself. Formats: "int" a count, "text", or the
+# number of decimals (times to 0.1 s, the other figures as the filters' Log prints them).
+SUMMARY_COLUMNS = [
+    ("case", "run:case", "text"), ("sex", "run:sex", "text"), ("age_years", "run:age", "g"),
+    ("target_elevation_mm", "run:elevation", "g"),
+    # what the figures are worth: quick mode, the FE filter's verdict on its mesh, its solve
+    ("run_mode", "s:run_mode", "text"), ("reportable", "r:reportable", "int"),
+    ("not_reportable_because", "r:not_reportable_because", "text"), ("fe_converged", "r:fe_converged", "int"),
+    # the analysis settings
+    ("fe_analysis", "s:analysis", "text"), ("fe_material", "s:material", "text"), ("fe_element", "s:element", "text"),
+    ("fe_load", "s:load", "text"), ("fe_calibration", "s:calibration", "text"), ("bar_intercostal_space", "s:bar_space", "int"),
+    ("sternum_load_radius_mm", "s:sternum_load_radius", "g"), ("rib_support_radius_mm", "s:rib_support_radius", "g"),
+    ("joint_radius_mm", "s:joint_radius", "g"), ("bone_E_MPa", "s:bone_E", "g"), ("bone_nu", "s:bone_nu", "g"),
+    ("cartilage_E_MPa", "s:cartilage_E", "g"), ("cartilage_nu", "s:cartilage_nu", "g"),
+    # mesh density
+    ("surface_edge_mm", "s:surface_edge", "g"), ("tet_quality_radius_edge", "s:tet_quality", "g"),
+    ("max_tet_volume_mm3", "s:max_tet_volume", "g"), ("cage_faces", "r:faces", "int"), ("fe_tets", "r:tets", "int"),
+    ("fe_nodes", "r:nodes", "int"),
+    # the solve
+    ("fe_solves", "r:solves", "int"), ("fe_nonlinear_solves", "r:nonlinear_solves", "int"),
+    ("fe_newton_iterations", "r:newton_iterations", "int"),
+    # Table 6-1
+    ("force_N", "r:force", 2), ("elevation_mm", "r:elevation", 2), ("max_stress_MPa", "r:max_stress", 2),
+    ("max_stress_where", "r:max_stress_where", "text"), ("max_stress_body_MPa", "r:max_stress_body", 2),
+    ("max_stress_body_where", "r:max_stress_body_where", "text"), ("max_strain", "r:max_strain", 4),
+    ("max_strain_where", "r:max_strain_where", "text"), ("slice_change_cm3", "r:slice_change_cm3", 2),
+    ("slice_change_pct", "r:slice_change_pct", 2), ("envelope_change_cm3", "r:envelope_change_cm3", 2),
+    ("envelope_change_pct", "r:envelope_change_pct", 2), ("haller_index_before", "r:haller_before", 3),
+    ("haller_index_after", "r:haller_after", 3),
+    # the generated cage and its smoothing
+    ("haller_index_generated", "r:haller_generator", 3), ("quality_alpha_mean_before", "r:quality_mean_before", 4),
+    ("quality_alpha_min_before", "r:quality_min_before", 4), ("quality_alpha_mean_after", "r:quality_mean_after", 4),
+    ("quality_alpha_min_after", "r:quality_min_after", 4), ("mga_sweeps", "r:mga_sweeps", "int"),
+    ("mga_nodes_moved", "r:mga_nodes_moved", "int"),
+    ("fe_time_s", "r:fe_seconds", 1), ("pipeline_time_s", "r:seconds", 1),
+]
+SUMMARY_FORMAT = {name: fmt for name, _, fmt in SUMMARY_COLUMNS}
+# the column names of summary.csv files written before the columns carried their units: read_summary renames them
+OLD_SUMMARY_NAMES = {
+    "age": "age_years", "haller_generator": "haller_index_generated", "faces": "cage_faces",
+    "quality_mean_before": "quality_alpha_mean_before", "quality_min_before": "quality_alpha_min_before",
+    "quality_mean_after": "quality_alpha_mean_after", "quality_min_after": "quality_alpha_min_after",
+    "tets": "fe_tets", "element": "fe_element", "force": "force_N", "elevation": "elevation_mm", "solves": "fe_solves",
+    "max_stress": "max_stress_MPa", "max_stress_body": "max_stress_body_MPa", "fe_seconds": "fe_time_s",
+    "seconds": "pipeline_time_s", "haller_before": "haller_index_before", "haller_after": "haller_index_after",
+}
+
+
+def summary_cell(value, fmt) -> str:
+    """One value as summary.csv writes it: '' for none, a count as an integer, a figure rounded (fmt decimals)."""
+    if value is None or value == "":
+        return ""
+    if fmt == "text":
+        return str(value)
+    if fmt == "int":
+        return str(int(round(float(value))))
+    if fmt == "g":
+        return f"{float(value):g}"
+    return f"{float(value):.{fmt}f}"
+
+
+def summary_row(r: dict, settings: dict, sex: str, age: float, elevation: float, case: str) -> dict:
+    """{column: text} of summary.csv for one run"""
     hb, ha = (r["haller"] + [None, None])[:2]
+    src = {"r": dict(r, haller_before=hb, haller_after=ha), "s": settings,
+           "run": {"case": case, "sex": sex, "age": age, "elevation": elevation}}
+    return {name: summary_cell(src[where.split(":")[0]].get(where.split(":")[1]), fmt) for name, where, fmt in SUMMARY_COLUMNS}
+
+
+def write_summary(path: str, r: dict, sex: str, age: float, elevation: float, case: str, settings: dict):
+    row = summary_row(r, settings, sex, age, elevation, case)
     with open(path, "w", newline="") as fh:
         w = csv.writer(fh)
-        w.writerow(["case", "sex", "age", "target_elevation_mm"] + keys + ["haller_before", "haller_after"])
-        w.writerow([case, sex, age, elevation] + [r[k] for k in keys] + [hb, ha])
+        w.writerow(list(row))
+        w.writerow(list(row.values()))
+
+
+def read_summary(path: str) -> dict:
+    """The row of a summary.csv as {column: text} in SUMMARY_COLUMNS' names and formats, from a file with these
+    columns or with the older names (OLD_SUMMARY_NAMES, counts as '14372.0', unrounded figures); a column the
+    file lacks is ''."""
+    with open(path, newline="") as fh:
+        rows = list(csv.DictReader(fh))
+    if not rows:
+        return {}
+    row = {OLD_SUMMARY_NAMES.get(k, k): v for k, v in rows[0].items()}
+    out = {}
+    for name, fmt in SUMMARY_FORMAT.items():
+        v = row.get(name, "")
+        try:
+            out[name] = v if fmt == "text" else summary_cell(v, fmt)
+        except ValueError:  # not a number where one is due: kept as written
+            out[name] = v
+    return out
 
 
 def run_pipeline(outdir: str, age=8.0, haller=5.3, elevation=44.7, sex="M", quick=False, prefix=None,
-                 planner: dict | None = None) -> tuple[int, dict, mlx.Result]:
+                 planner: dict | None = None, case: str | None = None) -> tuple[int, dict, mlx.Result]:
+    """case: summary.csv's case column (default SEX+AGE-indexHALLER, e.g. M8-index5.3)"""
     os.makedirs(outdir, exist_ok=True)
     script = build_script(outdir, age, haller, elevation, quick, planner)
     script_path = script.write(os.path.join(outdir, "pipeline.mlx"))
@@ -221,7 +343,8 @@ def run_pipeline(outdir: str, age=8.0, haller=5.3, elevation=44.7, sex="M", quic
     r["seconds"] = time.time() - t0
     with open(os.path.join(outdir, "meshlabserver.log"), "w") as fh:
         fh.write(res.stdout)
-    write_summary(os.path.join(outdir, "summary.csv"), r, sex, age, elevation)
+    write_summary(os.path.join(outdir, "summary.csv"), r, sex, age, elevation, case or f"{sex}{age:g}-index{haller:g}",
+                  run_settings(script, quick))
     return res.rc, r, res
 
 
@@ -233,9 +356,10 @@ def main(argv=None) -> int:
     ap.add_argument("--haller", type=float, default=5.3)
     ap.add_argument("--elevation", type=float, default=44.7, help="measured sternal elevation (mm)")
     ap.add_argument("--quick", action="store_true", help="small-strain TET4 FE (seconds), for tests")
+    ap.add_argument("--case", help="summary.csv's case column (default SEX+AGE-indexHALLER, e.g. M8-index5.3)")
     a = ap.parse_args(argv)
     out = os.path.abspath(a.outdir or os.path.join(ROOT, "out", "pipeline-" + datetime.datetime.now().strftime("%Y%m%d-%H%M%S")))
-    rc, r, res = run_pipeline(out, a.age, a.haller, a.elevation, a.sex, a.quick)
+    rc, r, res = run_pipeline(out, a.age, a.haller, a.elevation, a.sex, a.quick, case=a.case)
     if rc != 0:
         print(res.stdout[-4000:], file=sys.stderr)
         print(f"pipeline failed (MeshLab {mlx.default_host()} exit {rc}); log in {out}/meshlabserver.log", file=sys.stderr)

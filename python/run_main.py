@@ -3,7 +3,7 @@
 real meshlabserver and one .mlx script (python/pipeline.py), then plots. Writes everything into one
 output folder (default out/main-<timestamp>) and prints a table shaped like the thesis' Table 6-1.
 
-    python3 python/run_main.py [OUTDIR] [--quick] [--planner [--planner-levels 3,4,5] [--planner-bars both|one|two]]
+    python3 python/run_main.py [OUTDIR] [--quick] [--case NAME] [--planner [--planner-levels 3,4,5] [--planner-bars both|one|two]]
 
 --planner adds the 'Nuss Bar Planner' (filter_nuss_fea) to the same script, on the smoothed cage with the main job's
 FE settings, and prints its table (planner.csv in the output folder). Full mode takes ~4 min per option.
@@ -57,6 +57,8 @@ def parse_args(argv: list[str]) -> argparse.Namespace:
     ap.add_argument("outdir", nargs="?", help="output folder (default: out/main-<date>-<time> in the clone)")
     ap.add_argument("--quick", action="store_true",
                     help="a coarse TET4 small-strain model in seconds: its figures are not results to report")
+    ap.add_argument("--case", default="case1",
+                    help="summary.csv's case column (default case1: the thesis' patient 1, as cohort.py demo names it)")
     ap.add_argument("--planner", action="store_true", help="add the Nuss Bar Planner to the same script")
     ap.add_argument("--planner-levels", default="3,4,5", help="planner: intercostal spaces, comma-separated (default 3,4,5)")
     ap.add_argument("--planner-bars", default="both", choices=["both", "one", "two"],
@@ -72,7 +74,8 @@ def main(argv: list[str]) -> int:
     print("pectus-meshlab main job: create the rib cage of the thesis' patient 1 (M/8, pectus index 5.3) -> element "
           "quality -> MGA smoothing -> Nuss FE with the force calibrated to 44.7 mm -> thoracic volume (slice, "
           "envelope) and pectus index before/after, through MeshLab " + pipeline.mlx.default_host() + " headless ...", flush=True)
-    rc, r, res = pipeline.run_pipeline(out, quick=quick, planner=dict(levels=levels, bars=bars) if with_planner else None)
+    rc, r, res = pipeline.run_pipeline(out, quick=quick, planner=dict(levels=levels, bars=bars) if with_planner else None,
+                                       case=a.case)
     if rc != 0:
         print(res.stdout[-4000:], file=sys.stderr)
         print(f"pipeline failed (MeshLab {pipeline.mlx.default_host()} exit {rc}); log in {out}/meshlabserver.log", file=sys.stderr)
@@ -81,7 +84,7 @@ def main(argv: list[str]) -> int:
     q = {k: round(r[k], 4) for k in ("quality_mean_before", "quality_mean_after", "quality_min_before", "quality_min_after")}
     print(f"\nElement quality (alpha) of the cage: mean {q['quality_mean_before']} -> {q['quality_mean_after']}, "
           f"min {q['quality_min_before']} -> {q['quality_min_after']} ({r['mga']})")
-    print(f"FE: {r['tets']:.0f} {r['element']} elements, force calibrated in {r['solves']} solves, {round(r['fe_seconds'], 1)} s; "
+    print(f"FE: {r['tets']} {r['element']} elements, force calibrated in {r['solves']} solves, {round(r['fe_seconds'], 1)} s; "
           f"whole pipeline {r['seconds']:.0f} s")
     if with_planner:
         print_planner(r, out)

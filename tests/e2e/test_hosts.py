@@ -157,7 +157,7 @@ for h in HOSTS:
     rows = list(csv.DictReader(open(os.path.join(out_main, "summary.csv")))) if p.returncode == 0 else []
     check(len(rows) == 1, f"main job on {h}: exit 0 and summary.csv", p.stdout[-2000:])
     main[h] = rows[0] if rows else {}
-keys = ("tets", "force", "max_strain", "slice_change_cm3", "envelope_change_cm3", "haller_after")
+keys = ("fe_tets", "force_N", "max_strain", "slice_change_cm3", "envelope_change_cm3", "haller_index_after")
 for k in keys:
     va, vb = (float(main[h][k]) if main[h].get(k) not in (None, "") else None for h in HOSTS)
     check(within(va, vb, 0.02), f"main job: {k} within 2 % on both hosts ({va}, {vb})")
