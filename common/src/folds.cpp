@@ -15,13 +15,14 @@ Vec3 elementNormal(const Element& e, const std::vector<Vec3>& X) {
   return len > 0 && std::isfinite(len) ? Vec3(n / len) : Vec3::Zero();
 }
 
-Folds::Folds(const std::vector<Element>& elements, std::size_t nodes) : E_(elements), nb_(elements.size()), vE_(nodes) {
+Folds::Folds(std::vector<Element> elements, std::size_t nodes)
+    : E_(std::move(elements)), nb_(E_.size()), vE_(nodes) {
   std::map<std::pair<int, int>, std::vector<int>> byEdge;
   for (int e = 0; e < int(E_.size()); ++e) {
     const Element& el = E_[std::size_t(e)];
     for (int k = 0; k < el.nv; ++k) {
       const int a = el.v[std::size_t(k)], b = el.v[std::size_t((k + 1) % el.nv)];
-      assert(a >= 0 && std::size_t(a) < nodes);
+      assert(a >= 0 && std::size_t(a) < nodes && b >= 0 && std::size_t(b) < nodes);
       vE_[std::size_t(a)].push_back(e);
       byEdge[std::minmax(a, b)].push_back(e);
     }

@@ -14,8 +14,8 @@ namespace pectus {
 
 class Folds {
  public:
-  /// the edge neighbours of each element (elements with nodes outside [0, nodes) are refused by an assert)
-  Folds(const std::vector<Element>& elements, std::size_t nodes);
+  /// the elements (copied) and the edge neighbours of each; their nodes are in [0, nodes)
+  Folds(std::vector<Element> elements, std::size_t nodes);
 
   /// whether element e is folded with the nodes at X
   bool folded(int e, const std::vector<Vec3>& X) const;
@@ -26,11 +26,10 @@ class Folds {
   std::vector<int> readers(int n) const;
   /// element e's edge neighbours
   const std::vector<int>& neighbours(int e) const { return nb_[std::size_t(e)]; }
-  const std::vector<int>& elementsOf(int n) const { return vE_[std::size_t(n)]; }
   const Element& element(int e) const { return E_[std::size_t(e)]; }
 
  private:
-  const std::vector<Element>& E_;
+  std::vector<Element> E_;
   std::vector<std::vector<int>> nb_, vE_;
 };
 
