@@ -259,7 +259,7 @@ double spreadOffLine(const std::vector<Eigen::Vector3d>& p) {
 // A floating rib is held only at its joint. On a TET10 mesh the rib's nodes nearest to the joint can all lie on
 // one line (two corners of an edge pointing at the joint, the mid-edge node between them and the next one
 // along), and the rib then turns about that line: the stiffness matrix is singular. The joint fixes its rib's
-// nearest nodes until they leave one line.
+// nearest nodes until they leave one line. A piece held by other joints' nodes on one line only is refused.
 TEST(NussAnalysis, FloatingRibIsNotHeldOnOneLine) {
   const auto surf = nuss::cageFromMesh(cage().mesh);
   const double z0 = 2000, h = 12;  // far above the cage
@@ -286,6 +286,13 @@ TEST(NussAnalysis, FloatingRibIsNotHeldOnOneLine) {
   ASSERT_GE(held.size(), 5u);
   EXPECT_GT(spreadOffLine(held), 1.0) << held.size() << " fixed nodes of the box";
   EXPECT_TRUE(a.result.u.allFinite());
+
+  // a second box, of a part without a joint, 2.5 mm on the other side of that joint: the joint's radius
+  // reaches four nodes of it, all on one line, and nothing else holds it
+  const auto two = cageWithBoxes(surf, {ribPart(1, 11)}, {0.0, -25.0}, {20.0, 20.0}, {ribPart(1, 11), 0}, z0, h);
+  const std::string e = errorOf([&] { nuss::analyze(two, lms, o); });
+  EXPECT_NE(e.find("on one line"), std::string::npos) << e;
+  EXPECT_NE(e.find("increase the joint radius"), std::string::npos) << e;
 }
 
 // The sternoclavicular support holds the anterior translation of the sternum's nodes near the jugular notch

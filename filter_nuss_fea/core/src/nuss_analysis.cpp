@@ -425,20 +425,31 @@ std::string slivers(const Analysis& a) {
          "): set a tet quality (radius-edge ratio, e.g. 1.6) or use a smaller edge length.";
 }
 
-// connected components of the tet mesh; every one must hold a fixed node
-int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, const std::vector<int>& fixedNodes) {
+// connected components of the tet mesh; every one must hold fixed nodes off one line (at least
+// kMinOffLine x spacing, the surface's mean edge length, from it)
+int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, const std::vector<int>& fixedNodes,
+                    double spacing) {
   UnionFind sets(std::size_t(mesh.numNodes()));
   for (const auto& t : mesh.tets)
     for (int k = 1; k < mesh.nodesPerTet(); ++k) sets.unite(t[k], t[0]);
-  std::map<int, int> fixedIn;
-  for (int n : fixedNodes) fixedIn[sets.find(n)]++;
+  std::map<int, std::vector<Vector3d>> fixedIn;
+  for (int n : fixedNodes) fixedIn[sets.find(n)].push_back(mesh.nodes[size_t(n)]);
   std::map<int, int> compTet;
   for (int t = 0; t < mesh.numTets(); ++t) compTet.emplace(sets.find(mesh.tets[t][0]), t);
-  for (const auto& [root, t] : compTet)
+  for (const auto& [root, t] : compTet) {
     if (!fixedIn.count(root))
       throw TopologyError("A part of the model is not held by any costovertebral joint or the vertebral column (the connected piece containing the " +
                        partName(mesh.tissue[t], tetPart[t]) +
                        "): the system would be singular. Connect it to the cage, remove it, or add its joint landmark.");
+    // held at nodes on one line only (one or two nodes, or the nodes of one edge): it turns about that line
+    const auto& held = fixedIn.at(root);
+    if (offLine(held) < kMinOffLine * spacing)
+      throw TopologyError("A part of the model (the connected piece containing the " + partName(mesh.tissue[t], tetPart[t]) +
+                          ") is held only at " + std::to_string(held.size()) + " fixed node(s) on one line, near " +
+                          pointText(held.front()) + ": it turns freely about that line and the system would be singular. "
+                          "Add its costovertebral joint landmark, or increase the joint radius so that the joint holding "
+                          "it fixes more of it.");
+  }
   // pieces that hang on the rest by a node or an edge only (tets sharing no face with it) turn about that
   // hinge freely: every piece of face-connected tets needs a fixed node of its own
   UnionFind tp(mesh.tets.size());
@@ -926,7 +937,7 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
   Analysis a = analysisOf(std::move(model), target);
   place(cage, lms, opt.place, a);
   const Vector3d dir = opt.place.direction.normalized();
-  a.components = checkComponents(a.mesh, a.tetPart, a.fixedNodes);
+  a.components = checkComponents(a.mesh, a.tetPart, a.fixedNodes, meanEdgeLength(cage.surface));
 
   auto t0 = Clock::now();
   report(opt, 15, "Factorising (CHOLMOD)");
