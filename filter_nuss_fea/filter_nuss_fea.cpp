@@ -180,7 +180,7 @@ void addModelParams(RichParameterList& par) {
 void addPatchParams(RichParameterList& par) {
   addFloat(par, "jointRadius", 6.0f, "Joint radius (mm)",
            "Nodes within this distance of a costovertebral joint landmark are fixed (head and tubercle); a joint with "
-           "fewer than 4 nodes of its rib that near (a coarse or smoothed mesh) is fixed at the 4 nodes of its rib nearest to it, and the Log says so.",
+           "fewer than 4 nodes of its rib that near (a coarse or smoothed mesh) is fixed at the 4 nodes of its rib nearest to it (more, nearest first, while those lie on one line, about which a floating rib would turn), and the Log says so.",
            pectus::nuss::kPatchRadiusRange);
   addFloat(par, "sternumLoadRadius", 8.0f, "Fe patch radius (mm)",
            "Fe is spread evenly over the sternum surface nodes within this distance of the lower sternum end.",
@@ -369,7 +369,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
             " on the vertebral column (part " + std::to_string(pectus::kVertebralColumn) + ", kept as the fixed support)");
   if (a.jointsWidened > 0)
     ctx.log(std::to_string(a.jointsWidened) + " costovertebral joints have fewer than 4 nodes of their rib within the joint radius (" +
-            fmt(o.place.jointRadius, 1) + " mm): each is fixed at the 4 nodes of its rib nearest to it (up to " + fmt(a.widestJointRadius, 1) + " mm away)");
+            fmt(o.place.jointRadius, 1) + " mm): each is fixed at the 4 nodes of its rib nearest to it, more where those lie on one line (up to " + fmt(a.widestJointRadius, 1) + " mm away)");
   if (calibrate) ctx.log("Target elevation " + a.target.describe());
   ctx.log(std::string("Nuss FE result (") + (o.nonlinear ? "large displacement" : "small strain") + "): Fe = " + fmt(a.force, 2) +
           " N (Fs = " + fmt(a.force / 2, 2) + " N, Fsr = " + fmt(a.force / 4, 2) + " N)" +

@@ -4,6 +4,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
+#include <cmath>
 #include <cstdio>
 #include <numeric>
 
@@ -197,6 +199,100 @@ TEST(NussAnalysis, JointWithoutNodesWithinTheRadiusIsFixedAtItsNearestNodes) {
   const std::string e = errorOf([&] { nuss::analyze(surf, model, far, coarse()); });
   EXPECT_NE(e.find("right rib 4"), std::string::npos) << e;
   EXPECT_NE(e.find("does not belong to this cage"), std::string::npos) << e;
+}
+
+namespace {
+
+// the cage without the parts `drop`, plus closed boxes [x0,x0+len] x [0,h] x [z0,z0+h] (one per x0, part
+// `parts[i]`, bone) with a vertex every 2 mm along x and only the section's corners across: on a TET10 mesh
+// the nodes of a box nearest to a point on the extension of its edge y = 0, z = z0 are that edge's corners
+// and mid-edge nodes, all on one line, up to sqrt(d^2 + h^2/4) from it
+nuss::CageSurface cageWithBoxes(const nuss::CageSurface& in, const std::vector<int>& drop, const std::vector<double>& x0,
+                                const std::vector<double>& len, const std::vector<int>& parts, double z0, double h) {
+  nuss::CageSurface c;
+  std::vector<int> node(in.surface.V.size(), -1);
+  for (size_t f = 0; f < in.surface.F.size(); ++f) {
+    if (std::find(drop.begin(), drop.end(), in.facePart[f]) != drop.end()) continue;
+    std::array<int, 3> t{};
+    for (int k = 0; k < 3; ++k) {
+      int& n = node[size_t(in.surface.F[f][k])];
+      if (n < 0) n = int(c.surface.V.size()), c.surface.V.push_back(in.surface.V[size_t(in.surface.F[f][k])]);
+      t[k] = n;
+    }
+    c.surface.F.push_back(t);
+    c.surface.faceTissue.push_back(in.surface.faceTissue[f]);
+    c.facePart.push_back(in.facePart[f]);
+  }
+  for (size_t b = 0; b < x0.size(); ++b) {
+    const int slices = int(std::lround(len[b] / 2.0)) + 1, first = int(c.surface.V.size());
+    const double yz[4][2] = {{0, 0}, {h, 0}, {h, h}, {0, h}};
+    for (int i = 0; i < slices; ++i)
+      for (const auto& q : yz) c.surface.V.emplace_back(x0[b] + 2.0 * i, q[0], z0 + q[1]);
+    auto v = [&](int i, int k) { return first + 4 * i + (k % 4); };
+    auto face = [&](int a, int b2, int c2) {
+      c.surface.F.push_back({a, b2, c2});
+      c.surface.faceTissue.push_back(int(Tissue::Bone));
+      c.facePart.push_back(parts[b]);
+    };
+    for (int i = 0; i + 1 < slices; ++i)
+      for (int k = 0; k < 4; ++k) face(v(i, k), v(i + 1, k), v(i + 1, k + 1)), face(v(i, k), v(i + 1, k + 1), v(i, k + 1));
+    face(v(0, 0), v(0, 2), v(0, 1)), face(v(0, 0), v(0, 3), v(0, 2));
+    face(v(slices - 1, 0), v(slices - 1, 1), v(slices - 1, 2)), face(v(slices - 1, 0), v(slices - 1, 2), v(slices - 1, 3));
+  }
+  return c;
+}
+
+// mm: the largest distance of the points from the line through the first and the farthest from it
+double spreadOffLine(const std::vector<Eigen::Vector3d>& p) {
+  double far = 0, off = 0;
+  Eigen::Vector3d b = p.front();
+  for (const auto& q : p)
+    if ((q - p.front()).norm() > far) far = (q - p.front()).norm(), b = q;
+  if (!(far > 0)) return 0;
+  const Eigen::Vector3d d = (b - p.front()) / far;
+  for (const auto& q : p) off = std::max(off, (q - p.front() - (q - p.front()).dot(d) * d).norm());
+  return off;
+}
+
+}  // namespace
+
+// A floating rib is held only at its joint. On a TET10 mesh the rib's nodes nearest to the joint can all lie on
+// one line (two corners of an edge pointing at the joint, the mid-edge node between them and the next one
+// along), and the rib then turns about that line: the stiffness matrix is singular. The joint fixes its rib's
+// nearest nodes until they leave one line. A piece held by other joints' nodes on one line only is refused.
+TEST(NussAnalysis, FloatingRibIsNotHeldOnOneLine) {
+  const auto surf = nuss::cageFromMesh(cage().mesh);
+  const double z0 = 2000, h = 12;  // far above the cage
+  auto o = coarse();
+  o.mesh.order = 2;
+  // the right rib 11 (a floating rib) replaced by a box; its joint 2.5 mm beyond the box's end on the line
+  // of its edge y = 0, z = z0: the nodes within the joint radius (6 mm) are that edge's first four nodes
+  auto lms = cage().lms;
+  for (auto& l : lms)
+    if (l.code == ribPart(1, 11)) l.p = Eigen::Vector3d(-2.5, 0, z0);
+  const auto one = cageWithBoxes(surf, {ribPart(1, 11)}, {0.0}, {20.0}, {ribPart(1, 11)}, z0, h);
+  nuss::Analysis a;
+  ASSERT_NO_THROW(a = nuss::analyze(one, lms, o));
+  std::vector<char> isFixed(a.mesh.nodes.size(), 0);
+  for (int n : a.fixedNodes) isFixed[size_t(n)] = 1;
+  std::vector<Eigen::Vector3d> held;
+  for (int t = 0; t < a.mesh.numTets(); ++t)
+    if (a.tetPart[size_t(t)] == ribPart(1, 11))
+      for (int k = 0; k < a.mesh.nodesPerTet(); ++k)
+        if (const int n = a.mesh.tets[size_t(t)][size_t(k)]; isFixed[size_t(n)]) {
+          held.push_back(a.mesh.nodes[size_t(n)]);
+          isFixed[size_t(n)] = 0;
+        }
+  ASSERT_GE(held.size(), 5u);
+  EXPECT_GT(spreadOffLine(held), 1.0) << held.size() << " fixed nodes of the box";
+  EXPECT_TRUE(a.result.u.allFinite());
+
+  // a second box, of a part without a joint, 2.5 mm on the other side of that joint: the joint's radius
+  // reaches four nodes of it, all on one line, and nothing else holds it
+  const auto two = cageWithBoxes(surf, {ribPart(1, 11)}, {0.0, -25.0}, {20.0, 20.0}, {ribPart(1, 11), 0}, z0, h);
+  const std::string e = errorOf([&] { nuss::analyze(two, lms, o); });
+  EXPECT_NE(e.find("on one line"), std::string::npos) << e;
+  EXPECT_NE(e.find("increase the joint radius"), std::string::npos) << e;
 }
 
 // The sternoclavicular support holds the anterior translation of the sternum's nodes near the jugular notch

@@ -210,6 +210,26 @@ Vector3d lowerSternumEnd(const std::vector<Landmark>& lms, const Placement& pl, 
 }
 
 constexpr int kMinJointNodes = 4;  // fixed nodes per costovertebral joint, at least
+// fixed nodes closer than this fraction of the mean edge length to one line hold a piece only on that line
+constexpr double kMinOffLine = 0.1;
+
+// mm: how far the points stray from one line: the largest distance of a point from the line through the
+// first point and the point farthest from it (0 for fewer than two distinct points). A piece held only at
+// points on one line turns freely about it (a mid-edge node of a TET10 lies on its edge, so the nodes
+// nearest to a point are often two corners and the mid-edge nodes between and beyond them)
+double offLine(const std::vector<Vector3d>& pts) {
+  if (pts.size() < 3) return 0;
+  const Vector3d& a = pts.front();
+  const Vector3d b = *std::max_element(pts.begin(), pts.end(), [&](const Vector3d& p, const Vector3d& q) {
+    return (p - a).squaredNorm() < (q - a).squaredNorm();
+  });
+  const double len = (b - a).norm();
+  if (!(len > 0)) return 0;
+  const Vector3d dir = (b - a) / len;
+  double off = 0;
+  for (const Vector3d& p : pts) off = std::max(off, (p - a - (p - a).dot(dir) * dir).norm());
+  return off;
+}
 
 // mm: the mean length of the faces' edges (an edge of two faces counted twice)
 double meanEdgeLength(const fe::SurfaceMesh& s) {
@@ -230,6 +250,22 @@ void checkRadii(const Placement& pl) {
 }
 
 void placeLoads(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl, Analysis& s);
+
+// fixes a joint's nodes of its own rib, `own` as (distance, node): those within the radius, at least the
+// kMinJointNodes nearest, and the next nearest while those fixed lie on one line (closer than kMinOffLine x
+// spacing to it); returns the distance of the farthest fixed (0 if none)
+double fixOwnNodes(const fe::TetMesh& mesh, std::vector<std::pair<double, int>>& own, double radius, double spacing,
+                   std::vector<char>& fixed) {
+  std::sort(own.begin(), own.end());
+  std::vector<Vector3d> held;
+  size_t n = 0;
+  for (; n < own.size(); ++n) {
+    if (n >= size_t(kMinJointNodes) && own[n].first > radius && offLine(held) >= kMinOffLine * spacing) break;
+    fixed[size_t(own[n].second)] = 1;
+    held.push_back(mesh.nodes[size_t(own[n].second)]);
+  }
+  return n > 0 ? own[n - 1].first : 0.0;
+}
 
 void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Placement& pl, Analysis& s) {
   const fe::TetMesh& mesh = s.mesh;
@@ -253,12 +289,13 @@ void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Plac
     // each joint fixes the nodes within the joint radius and at least the four nodes of its own rib nearest
     // to it (of any part if the model has no tets of that rib): a coarse or smoothed mesh may have fewer
     // within the radius, and a rib held only at its joint (the floating ribs, separate pieces of the
-    // surface) needs three non-collinear nodes of its own fixed, not those of the rib next to it; a landmark
-    // more than two mean edge lengths beyond the radius from every node is not on this cage
+    // surface) needs three non-collinear nodes of its own fixed, not those of the rib next to it; while the
+    // rib's nodes fixed so far lie on one line, the next nearest is fixed too; a landmark more than two mean
+    // edge lengths beyond the radius from every node is not on this cage
     const int part = ribPart(side, rib);
     const bool ribInModel = std::find(s.tetPart.begin(), s.tetPart.end(), part) != s.tetPart.end();
     double nearest = std::numeric_limits<double>::infinity();
-    std::vector<std::pair<double, int>> own;  // (distance, node) of the joint's rib, the nearest first
+    std::vector<std::pair<double, int>> own;  // (distance, node) of the joint's rib
     for (int i = 0; i < mesh.numNodes(); ++i) {
       const double d = (mesh.nodes[i] - l.p).norm();
       nearest = std::min(nearest, d);
@@ -270,12 +307,10 @@ void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Plac
       throw InputError("The costovertebral joint of the " + partName(1, l.code) + " at " + pointText(l.p) + " lies " + mm(nearest) +
                        " mm from the nearest mesh node, more than the joint radius (" + mm(pl.jointRadius) + " mm) and two mean edge lengths (" +
                        mm(2 * spacing) + " mm): the landmark layer does not belong to this cage; pick the cage's landmark layer or increase the joint radius.");
-    const size_t n = std::min<size_t>(kMinJointNodes, own.size());
-    std::partial_sort(own.begin(), own.begin() + std::ptrdiff_t(n), own.end());
-    for (size_t k = 0; k < n; ++k) fixed[size_t(own[k].second)] = 1;
-    if (n > 0 && own[n - 1].first > pl.jointRadius) {
+    const double farthest = fixOwnNodes(mesh, own, pl.jointRadius, spacing, fixed);
+    if (farthest > pl.jointRadius) {
       ++s.jointsWidened;
-      s.widestJointRadius = std::max(s.widestJointRadius, own[n - 1].first);
+      s.widestJointRadius = std::max(s.widestJointRadius, farthest);
     }
   }
   if (joints == 0)
@@ -390,20 +425,31 @@ std::string slivers(const Analysis& a) {
          "): set a tet quality (radius-edge ratio, e.g. 1.6) or use a smaller edge length.";
 }
 
-// connected components of the tet mesh; every one must hold a fixed node
-int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, const std::vector<int>& fixedNodes) {
+// connected components of the tet mesh; every one must hold fixed nodes off one line (at least
+// kMinOffLine x spacing, the surface's mean edge length, from it)
+int checkComponents(const fe::TetMesh& mesh, const std::vector<int>& tetPart, const std::vector<int>& fixedNodes,
+                    double spacing) {
   UnionFind sets(std::size_t(mesh.numNodes()));
   for (const auto& t : mesh.tets)
     for (int k = 1; k < mesh.nodesPerTet(); ++k) sets.unite(t[k], t[0]);
-  std::map<int, int> fixedIn;
-  for (int n : fixedNodes) fixedIn[sets.find(n)]++;
+  std::map<int, std::vector<Vector3d>> fixedIn;
+  for (int n : fixedNodes) fixedIn[sets.find(n)].push_back(mesh.nodes[size_t(n)]);
   std::map<int, int> compTet;
   for (int t = 0; t < mesh.numTets(); ++t) compTet.emplace(sets.find(mesh.tets[t][0]), t);
-  for (const auto& [root, t] : compTet)
+  for (const auto& [root, t] : compTet) {
     if (!fixedIn.count(root))
       throw TopologyError("A part of the model is not held by any costovertebral joint or the vertebral column (the connected piece containing the " +
                        partName(mesh.tissue[t], tetPart[t]) +
                        "): the system would be singular. Connect it to the cage, remove it, or add its joint landmark.");
+    // held at nodes on one line only (one or two nodes, or the nodes of one edge): it turns about that line
+    const auto& held = fixedIn.at(root);
+    if (offLine(held) < kMinOffLine * spacing)
+      throw TopologyError("A part of the model (the connected piece containing the " + partName(mesh.tissue[t], tetPart[t]) +
+                          ") is held only at " + std::to_string(held.size()) + " fixed node(s) on one line, near " +
+                          pointText(held.front()) + ": it turns freely about that line and the system would be singular. "
+                          "Add its costovertebral joint landmark, or increase the joint radius so that the joint holding "
+                          "it fixes more of it.");
+  }
   // pieces that hang on the rest by a node or an edge only (tets sharing no face with it) turn about that
   // hinge freely: every piece of face-connected tets needs a fixed node of its own
   UnionFind tp(mesh.tets.size());
@@ -891,7 +937,7 @@ Analysis analyzeModel(const CageSurface& cage, Model model, const std::vector<La
   Analysis a = analysisOf(std::move(model), target);
   place(cage, lms, opt.place, a);
   const Vector3d dir = opt.place.direction.normalized();
-  a.components = checkComponents(a.mesh, a.tetPart, a.fixedNodes);
+  a.components = checkComponents(a.mesh, a.tetPart, a.fixedNodes, meanEdgeLength(cage.surface));
 
   auto t0 = Clock::now();
   report(opt, 15, "Factorising (CHOLMOD)");

@@ -7,7 +7,8 @@
 // both moduli and both Poisson ratios).
 // Boundary conditions (Fig. 6-4): every node within `jointRadius` of a costovertebral joint landmark is
 // fixed (head and tubercle rigid; a joint with fewer than four nodes that near, on a coarse or smoothed mesh,
-// is fixed at its four nearest nodes); a vertebral column in the model (part kVertebralColumn, as 'Prepare
+// is fixed at the four nodes of its rib nearest to it, and at the next nearest while those lie on one line, about
+// which a floating rib would turn); a vertebral column in the model (part kVertebralColumn, as 'Prepare
 // Patient Rib Cage' keeps it) is the fixed support: every node of its tets is fixed too. Loads (Fig. 6-3, Fe = 2 Fs = 4 Fsr): the elevating force Fe along
 // `direction` (default anterior, +y) spread evenly over the sternum's surface nodes within
 // `sternumLoadRadius` of the lower sternum end; four rib support forces Fsr = Fe/4, opposite to Fe,
@@ -238,7 +239,7 @@ struct Analysis {
   std::vector<int> sternoclavicularNodes;  ///< held along the force direction only (Placement::sternoclavicularRadius)
   int fixedAtJoints = 0;   ///< of fixedNodes: within the joint radius of a costovertebral joint
   int fixedOnColumn = 0;   ///< of fixedNodes: the others, nodes of the vertebral column's tets (part kVertebralColumn)
-  int jointsWidened = 0;         ///< joints with fewer than four nodes within the joint radius: fixed at their four nearest
+  int jointsWidened = 0;         ///< joints with fewer than four nodes within the joint radius: fixed at their four nearest (or more)
   double widestJointRadius = 0;  ///< mm: the farthest of those nodes from its joint
   std::vector<std::vector<int>> supportNodes;    ///< right s, right s+1, left s, left s+1 (then the second bar's)
   std::vector<std::string> supportNames;
