@@ -38,10 +38,14 @@ Folds::Folds(std::vector<Element> elements, std::size_t nodes)
 }
 
 bool Folds::folded(int e, const std::vector<Vec3>& X) const {
-  const Vec3 n = elementNormal(E_[std::size_t(e)], X);
-  Vec3 mean = Vec3::Zero();
-  for (int g : nb_[std::size_t(e)]) mean += elementNormal(E_[std::size_t(g)], X);
-  return n.dot(mean) < 0;
+  return foldedBy(e, [&](int g) { return elementNormal(E_[std::size_t(g)], X); });
+}
+
+std::vector<Vec3> Folds::normals(const std::vector<Vec3>& X) const {
+  std::vector<Vec3> n(E_.size());
+#pragma omp parallel for schedule(static)
+  for (int e = 0; e < int(E_.size()); ++e) n[std::size_t(e)] = elementNormal(E_[std::size_t(e)], X);
+  return n;
 }
 
 std::vector<char> Folds::all(const std::vector<Vec3>& X) const {
@@ -56,15 +60,14 @@ std::size_t Folds::count(const std::vector<Vec3>& X) const {
   return std::size_t(std::count(f.begin(), f.end(), char(1)));
 }
 
-std::vector<int> Folds::readers(int n) const {
-  std::vector<int> r;
+void Folds::readers(int n, std::vector<int>& r) const {
+  r.clear();
   for (int e : vE_[std::size_t(n)]) {
     r.push_back(e);
     r.insert(r.end(), nb_[std::size_t(e)].begin(), nb_[std::size_t(e)].end());
   }
   std::sort(r.begin(), r.end());
   r.erase(std::unique(r.begin(), r.end()), r.end());
-  return r;
 }
 
 }  // namespace pectus

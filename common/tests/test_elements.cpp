@@ -170,7 +170,9 @@ TEST(Folds, AnElementFacingAgainstItsEdgeNeighboursIsAFold) {
   EXPECT_EQ(ft.count(X), 0u);
   EXPECT_EQ(fq.count(X), 0u);
   const int v = 2 * (n + 1) + 2;  // the centre node (2, 2)
-  EXPECT_EQ(ft.readers(v).size(), 6u + 6u);  // its 6 triangles and the 6 across their outer edges
+  std::vector<int> readers;
+  ft.readers(v, readers);
+  EXPECT_EQ(readers.size(), 6u + 6u);  // its 6 triangles and the 6 across their outer edges
   std::vector<pectus::Vec3> Y = X;
   Y[std::size_t(v)] = pectus::Vec3(3.6, 2, 0);  // past its neighbour (3, 2)
   const std::vector<char> f = ft.all(Y);

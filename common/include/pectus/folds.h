@@ -19,11 +19,21 @@ class Folds {
 
   /// whether element e is folded with the nodes at X
   bool folded(int e, const std::vector<Vec3>& X) const;
+  /// whether element e is folded, given each element's unit normal as normal(g) (e.g. kept up to date by a
+  /// caller that moves one node at a time)
+  template <class Normal>
+  bool foldedBy(int e, const Normal& normal) const {
+    Vec3 mean = Vec3::Zero();
+    for (int g : nb_[std::size_t(e)]) mean += normal(g);
+    return normal(e).dot(mean) < 0;
+  }
+  /// every element's unit normal at X (elementNormal)
+  std::vector<Vec3> normals(const std::vector<Vec3>& X) const;
   /// per element, 1 if folded (in parallel; the same for any thread count)
   std::vector<char> all(const std::vector<Vec3>& X) const;
   std::size_t count(const std::vector<Vec3>& X) const;
-  /// the elements whose fold test reads node n: its elements and their edge neighbours (sorted)
-  std::vector<int> readers(int n) const;
+  /// the elements whose fold test reads node n: its elements and their edge neighbours (sorted, into out)
+  void readers(int n, std::vector<int>& out) const;
   /// element e's edge neighbours
   const std::vector<int>& neighbours(int e) const { return nb_[std::size_t(e)]; }
   const Element& element(int e) const { return E_[std::size_t(e)]; }

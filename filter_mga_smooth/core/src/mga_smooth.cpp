@@ -873,7 +873,7 @@ class Sweeps {
          const std::vector<char>& fixed, const Folds& folds)
       : M_(M), loc_(loc), S_(S), proj_(proj), opt_(opt), toM_(toM), classes_(classes), freeNodes_(freeNodes),
         fixed_(fixed), folds_(folds), projDist_(M.X.size(), 0.0), evaluations_(M.X.size(), 0), active_(M.X.size(), 0),
-        gained_(M.X.size(), 0), from_(M.X.size()) {
+        gained_(M.X.size(), 0), from_(M.X.size()), normal_(folds.normals(M.X)) {
     mo_.population = opt.population;
     mo_.accuracy = opt.accuracy;
     mo_.maxRestarts = opt.restarts;
@@ -936,7 +936,8 @@ class Sweeps {
   // The moves of one colour, taken again one after the other in node order from where the colour started;
   // a move that folds an element (Folds) that was not folded before it is undone. The fold test of an
   // element reads the nodes of its edge neighbours too, which may share the colour: hence in order, after
-  // the parallel search. A folded element can unfold, and no element folds anew.
+  // the parallel search. A folded element can unfold, and no element folds anew. The elements' unit normals
+  // are kept (normal_): a move changes those of the node's own elements only.
   void keepUnfolding(const std::vector<int>& cls) {
     std::vector<int> moved;
     for (int n : cls)
@@ -946,15 +947,28 @@ class Sweeps {
       to[i] = M_.X[std::size_t(moved[i])];
       M_.X[std::size_t(moved[i])] = from_[std::size_t(moved[i])].x;
     }
+    std::vector<int> readers;
+    std::vector<Vec3> starNormal;
+    const auto kept = [&](int g) -> const Vec3& { return normal_[std::size_t(g)]; };
     for (std::size_t i = 0; i < moved.size(); ++i) {
       const int n = moved[i];
-      const std::vector<int> readers = folds_.readers(n);
-      std::vector<char> before(readers.size());
-      for (std::size_t k = 0; k < readers.size(); ++k) before[k] = folds_.folded(readers[k], M_.X);
+      const std::vector<int>& star = M_.vE[std::size_t(n)];
       M_.X[std::size_t(n)] = to[i];
+      starNormal.resize(star.size());
+      for (std::size_t k = 0; k < star.size(); ++k) starNormal[k] = elementNormal(M_.E[std::size_t(star[k])], M_.X);
+      const auto movedTo = [&](int g) -> const Vec3& {
+        for (std::size_t k = 0; k < star.size(); ++k)
+          if (star[k] == g) return starNormal[k];
+        return normal_[std::size_t(g)];
+      };
+      folds_.readers(n, readers);
       bool folds = false;
-      for (std::size_t k = 0; k < readers.size() && !folds; ++k) folds = !before[k] && folds_.folded(readers[k], M_.X);
-      if (!folds) continue;
+      for (std::size_t k = 0; k < readers.size() && !folds; ++k)
+        folds = folds_.foldedBy(readers[k], movedTo) && !folds_.foldedBy(readers[k], kept);
+      if (!folds) {
+        for (std::size_t k = 0; k < star.size(); ++k) normal_[std::size_t(star[k])] = starNormal[k];
+        continue;
+      }
       const From& f = from_[std::size_t(n)];
       M_.X[std::size_t(n)] = f.x;
       M_.N[std::size_t(n)] = f.normal;
@@ -1053,6 +1067,7 @@ class Sweeps {
     double projDist = 0;
   };
   std::vector<From> from_;
+  std::vector<Vec3> normal_;             ///< per element: its unit normal where the nodes are (keepUnfolding)
   std::size_t movesUndone_ = 0;
 };
 
