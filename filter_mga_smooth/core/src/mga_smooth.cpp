@@ -873,7 +873,7 @@ class Sweeps {
          const std::vector<char>& fixed, const Folds& folds)
       : M_(M), loc_(loc), S_(S), proj_(proj), opt_(opt), toM_(toM), classes_(classes), freeNodes_(freeNodes),
         fixed_(fixed), folds_(folds), projDist_(M.X.size(), 0.0), evaluations_(M.X.size(), 0), active_(M.X.size(), 0),
-        gained_(M.X.size(), 0), from_(M.X.size()), normal_(folds.normals(M.X)) {
+        gained_(M.X.size(), 0), from_(M.X.size()), normal_(folds.normals(M.X)), seen_(M.E.size(), 0) {
     mo_.population = opt.population;
     mo_.accuracy = opt.accuracy;
     mo_.maxRestarts = opt.restarts;
@@ -948,27 +948,36 @@ class Sweeps {
       M_.X[std::size_t(moved[i])] = from_[std::size_t(moved[i])].x;
     }
     std::vector<int> readers;
-    std::vector<Vec3> starNormal;
+    std::vector<char> before;
+    std::vector<Vec3> oldNormal;
     const auto kept = [&](int g) -> const Vec3& { return normal_[std::size_t(g)]; };
     for (std::size_t i = 0; i < moved.size(); ++i) {
       const int n = moved[i];
       const std::vector<int>& star = M_.vE[std::size_t(n)];
-      M_.X[std::size_t(n)] = to[i];
-      starNormal.resize(star.size());
-      for (std::size_t k = 0; k < star.size(); ++k) starNormal[k] = elementNormal(M_.E[std::size_t(star[k])], M_.X);
-      const auto movedTo = [&](int g) -> const Vec3& {
-        for (std::size_t k = 0; k < star.size(); ++k)
-          if (star[k] == g) return starNormal[k];
-        return normal_[std::size_t(g)];
+      // the elements whose fold test reads n (its own and their edge neighbours, each once), and their
+      // state before the move
+      ++stamp_;
+      readers.clear();
+      const auto list = [&](int r) {
+        if (seen_[std::size_t(r)] != stamp_) seen_[std::size_t(r)] = stamp_, readers.push_back(r);
       };
-      folds_.readers(n, readers);
-      bool folds = false;
-      for (std::size_t k = 0; k < readers.size() && !folds; ++k)
-        folds = folds_.foldedBy(readers[k], movedTo) && !folds_.foldedBy(readers[k], kept);
-      if (!folds) {
-        for (std::size_t k = 0; k < star.size(); ++k) normal_[std::size_t(star[k])] = starNormal[k];
-        continue;
+      for (int e : star) {
+        list(e);
+        for (int g : folds_.neighbours(e)) list(g);
       }
+      before.resize(readers.size());
+      for (std::size_t k = 0; k < readers.size(); ++k) before[k] = folds_.foldedBy(readers[k], kept);
+      // the move: its elements' normals change, the others' do not
+      M_.X[std::size_t(n)] = to[i];
+      oldNormal.resize(star.size());
+      for (std::size_t k = 0; k < star.size(); ++k) {
+        oldNormal[k] = normal_[std::size_t(star[k])];
+        normal_[std::size_t(star[k])] = elementNormal(M_.E[std::size_t(star[k])], M_.X);
+      }
+      bool folds = false;
+      for (std::size_t k = 0; k < readers.size() && !folds; ++k) folds = !before[k] && folds_.foldedBy(readers[k], kept);
+      if (!folds) continue;
+      for (std::size_t k = 0; k < star.size(); ++k) normal_[std::size_t(star[k])] = oldNormal[k];
       const From& f = from_[std::size_t(n)];
       M_.X[std::size_t(n)] = f.x;
       M_.N[std::size_t(n)] = f.normal;
@@ -1068,6 +1077,8 @@ class Sweeps {
   };
   std::vector<From> from_;
   std::vector<Vec3> normal_;             ///< per element: its unit normal where the nodes are (keepUnfolding)
+  std::vector<unsigned> seen_;           ///< per element: the stamp of the last check that listed it
+  unsigned stamp_ = 0;
   std::size_t movesUndone_ = 0;
 };
 
