@@ -17,7 +17,7 @@ def rows(path):
     """(method, q mean, time s) of the table's method rows"""
     out, title = [], None
     for line in open(path):
-        m = re.match(r"^  (.+?)\s{2,}(\d\.\d+)\s+(\d\.\d+)\s+(\S+)\s+(\d+\.\d+)\s+(\S+)(?:\s+\S+(?: / \d+)?)?$", line.rstrip())
+        m = re.match(r"^  (.+?)\s{2,}(\d\.\d+)\s+(\d\.\d+)\s+(\S+)\s+(\d+\.\d+)\s+(\S+(?: / \d+)?)(?:\s+\S+(?: / \d+)?)?$", line.rstrip())
         if m and m.group(1) != "input":
             out.append((m.group(1), float(m.group(3)), float(m.group(5))))
         elif re.match(r"^\S.*\(\d+ nodes", line):
