@@ -6,6 +6,7 @@ import os
 import re
 import struct
 import sys
+import tarfile
 import tempfile
 
 import numpy as np
@@ -37,6 +38,24 @@ if mlx.default_host() in SUITES:
 def workdir(name: str) -> str:
     d = tempfile.mkdtemp(prefix=f"pectus-{name}-")
     return d
+
+
+CGAL_DATA = "/usr/share/doc/libcgal-dev/data.tar.gz"  # Debian's libcgal-demo
+
+
+def cgal_meshes(folder: str, *names: str) -> dict:
+    """name -> folder/name.off, each of libcgal-demo's data/meshes written there; without libcgal-demo the test
+    prints SKIP and ends"""
+    if not os.path.exists(CGAL_DATA):
+        print("SKIP: libcgal-demo not installed")
+        sys.exit(0)
+    paths = {}
+    with tarfile.open(CGAL_DATA) as tf:
+        for name in names:
+            paths[name] = os.path.join(folder, name + ".off")
+            with open(paths[name], "wb") as fh:
+                fh.write(tf.extractfile(f"data/meshes/{name}.off").read())
+    return paths
 
 
 def example_script(example: str, folder: str, name: str, **values) -> str:

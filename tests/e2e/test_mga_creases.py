@@ -8,24 +8,14 @@ import os
 import re
 import shutil
 import subprocess
-import sys
-import tarfile
 
 import numpy as np
 
 from pectus_meshes import alpha, read_off, write_off
-from harness import SOURCE, check, example_script, finish, read_ply, run, workdir
+from harness import SOURCE, cgal_meshes, check, example_script, finish, read_ply, run, workdir
 
-DATA = "/usr/share/doc/libcgal-dev/data.tar.gz"
-if not os.path.exists(DATA):
-    print("SKIP: libcgal-demo not installed")
-    sys.exit(0)
 d = workdir("mga_creases")
-mesh = {}
-with tarfile.open(DATA) as tf:
-    for name in ("femur", "cube-meshed", "fandisk", "cube"):
-        mesh[name] = os.path.join(d, name + ".off")
-        open(mesh[name], "wb").write(tf.extractfile(f"data/meshes/{name}.off").read())
+mesh = cgal_meshes(d, "femur", "cube-meshed", "fandisk", "cube")
 EXAMPLE = os.path.join(SOURCE, "filter_mga_smooth", "examples", "mga_smooth.mlx")
 
 

@@ -5,23 +5,15 @@ invalid in themselves, so such a quad is never traded for a reflex quad (Knupp b
 libcgal-demo."""
 import os
 import re
-import sys
-import tarfile
 
 import numpy as np
 
 import pectus_mlx as mlx
 from pectus_meshes import beta, read_off
-from harness import SOURCE, check, finish, run, workdir
+from harness import SOURCE, cgal_meshes, check, finish, run, workdir
 
-DATA = "/usr/share/doc/libcgal-dev/data.tar.gz"
-if not os.path.exists(DATA):
-    print("SKIP: libcgal-demo not installed")
-    sys.exit(0)
 d = workdir("mga_femur_quads")
-with tarfile.open(DATA) as tf:
-    femur = os.path.join(d, "femur.off")
-    open(femur, "wb").write(tf.extractfile("data/meshes/femur.off").read())
+femur = cgal_meshes(d, "femur")["femur"]
 
 ex = lambda *p: os.path.join(SOURCE, *p)  # noqa: E731
 convert = mlx.load_script(ex("filter_quad_convert", "examples", "tri_to_quad.mlx"))

@@ -5,22 +5,14 @@ with. A fold: an element whose normal points against the mean of its edge neighb
 counted here independently of the filters' code. Skipped without libcgal-demo."""
 import os
 import re
-import sys
-import tarfile
 
 import numpy as np
 
 from pectus_meshes import read_off, write_off
-from harness import SOURCE, check, example_script, finish, run, workdir
+from harness import SOURCE, cgal_meshes, check, example_script, finish, run, workdir
 
-DATA = "/usr/share/doc/libcgal-dev/data.tar.gz"
-if not os.path.exists(DATA):
-    print("SKIP: libcgal-demo not installed")
-    sys.exit(0)
 d = workdir("mga_folds")
-with tarfile.open(DATA) as tf:
-    cow = os.path.join(d, "cow.off")
-    open(cow, "wb").write(tf.extractfile("data/meshes/cow.off").read())
+cow = cgal_meshes(d, "cow")["cow"]
 
 
 def folds(V, F):
