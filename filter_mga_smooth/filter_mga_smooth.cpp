@@ -333,7 +333,7 @@ void FilterMgaSmoothPlugin::runSmooth(FilterContext& ctx, bool mga) {
           std::to_string(r.nodesMoved) + " of " + std::to_string(r.freeNodes) + " free" +
           (r.nodesPutBack ? " (" + std::to_string(r.nodesPutBack) + " put back: the surface crossed itself there)" : std::string()) +
           (r.nodesPutBackGuard ? " (" + std::to_string(r.nodesPutBackGuard) +
-                                     " put back beside them: an element fell below the guard)"
+                                     " put back to keep the worst-element guard)"
                                : std::string()) +
           "; folds (elements facing against their edge neighbours) " + std::to_string(r.foldsBefore) + " -> " +
           std::to_string(r.foldsAfter) + ", " + std::to_string(r.foldsNew) + " new" +
