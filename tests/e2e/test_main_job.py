@@ -9,6 +9,7 @@ import os
 import re
 import subprocess
 
+import pectus_mlx as mlx
 from harness import SOURCE, check, finish, workdir
 
 out = workdir("main")
@@ -76,9 +77,11 @@ for where, lines in (("meshlabserver.log", saved), ("the job's output", p.stdout
     check(not joined, f"{where}: no line holds two progress messages", "\n".join(l[:200] for l in joined[:5]))
     cut = [l for l in lines if "LOG: " in l and not l.startswith("LOG: ")]
     check(not cut, f"{where}: no LOG line inside another line", "\n".join(l[:200] for l in cut[:5]))
-check(all(m in saved for m in ("calibrating funnel depth", "extracting the surface", "labelling", "Factorising (CHOLMOD)"))
-      and saved.count("envelope convergence") > 1 and re.search(r"^sweep 2, mean quality [0-9.]+$", "\n".join(saved), re.M),
-      "meshlabserver.log: the progress messages, each a line")
+# meshlabserver 2020.09 prints the filters' progress; pectus-mlrun (the newer releases) prints none
+if mlx.default_host() == "2020.09":
+    check(all(m in saved for m in ("calibrating funnel depth", "extracting the surface", "labelling", "Factorising (CHOLMOD)"))
+          and saved.count("envelope convergence") > 1 and re.search(r"^sweep 2, mean quality [0-9.]+$", "\n".join(saved), re.M),
+          "meshlabserver.log: the progress messages, each a line")
 plan = list(csv.DictReader(open(os.path.join(out, "planner.csv")))) if os.path.exists(os.path.join(out, "planner.csv")) else []
 check(len(plan) == 1 and plan[0]["option"] == "1 bar, space 4", "planner.csv: one option, one bar at space 4")
 if plan and rows:
