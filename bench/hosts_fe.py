@@ -22,7 +22,7 @@ ROOT = os.path.dirname(HERE)
 sys.path.insert(0, os.path.join(ROOT, "python"))
 import pectus_mlx as mlx  # noqa: E402
 
-FE = "Nuss Procedure FE Analysis"
+FE = "Pectus: Nuss Procedure FE Analysis"
 EXAMPLE = os.path.join(ROOT, "filter_nuss_fea", "examples", "nuss_fea.mlx")
 FE_KEYS = (("tets", "tets", "{:,.0f}"), ("force_N", "Fe N", "{:.4f}"), ("max_strain", "max strain", "{:.4f}"),
            ("newton_iterations", "Newton it.", "{:.0f}"))

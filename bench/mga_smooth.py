@@ -161,13 +161,13 @@ def ours(mga, sweeps, guard=GUARD, min_pass=0.0, feature=None, singular=None, gu
     if mga:
         if search is None:
             search = int(guided)
-        return [mlx.Filter("MGA Surface Mesh Smoothing", **common, accuracy=mlx.Float(1e-3),
+        return [mlx.Filter("Pectus: MGA Surface Mesh Smoothing", **common, accuracy=mlx.Float(1e-3),
                            generations=mlx.Int(generations),
                            restarts=mlx.Int(4), population=mlx.Int(5),
                            selection=mlx.Enum(0, ["Roulette wheel", "Tournament"]),
                            elementSearch=mlx.Enum(search, SEARCH),
                            **tail, seed=mlx.Int(1))]
-    return [mlx.Filter("Gradient Surface Mesh Smoothing (Baseline)", **common, cgIterations=mlx.Int(10), **tail)]
+    return [mlx.Filter("Pectus: Gradient Surface Mesh Smoothing (Baseline)", **common, cgIterations=mlx.Int(10), **tail)]
 
 
 CREASE_DEG = 20.0  # a CAD part's edge bent at least this much is a crease edge

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Benchmark: a patient's CT export through 'Prepare Patient Rib Cage' and the calibrated FE analysis, next to the
+"""Benchmark: a patient's CT export through 'Pectus: Prepare Patient Rib Cage' and the calibrated FE analysis, next to the
 generator's own cage of the same child. One table.
 
 The export is the default cage (age 7, pectus index 4) rasterised on a 1 mm CT grid by pectus_ct_phantom and
@@ -83,9 +83,9 @@ def main() -> int:
         cage, lms = os.path.join(a.out, folder + "_cage.ply"), os.path.join(a.out, folder + "_landmarks.ply")
         res, wall, rss, rc = timed([], mlx.Script([import_ct_segmentation(path=src), prepare_patient_rib_cage()]),
                                    [(cage, n, "fc fq"), (lms, n + 1, "vq")])
-        step = res.get("seconds", "Prepare Patient Rib Cage")
-        faces = res.get("faces", "Prepare Patient Rib Cage")
-        inputs = res.get("faces", "Import CT Segmentation")
+        step = res.get("seconds", "Pectus: Prepare Patient Rib Cage")
+        faces = res.get("faces", "Pectus: Prepare Patient Rib Cage")
+        inputs = res.get("faces", "Pectus: Import CT Segmentation")
         rows.append((f"prepare: {name} ({n} layers, {inputs} faces)", f"{faces} faces",
                      f"{step:.1f} s step" if step else "failed", wall, rss))
         cages[name] = (cage, lms)

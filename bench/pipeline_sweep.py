@@ -4,12 +4,12 @@
 For every (age, pectus index, edge length) of a grid, one MeshLab script through the real meshlabserver
 (under xvfb-run, as the end-to-end tests run it; the script is assembled like the main job's pipeline.mlx):
 
-  'Create Pectus Excavatum Rib Cage' (the age, the pectus (Haller) index, the edge length; the rest its defaults)
-  -> 'MGA Surface Mesh Smoothing' (its defaults)
-  -> 'Nuss Procedure FE Analysis' (its defaults: calibrated to the target from the model, the rise that brings the
+  'Pectus: Create Rib Cage' (the age, the pectus (Haller) index, the edge length; the rest its defaults)
+  -> 'Pectus: MGA Surface Mesh Smoothing' (its defaults)
+  -> 'Pectus: Nuss Procedure FE Analysis' (its defaults: calibrated to the target from the model, the rise that brings the
      lower sternum end onto the chest line; large displacement, neo-Hookean, TET10, displacement control; --order
      changes the element only)
-  -> 'Thoracic Volume (Slice Method)', 'Thoracic Volume (Ferguson Envelope)', 'Pectus Index' (their defaults,
+  -> 'Pectus: Thoracic Volume (Slice Method)', 'Pectus: Thoracic Volume (Ferguson Envelope)', 'Pectus: Pectus Index' (their defaults,
      before = the smoothed cage, after = the FE result).
 
 Each row: success, refused (the FE filter refused the cell before any solve with a message that names the
@@ -59,7 +59,7 @@ REFUSALS = {"lies beyond what the model reaches": "targetElevation",
 
 def script(age: float, index: float, edge: float, order: str) -> mlx.Script:
     cage = pf.create_ribcage(age=age, hallerIndex=index, edgeLength=edge)
-    mga = pipeline.example("mga", "MGA Surface Mesh Smoothing")
+    mga = pipeline.example("mga", "Pectus: MGA Surface Mesh Smoothing")
     fe = pf.nuss_fea(landmarkLayer=LANDMARKS, **ORDERS[order])
     return mlx.Script([cage, mga, fe] + pipeline.measure_filters(CAGE, LANDMARKS))
 

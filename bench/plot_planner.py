@@ -25,7 +25,7 @@ def main():
     ap = argparse.ArgumentParser(description=__doc__, formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("csv")
     ap.add_argument("out")
-    ap.add_argument("--title", default="Nuss Bar Planner: each option calibrated to the same elevation; red: the best")
+    ap.add_argument("--title", default="Pectus: Nuss Bar Planner: each option calibrated to the same elevation; red: the best")
     a = ap.parse_args()
     with open(a.csv, newline="") as f:
         rows = list(csv.DictReader(f))

@@ -6,12 +6,12 @@
   rows:   ours (optimal = max-weight matching, greedy; all quads), MeshLab's 'Tri to Quad by smart triangle
           pairing' and 'Turn into Quad-Dominant mesh' (meshlabserver), gmsh 4.8 Blossom recombination of the same
           triangles (Mesh.RecombinationAlgorithm=1, RecombineOptimizeTopology=0), and ours followed by 'MGA Surface
-          Mesh Smoothing' (quads) with and without 'Mesh Structure Improvement' first.
+          Mesh Smoothing' (quads) with and without 'Pectus: Quad Mesh Structure Improvement' first.
   columns: elements, % quads, invalid quads (beta <= 0), mean and min beta (Knupp, along each quad's own normal,
           computed here from the written files), filter time from the Log (ours) and the wall time of the
           whole process (load, filter, save).
 
-Every quad mesh is written as a real polygon file (our 'Save Polygonal Mesh'; gmsh: .msh) and measured here.
+Every quad mesh is written as a real polygon file (our 'Pectus: Save Polygonal Mesh'; gmsh: .msh) and measured here.
 
     PECTUS_PREFIX=build-quad/prefix bench/quad_convert.py [--no-mga] [--out DIR]
 """
@@ -141,7 +141,7 @@ def main():
             methods += [
                 ("ours optimal + MGA smoothing", [conv(pairing=0, leftovers=0), mga], "Quads: |MGA smoothing"),
                 ("ours optimal + structure + MGA", [conv(pairing=0, leftovers=0), structure, mga],
-                 "Quads: |Mesh Structure Improvement|MGA smoothing"),
+                 "Quads: |Pectus: Quad Mesh Structure Improvement|MGA smoothing"),
             ]
         for label, blocks, what in methods:
             out = os.path.join(work, f"{name}_{len(rows)}.off")

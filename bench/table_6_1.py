@@ -3,8 +3,8 @@
 in one run, beside the thesis' columns: force, Newton iterations, solves and time, max stress and strain and
 where (the stress also away from the tissue junctions, where it is singular), the intrathoracic volume gain (slice method and Ferguson envelope) and the pectus index after.
 
-Each patient: 'Create Pectus Excavatum Rib Cage' (sex/age and pectus index of Table 6-1, --edge mm) ->
-'Nuss Procedure FE Analysis' with its defaults, calibrated to the patient's measured elevation of the
+Each patient: 'Pectus: Create Rib Cage' (sex/age and pectus index of Table 6-1, --edge mm) ->
+'Pectus: Nuss Procedure FE Analysis' with its defaults, calibrated to the patient's measured elevation of the
 lower sternum end -> both thoracic volume filters and the pectus index, before and after; one
 meshlabserver per patient and method. --methods adds other large-displacement settings, on the same TET10 mesh:
 
@@ -20,8 +20,8 @@ joints ("default, spine kept").
 
 With --input exports, each patient's cage is first written as a messy CT segmentation export by
 pectus_ct_phantom (the generator's cage of that age and index on a 1 mm CT grid, TotalSegmentator-named STL
-files with the defects of real exports), then imported and prepared by 'Import CT Segmentation' and
-'Prepare Patient Rib Cage' (their defaults: 4 mm edges) in the same script before the analysis.
+files with the defects of real exports), then imported and prepared by 'Pectus: Import CT Segmentation' and
+'Pectus: Prepare Patient Rib Cage' (their defaults: 4 mm edges) in the same script before the analysis.
 
 --funnel-z builds every cage with that funnel centre (the generator's funnelCenterZ; default its own, 1.1).
 --cartilage-section runs each at each costal cartilage section of a list: rib (the generator's default, the
@@ -62,11 +62,11 @@ THESIS_RESULTS = {"case1": (140, 43.5, 0.93, 6.09), "case2": (120, 90.6, 1.20, 5
                   "case4": (80, 37.7, 0.65, 4.43), "case5": (70, 54.5, 0.59, 8.88)}
 METHODS = {"default": {},
            "search": dict(calibration=0),
-           "svk": dict(material=0, calibration=0, lineSearch=False, adaptiveSteps=False)}
+           "svk": dict(material=0, calibration=0, newton=1)}
 THESIS_CARTILAGE_E = pf.NUSS_MODEL["cartilageModulus"][1]  # MPa
 SECTIONS = ("rib", "ct")  # the generator's cartilageSection
 SLICE_FROM = ("dome", "sternum")  # the slice method's lowerLimit: 700 the dome of the diaphragm, 500 the lower sternum end
-SPINE = ("cut", "keep")  # 'Prepare Patient Rib Cage': the vertebral column cut at the joints or kept, fixed
+SPINE = ("cut", "keep")  # 'Pectus: Prepare Patient Rib Cage': the vertebral column cut at the joints or kept, fixed
 CAGE, LANDMARKS = 0, 1
 PHANTOM = os.path.join(ROOT, "build", "tools", "pectus_ct_phantom")
 

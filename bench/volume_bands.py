@@ -81,10 +81,10 @@ def main():
         fh.write(res.stdout)
     if res.rc:
         sys.exit(f"{case}: the script stopped (exit {res.rc}); its output is in {base}.log")
-    force = round(res.value("force_N", "Nuss Procedure FE Analysis"), 2)
+    force = round(res.value("force_N", "Pectus: Nuss Procedure FE Analysis"), 2)
     # each band's change (cm3, %) and its volume before (cm3)
     slices = [(r["results"]["volume_change_cm3"], r["results"]["volume_change_pct"], r["results"]["before_volume_cm3"])
-              for r in res.results if r["filter"] == "Thoracic Volume (Slice Method)"]
+              for r in res.results if r["filter"] == "Pectus: Thoracic Volume (Slice Method)"]
     motion = sternum_motion(base + ".vtu", bands)
 
     print(f"{case} ({sex}/{age}, index {index}), lifted {elevation} mm by Fe = {force} N; generated cage, {a.edge:g} mm edges; "

@@ -64,15 +64,13 @@ void checkFaces(MeshModel& mm, const char* role) {
 FilterC1SurfacePlugin::FilterC1SurfacePlugin() {
   pectus::ml::FilterSpec r;
   r.id = FP_C1_REFINE;
-  r.name = "C1 Surface: Refine onto Goodman-Said Surface";
+  r.name = "Pectus: C1 Refine onto Goodman-Said Surface";
   r.pythonName = "c1_surface_refine";
   r.info =
-      "Builds the C1 surface of thesis chapter 3 on the current triangle mesh (Goodman-Said cubic Bezier "
-      "triangular patches with the rational blend of eq. 3-16, vertex gradients by local estimation) and "
-      "splits every triangle k&times;k with the new vertices on the patches. Vertices on a shared edge are "
-      "shared: the output is conforming (no T-junctions), the original vertices are kept. Vertex normals of "
-      "the output are the patch normals. Non-manifold edges/vertices and NaN coordinates are refused with a "
-      "message; zero-area triangles and isolated vertices are tolerated (isolated vertices are dropped).";
+      "Splits every triangle of the current layer k&times;k and puts the new vertices on the layer's C1 "
+      "surface (Goodman-Said patches, thesis ch. 3): a finer mesh of the same smooth shape.";
+  r.doc = "c1_refine";
+  r.advanced = QStringList{"gradientMethod", "frame"};
   r.cls = pectus::ml::HostFilter::Remeshing;
   r.postCondition = MeshModel::MM_VERTCOORD | MeshModel::MM_VERTNORMAL | MeshModel::MM_FACENUMBER |
                     MeshModel::MM_VERTNUMBER;
@@ -80,12 +78,14 @@ FilterC1SurfacePlugin::FilterC1SurfacePlugin() {
 
   pectus::ml::FilterSpec p;
   p.id = FP_C1_PROJECT;
-  p.name = "C1 Surface: Project Layer onto Surface";
+  p.name = "Pectus: C1 Project Layer onto Goodman-Said Surface";
   p.pythonName = "c1_surface_project_layer";
   p.info =
-      "Moves every vertex of the current layer to its closest point on the C1 (Goodman-Said) surface built "
-      "on another layer (the surface layer): a spatial grid on the patches and a Newton search per patch. "
-      "Vertex normals become the surface normals there. The Log gives the mean and max displacement.";
+      "Moves every vertex of the current layer to its closest point on the C1 (Goodman-Said) surface of "
+      "another layer, e.g. a smoothed or remeshed copy back onto the original shape. The Log gives the "
+      "displacements.";
+  p.doc = "c1_project";
+  p.advanced = QStringList{"gradientMethod", "frame"};
   p.cls = pectus::ml::HostFilter::Smoothing;
   p.postCondition = MeshModel::MM_VERTCOORD | MeshModel::MM_VERTNORMAL;
   addFilter(this, p);

@@ -30,76 +30,43 @@ void writeFaceQuality(MeshModel& mm, const std::vector<double>& perFace, bool co
 }
 }  // namespace
 
-#define FIXED_NODES_INFO                                                                                         \
-  "<b>Fixed nodes</b>: boundary nodes; feature nodes, by default the nodes of crease chains (sharp edges "       \
-  "linked into chains of consistent dihedral angle; the isolated sharp edges of a noisy scan stay free), or "     \
-  "every node on an edge bent more than the feature angle (faux edges inside quads do not count); singular "      \
-  "nodes of large curvature variation (where crease chains meet or end, or a normal cone wider than the "         \
-  "singular angle: cone tips, spikes); and the vertex selection as chosen. "
-
 FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
   pectus::ml::FilterSpec q;
   q.id = FP_ELEMENT_QUALITY;
-  q.name = "Compute Element Quality (Triangle Alpha / Quad Beta)";
+  q.name = "Pectus: Element Quality (Triangle Alpha / Quad Beta)";
   q.pythonName = "compute_element_quality";
   q.info =
-      "Shape quality of every element of the current layer, written to per-face quality and shown "
-      "with MeshLab's quality colours (red = 0, poor; blue = 1, ideal).<br>"
-      "<b>Triangles</b>: alpha = 2&radic;3 |AB&times;AC| / (|AB|&sup2;+|BC|&sup2;+|CA|&sup2;) (thesis eq. 3-20): "
-      "1 for an equilateral triangle, 0 for a degenerate one.<br>"
-      "<b>Quads</b> (MeshLab stores a quad as two triangles sharing a faux edge): Knupp's shape quality "
-      "beta (eqs. 3-22/3-23), measured along the quad's own normal for surface quads: 1 for a square, "
-      "towards 0 as an angle nears 180&deg;, 0 for a non-convex or inverted quad. Both triangles of a "
-      "quad get its beta.<br>"
-      "The Log gets min / mean / max and a 10-bin histogram. Empty layers, point clouds and NaN "
-      "coordinates are refused with a message; asking for quads on a layer without faux edges is "
-      "refused too (run a tri-to-quad conversion first).";
-  q.cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Quality | pectus::ml::HostFilter::Measure);
+      "Shape quality of every element of the current layer (triangles: alpha, thesis eq. 3-20; quads: "
+      "beta) as face quality and colours (red 0, poor; blue 1, ideal).";
+  q.doc = "element_quality";
+  q.cls = pectus::ml::HostFilter::Measure;
   q.postCondition = MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
   addFilter(this, q);
 
   pectus::ml::FilterSpec s;
   s.id = FP_MGA_SMOOTH;
-  s.name = "MGA Surface Mesh Smoothing";
+  s.name = "Pectus: MGA Surface Mesh Smoothing";
   s.pythonName = "mga_surface_mesh_smoothing";
   s.info =
-      "Improves the shape of the elements of a triangle or quad surface mesh without changing its "
-      "connectivity, by moving every free node on the surface (thesis chapter 4.2).<br>"
-      "For each free node a micro-genetic algorithm (population 5, elitism, crossover with probability one, "
-      "restarts) searches inside every adjacent element: a triangle, or for a quad the two triangles of the "
-      "quad around the node; a candidate V = (1-r2) V1 + r2 (1-r1) V2 + r1 r2 V3 (eq. 3-19, V1 the node, "
-      "r1 in [0,1], r2 in [0,0.5]) is mapped onto the C1 (Goodman-Said) surface of the input mesh, so the "
-      "nodes stay on the original surface. Fitness: the sum of alpha (triangles, eq. 3-21) or Knupp's beta "
-      "(quads, eq. 3-24) over the node's elements. A move never inverts or folds an element, never lowers "
-      "the node's sum, and never lets the node's worst element drop below min(its value, the guard, 0.35 by default). "
-      "The best position over the adjacent elements is kept; sweeps repeat until the mean quality improves "
-      "by less than the tolerance. Where the smoothed surface would cross itself (two faces intersect that did "
-      "not in the input), the moved nodes of the crossing faces are put back to their input positions.<br>"
-      FIXED_NODES_INFO "Nodes of one colour of a greedy colouring share no element and are smoothed in parallel, with "
-      "per-node random seeds: the result does not depend on the number of threads.<br>"
-      "Afterwards the element quality is written to per-face quality and colours (red = 0, blue = 1), and the "
-      "Log gives worst/mean quality before and after, nodes moved, sweeps and time. Non-manifold meshes, NaN "
-      "coordinates, a mesh with no free node, and quads asked of a triangle mesh are refused with a message.";
-  s.cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Smoothing | pectus::ml::HostFilter::Quality);
+      "Improves the element shapes of a triangle or quad mesh by moving its free nodes on the mesh's own "
+      "C1 surface with a micro-genetic algorithm (thesis 4.2). No element is folded.";
+  s.doc = "mga_smooth";
+  s.advanced = QStringList{"tolerance", "accuracy", "generations", "restarts", "population", "selection",
+                            "elementSearch", "minPassBelow", "featureAngle", "singularAngle", "seed"};
+  s.cls = pectus::ml::HostFilter::Smoothing;
   s.postCondition = MeshModel::MM_VERTCOORD | MeshModel::MM_VERTNORMAL | MeshModel::MM_FACENORMAL |
                     MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
   addFilter(this, s);
 
   pectus::ml::FilterSpec g;
   g.id = FP_GRADIENT_SMOOTH;
-  g.name = "Gradient Surface Mesh Smoothing (Baseline)";
+  g.name = "Pectus: Gradient Surface Mesh Smoothing (Baseline)";
   g.pythonName = "gradient_surface_mesh_smoothing";
   g.info =
-      "The conjugate gradient baseline the thesis compares MGA smoothing with (Table 4-1, after Garimella et "
-      "al.): the same fitness (sum of alpha or beta of the node's elements), the same C1 surface of the input, "
-      "the same fixed nodes, guards and parallel colouring as <i>MGA Surface Mesh Smoothing</i>, but every free "
-      "node is moved by Polak-Ribiere conjugate gradient ascent in its local parametric coordinates (the "
-      "tangent plane of the surface at the node, in units of the node's mean edge length), with numerical "
-      "gradients and a line search of halving steps from half an edge length plus one parabolic step; every "
-      "trial point is projected onto the C1 surface and a step is taken only if it raises the fitness, so "
-      "no element inverts or folds and the node's worst element never drops below min(its value, the guard). "
-      "Faster than MGA, a local search.<br>" FIXED_NODES_INFO
-      "<br>Per-face quality, colours and the Log as for MGA smoothing; bad input is refused with a message.";
+      "The conjugate gradient smoothing the thesis compares MGA with (Table 4-1): the same fitness, C1 "
+      "surface, fixed nodes and guards as MGA smoothing, with a gradient search per node.";
+  g.doc = "gradient_smooth";
+  g.advanced = QStringList{"tolerance", "cgIterations", "minPassBelow", "featureAngle", "singularAngle"};
   g.cls = s.cls;
   g.postCondition = s.postCondition;
   addFilter(this, g);

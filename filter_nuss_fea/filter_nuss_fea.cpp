@@ -1,5 +1,5 @@
 // MeshLab adapter of the Nuss FE analysis (core/: pectus/nuss; the FE library pectus_fe): 'Nuss Procedure FE
-// Analysis' and 'Nuss Bar Planner'. Maps parameters, layers, progress, errors and results; no algorithm here.
+// Analysis' and 'Pectus: Nuss Bar Planner'. Maps parameters, layers, progress, errors and results; no algorithm here.
 #include "filter_nuss_fea.h"
 
 #include <algorithm>
@@ -26,50 +26,29 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
   pectus::fe::restBlasThreads();  // loaded with this plugin, OpenBLAS's idle threads would spin at start-up
   pectus::ml::FilterSpec n;
   n.id = FP_NUSS_FEA;
-  n.name = "Nuss Procedure FE Analysis";
+  n.name = "Pectus: Nuss Procedure FE Analysis";
   n.pythonName = "nuss_procedure_fe_analysis";
   n.info =
-      "Finite element analysis of a Nuss pectus excavatum repair on the current layer (thesis 6.1, 6.2, 6.4.1): a "
-      "closed rib cage surface whose faces carry tissue and part labels (as 'Create Pectus Excavatum Rib Cage' writes "
-      "them) plus a landmark layer.<br>"
-      "<b>Model.</b> TetGen tetrahedralises the surface (quality and maximum volume below); each tet takes the tissue "
-      "of the nearest surface face. Bone and sternum E = 11.5 GPa, pectus costal cartilage E = 12.25 MPa (the thesis' moduli, the defaults below). "
-      "<b>Boundary conditions</b> (Fig. 6-4): every node within the joint radius of a costovertebral joint landmark "
-      "is fixed. <b>Loads</b> (Fig. 6-3): the elevating force Fe, anterior, spread over the sternum surface nodes "
-      "near the lower sternum end (landmark 500); four rib support forces Fsr = Fe/4, posterior, on the ribs above "
-      "and below the bar's exits in the chosen intercostal space (landmarks 600+10*side+s): Fe = 2Fs = 4Fsr.<br>"
-      "<b>Solve.</b> Large displacement (total Lagrangian, St Venant-Kirchhoff: what ANSYS' large-displacement "
-      "static and CalculiX NLGEOM do with a linear material; Newton with load increments every curve step) or small "
-      "strain; linear TET4 (the thesis' SOLID185) or quadratic TET10 (no locking); CHOLMOD sparse Cholesky. With "
-      "'Calibrate', Fe is searched so the sternum end rises by the target elevation (Table 6-1: 34.0-44.7 mm).<br>"
-      "<b>Results.</b> A new layer 'nuss fe result' (the deformed surface; vertex quality and colour = von Mises "
-      "stress in MPa or equivalent strain), a layer 'nuss landmarks after' (landmarks moved with the cage), a Log "
-      "summary like Table 6-1 and, with a result file base, BASE.vtu (ParaView), BASE.inp (CalculiX deck of the same "
-      "model), BASE_force_displacement.csv/.png (Fig. 6-14) and BASE_rib_strain.csv (strain along a rib, Fig. 6-18).";
-  n.cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Measure | pectus::ml::HostFilter::Remeshing);
+      "Finite element analysis of a Nuss repair on the labelled rib cage (current layer) and its landmark "
+      "layer (thesis 6.1-6.4): the force that lifts the sternum to the target, stress and strain.";
+  n.doc = "nuss_fea";
+  n.advanced = QStringList{"maxForce", "tolerance", "calibration", "newton", "tetQuality", "maxTetVolume",
+                            "nuBone", "nuCartilage", "jointRadius", "sternumLoadRadius", "ribSupportRadius",
+                            "pathSide", "pathRib"};
+  n.cls = pectus::ml::HostFilter::Measure;
   n.arity = pectus::ml::HostFilter::VARIABLE;
   n.postCondition = MeshModel::MM_VERTQUALITY | MeshModel::MM_VERTCOLOR;
   addFilter(this, n);
 
   n.id = FP_BAR_PLANNER;  // same class, arity and post-conditions
-  n.name = "Nuss Bar Planner";
+  n.name = "Pectus: Nuss Bar Planner";
   n.pythonName = "nuss_bar_planner";
   n.info =
-      "Compares Nuss bar options before surgery (the thesis' conclusion): runs the calibrated 'Nuss Procedure FE Analysis' "
-      "on the current layer (the labelled rib cage) for every listed bar level (intercostal space) with one bar and/or "
-      "two bars, and measures the thoracic volume gain (slice method and Ferguson envelope) and the pectus index after "
-      "each.<br>"
-      "<b>One bar</b> in space s: exactly the FE filter's model (Fe at the lower sternum end, Fsr = Fe/4 on ribs s and "
-      "s+1 next to the bar's exits). <b>Two bars</b>: the first as above, the second in space s + offset (default one "
-      "space above), parallel to the first: its sternal load on the sternum at the lower end's height moved by the height "
-      "difference of the two bars' exits, its four Fsr on ribs s2 and s2+1 next to its exits. The second bar carries the "
-      "given share of the total force, each bar Fe_i = 2Fs_i = 4Fsr_i. Every option is calibrated to the same elevation "
-      "of the lower sternum end; the tet mesh is built once for all options.<br>"
-      "<b>Results.</b> One Log line per option (force, elevation, max von Mises stress and where, max equivalent strain "
-      "and where, volume gains in cm3 and %, pectus index after), a CSV file with the same table, and a new layer with the "
-      "deformed cage of the best option (lowest force or lowest max stress) coloured by von Mises stress, named after the "
-      "option. Volumes: slice method from landmark 700 to 701, envelope from 500 to 701 (as those filters' defaults); "
-      "pectus index at the level of landmark 501.";
+      "Compares bar levels, and one bar against two, before surgery: the calibrated FE analysis of each "
+      "option with its force, stress, volume gain and pectus index after.";
+  n.doc = "nuss_bar_planner";
+  n.advanced = QStringList{"maxForce", "tolerance", "calibration", "newton", "tetQuality", "maxTetVolume",
+                            "nuBone", "nuCartilage", "jointRadius", "sternumLoadRadius", "ribSupportRadius"};
   addFilter(this, n);
 
 }
@@ -104,15 +83,15 @@ template <class T, std::size_t N>
 int entryOf(const T (&entries)[N], T value) {
   return int(std::find(entries, entries + N, value) - entries);
 }
+QStringList newtonSteps() { return QStringList() << "Line search and adaptive steps" << "Plain Newton, fixed steps"; }
 QStringList calibrations() { return QStringList() << "Force search" << "Displacement control"; }
 QStringList modes() { return QStringList() << "Calibrate Fe to the target elevation" << "Given elevating force"; }
 QStringList fields() { return QStringList() << "von Mises stress (MPa)" << "Equivalent strain"; }
 QStringList sides() { return QStringList() << "Right" << "Left"; }
-Eigen::Vector3d toE(const Point3m& p) { return Eigen::Vector3d(p[0], p[1], p[2]); }
 }  // namespace
 
 namespace {
-// parameter groups shared by 'Nuss Procedure FE Analysis' and 'Nuss Bar Planner' (same names, defaults, help)
+// parameter groups shared by 'Pectus: Nuss Procedure FE Analysis' and 'Pectus: Nuss Bar Planner' (same names, defaults, help)
 void addLandmarkParam(const MeshDocument& md, RichParameterList& par) {
   par.addParam(pectus::ml::richMesh("landmarkLayer", pectus::ml::defaultLandmarkLayer(md), md, "Landmark layer",
                         "Point layer of landmarks (vertex quality = code, labels.h) as the rib cage generator writes it: "
@@ -148,12 +127,11 @@ void addModelParams(RichParameterList& par) {
                         "linear elasticity whatever this says). St Venant-Kirchhoff lets a strongly compressed tet "
                         "invert; neo-Hookean resists it (its energy grows without bound as the volume goes to zero) "
                         "and lets a child's cage reach the elevation."));
-  par.addParam(RichBool("lineSearch", d.newton.lineSearch, "Newton line search",
-                        "Large displacement: scale each Newton correction so that the residual falls (fewer failing "
-                        "increments on a soft cartilage)."));
-  par.addParam(RichBool("adaptiveSteps", d.newton.adaptiveSteps, "Adaptive load steps",
-                        "Large displacement: grow the load increment where Newton converges fast and halve it where it "
-                        "does not (the curve's stops are still hit exactly)."));
+  par.addParam(RichEnum("newton", d.newton.lineSearch && d.newton.adaptiveSteps ? 0 : 1, newtonSteps(), "Newton steps",
+                        "Large displacement. Line search and adaptive steps: each Newton correction is scaled so that "
+                        "the residual falls, and the load increment grows where Newton converges fast and is halved "
+                        "where it does not (the curve's stops are still hit exactly). Plain: full corrections and fixed "
+                        "increments, as ANSYS' and CalculiX' default static step."));
   par.addParam(RichEnum("order", 0, orders(), "Element",
                         "TET10: quadratic tetrahedra, accurate on thin ribs; with the default tet quality within 2 % of the "
                         "converged mesh. TET4: linear, as the thesis' SOLID185; it locks in bending on the thin ribs, so the "
@@ -210,8 +188,7 @@ void readCalibrationParams(FilterContext& ctx, pectus::nuss::Options& o, bool ca
 void readModelParams(FilterContext& ctx, pectus::nuss::Options& o) {
   o.nonlinear = ctx.enumIn("analysis", 2) == 0;
   o.material = kMaterials[ctx.enumIn("material", 3)];
-  o.newton.lineSearch = ctx.boolean("lineSearch");
-  o.newton.adaptiveSteps = ctx.boolean("adaptiveSteps");
+  o.newton.lineSearch = o.newton.adaptiveSteps = ctx.enumIn("newton", 2) == 0;
   o.mesh.order = ctx.enumIn("order", 2) == 0 ? 2 : 1;
   o.mesh.radiusEdgeRatio = ctx.floatIn("tetQuality");  // (0, 1.2) is refused by the core (fe::validate)
   o.mesh.maxVolume = ctx.floatIn("maxTetVolume");
@@ -270,11 +247,6 @@ void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList&
          "The bar exits between ribs s and s+1 (landmarks 600+10*side+s, the generator writes s = 4, 5; "
          "other spaces: between the ribs' lateral-most points).", {1, 11});
   addPatchParams(par);
-  par.addParam(RichBool("usePoints", false, "Place Fe and the exits at the points below",
-                        "Instead of the landmarks 500 and 600+10*side+s (the joints still come from the landmarks)."));
-  par.addParam(RichPoint3f("sternumPoint", Point3m(0, 0, 0), "Lower sternum end (Fe)", "Used with the option above (mm)."));
-  par.addParam(RichPoint3f("exitRight", Point3m(0, 0, 0), "Right bar exit", "Used with the option above (mm)."));
-  par.addParam(RichPoint3f("exitLeft", Point3m(0, 0, 0), "Left bar exit", "Used with the option above (mm)."));
   par.addParam(RichEnum("field", 0, fields(), "Colour by",
                         "Per-vertex quality and colour of the result layer: nodal von Mises stress (MPa) or equivalent "
                         "strain (ANSYS EPEL,EQV form; Green-Lagrange for large displacement)."));
@@ -298,12 +270,6 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   readModelParams(ctx, o);
   o.place.intercostalSpace = ctx.intIn("intercostalSpace");
   readPatchParams(ctx, o.place);
-  if (ctx.boolean("usePoints")) {
-    const RichParameterList& par = ctx.params();
-    o.place.sternumPoint = toE(par.getPoint3m("sternumPoint"));
-    o.place.exitRight = toE(par.getPoint3m("exitRight"));
-    o.place.exitLeft = toE(par.getPoint3m("exitLeft"));
-  }
   const bool stressField = ctx.enumIn("field", 2) == 0;
   const int pathSide = ctx.enumIn("pathSide", 2) + 1;
   const int pathRib = ctx.intIn("pathRib");

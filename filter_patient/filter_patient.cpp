@@ -1,4 +1,4 @@
-// MeshLab adapter of the patient-data core (core/: pectus/patient): 'Import CT Segmentation' and 'Prepare
+// MeshLab adapter of the patient-data core (core/: pectus/patient): 'Pectus: Import CT Segmentation' and 'Prepare
 // Patient Rib Cage'. Maps parameters, files, the visible layers, progress, errors and results; every decision
 // is in the core.
 #include "filter_patient.h"
@@ -28,28 +28,12 @@ using pectus::patient::kMinEdgeLength;
 FilterPatientPlugin::FilterPatientPlugin() {
   pectus::ml::FilterSpec c;
   c.id = FP_IMPORT_CT;
-  c.name = "Import CT Segmentation";
+  c.name = "Pectus: Import CT Segmentation";
   c.pythonName = "import_ct_segmentation";
   c.info =
-      "Reads a patient's CT segmentation as segmentation tools export it (3D Slicer, ITK-SNAP, TotalSegmentator, "
-      "InVesalius, Mimics) and adds one layer per structure, named after it.<br>"
-      "<b>Input</b> (parameter 'Path'): one file or a folder. A folder is read file by file in name order: every "
-      "*.stl (binary or ASCII), *.obj, *.ply, *.off, *.nii and *.nii.gz in it (not its subfolders); other files are "
-      "skipped and listed in the Log.<br>"
-      "<b>Names.</b> A mesh file or a one-structure NIfTI mask gives one layer named after the file without its "
-      "extension (rib_left_3.nii.gz -> 'rib_left_3'). A NIfTI label map with several labels (or a label table) "
-      "gives one layer per label present, in ascending label order, named from the file's own label table (as "
-      "TotalSegmentator writes it), else from parameter 'Label table', else from a table beside the file "
-      "(&lt;name&gt;.txt, .csv, .json or &lt;name&gt;_labels.txt, .csv, .json). A label map without any table, or a "
-      "label missing from its table, is refused. Label map surfaces are closed, unsmoothed marching-cubes "
-      "surfaces of each label's voxels, in mm.<br>"
-      "<b>Nothing is repaired or moved</b>: coordinates, frame and units stay as in the files (the next filter, "
-      "'Prepare Patient Rib Cage', finds the anatomical frame and the units). Vertices at the same position are "
-      "merged (STL stores none shared) and vertices no face uses are removed; faces with NaN or infinite "
-      "coordinates are dropped and counted in the Log. Duplicate faces, holes and other defects are kept.<br>"
-      "<b>Result.</b> The first structure's layer becomes the current layer. The Log has one summary line and "
-      "one line per structure: faces, vertices, connected components, source file (and label), size of the "
-      "bounding box; for labels the voxel count and spacing. If anything cannot be read, no layer is added.";
+      "Reads a patient's CT segmentation (a file or a folder of STL, OBJ, PLY, OFF or NIfTI label maps, as "
+      "TotalSegmentator or 3D Slicer export it) and adds one layer per structure, named after it.";
+  c.doc = "import_ct_segmentation";
   c.cls = pectus::ml::HostFilter::MeshCreation;
   c.arity = pectus::ml::HostFilter::NONE;
   c.needsCurrentMesh = false;
@@ -57,40 +41,14 @@ FilterPatientPlugin::FilterPatientPlugin() {
 
   pectus::ml::FilterSpec s;
   s.id = FP_PREPARE_PATIENT;
-  s.name = "Prepare Patient Rib Cage";
+  s.name = "Pectus: Prepare Patient Rib Cage";
   s.pythonName = "prepare_patient_rib_cage";
   s.info =
-      "Makes a patient's CT segmentation (the visible layers, e.g. from 'Import CT Segmentation') into the labelled "
-      "rib cage and landmarks that 'Nuss Procedure FE Analysis', the thoracic volume filters, the pectus index and the bar "
-      "planner take. Every decision goes to the Log.<br>"
-      "<b>Layers by name</b> (TotalSegmentator's, 3D Slicer's or generic): 'rib_left_3' / 'Rib R 3' ribs, "
-      "'costal_cartilages' / 'cartilage', 'sternum', 'vertebrae_T5' (the spine: used for the frame and landmarks; in the "
-      "model only when 'Spine' keeps it), 'bone' / 'ribs' (ribs, possibly fused to the spine). Scapulae, clavicles, humeri and organs are "
-      "left out, and so are labelled cages (a previous result). Point layers named '... user landmarks' are your "
-      "landmarks (vertex quality = code, in the input layers' frame).<br>"
-      "<b>Layers whose names say nothing</b> ('Segment_1', ...) are classified by their shape and place, each decision "
-      "in the Log: many long pieces (or one piece as wide as the cage) bone; many small bar-like pieces the costal "
-      "cartilages; the elongated one-piece layer nearest the cartilages the sternum; then compact blocks on the midline "
-      "behind the centre vertebrae, thin elongated pieces beside the midline that reach behind the centre ribs, plates "
-      "behind and beside the cage scapulae (left out); anything else is left out. If the cartilages or the sternum "
-      "cannot be told (or two layers are equally good sternums), it stops and asks you to rename the layers.<br>"
-      "<b>Steps.</b> Units (metres or cm scaled to mm); the anatomical frame (anterior towards the sternum, the long "
-      "axis along it, superior from the rib numbers or the ribs' slope, left from the right-handed scanner frame); "
-      "fragments under the minimum volume dropped; bone fused to the vertebral column cut at the costovertebral "
-      "joints (pieces that do not reach the spine, such as scapulae, left out); the column left out, or kept as "
-      "the fixed support (parameter 'Spine': then joined to the ribs as bone, part 400); ribs numbered per side from the top. "
-      "Every structure first becomes a solid on one grid (parameter 'Grid step'): the grid points that cannot be reached "
-      "from outside without crossing its faces, so that holes, duplicate faces, self-intersections, nested marrow shells "
-      "and slivers change nothing; holes are sealed by a ball as wide as the widest one (the Log gives each solid's "
-      "volume and seal). Fragments, the column and pieces that are not ribs are separated in that grid, and the "
-      "structures' points give one closed surface with tissue and part per face, decimated "
-      "to the edge length; landmarks placed (costovertebral joints, sternum ends, deepest funnel point, vertebra at "
-      "that level, bar exits at the mid-axillary line for every intercostal space, diaphragm dome and lung apex "
-      "heights). Picked points override them.<br>"
-      "<b>Output.</b> Two new layers: 'patient rib cage' (current; face colour = tissue, face quality = tissue*1000 + "
-      "part, in the project frame: mm, +x patient's left, +y anterior, +z superior) and 'patient landmarks' (vertex "
-      "quality = code). The Log gives the transform from the input layers to the result.";
-  s.cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Remeshing | pectus::ml::HostFilter::Cleaning);
+      "Makes the visible layers of a patient's segmentation into the labelled rib cage and landmarks the "
+      "analyses take. Every decision goes to the Log.";
+  s.doc = "prepare_patient_rib_cage";
+  s.advanced = QStringList{"minVolume", "gridStep"};
+  s.cls = pectus::ml::HostFilter::Remeshing;
   s.arity = pectus::ml::HostFilter::VARIABLE;
   s.needsCurrentMesh = false;
   s.postCondition = MeshModel::MM_FACECOLOR | MeshModel::MM_FACEQUALITY | MeshModel::MM_VERTQUALITY;

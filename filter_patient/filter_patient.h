@@ -1,4 +1,4 @@
-// MeshLab adapter of a patient's CT segmentation: 'Import CT Segmentation' and 'Prepare Patient Rib Cage'.
+// MeshLab adapter of a patient's CT segmentation: 'Pectus: Import CT Segmentation' and 'Pectus: Prepare Patient Rib Cage'.
 // Maps parameters, layers, progress, errors and results to the host-free core in core/ (pectus/patient).
 #pragma once
 #include "filter_plugin.h"

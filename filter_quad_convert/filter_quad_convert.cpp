@@ -64,65 +64,42 @@ void requireManifold(const MeshModel& mm) {
 }  // namespace
 
 FilterQuadConvertPlugin::FilterQuadConvertPlugin() {
-  const auto cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Polygonal | pectus::ml::HostFilter::Remeshing);
+  const auto cls = pectus::ml::HostFilter::Polygonal;
   pectus::ml::FilterSpec c;
   c.id = FP_TRI_TO_QUAD;
-  c.name = "Convert Triangles to Quads";
+  c.name = "Pectus: Convert Triangles to Quads";
   c.pythonName = "convert_triangles_to_quads";
   c.info =
-      "Merges pairs of adjacent triangles into quads (thesis 4.1.2), in the current layer: the result replaces "
-      "the triangles (like MeshLab's own tri-to-quad filters), quads stored the MeshLab way as two triangles "
-      "sharing a faux edge.<br>"
-      "A pair is a candidate when the two triangles share an edge, are oriented alike, the angle between their "
-      "normals is at most the dihedral limit, and the quad's Knupp shape quality beta (thesis eq. 3-23, along "
-      "its own normal and along the pair's mean normal) is above the minimum quality, which is never below 0: "
-      "no non-convex or inverted quad is ever made.<br>"
-      "<b>Optimal pairing</b>: a maximum-weight matching of the dual graph (Edmonds' blossom algorithm, "
-      "LEMON), of maximum cardinality first (a perfect matching when one exists) and, among those, of "
-      "maximum total beta, like gmsh's Blossom-Quad. <b>Greedy pairing</b> (the thesis' conversion scheme): "
-      "pairs by decreasing beta, each taken when both triangles are still free.<br>"
-      "<b>Leftover triangles</b>: <i>Quad-dominant</i> keeps them. <i>All quads</i>: when triangles remain, "
-      "the quad-dominant mesh is split once, Catmull-Clark style (quad -&gt; 4 quads, triangle -&gt; 3 quads), "
-      "the new nodes at edge midpoints and element centres placed on the C1 (Goodman-Said) surface of the "
-      "input (thesis ch. 3): 100% quads, about twice as many elements as triangles in the input.<br>"
-      "Per-face quality gets each element's beta (quads) or alpha (triangles). The Log gives the % of quads, "
-      "the invalid quads (beta &lt;= 0), min / mean beta and the time. Refused with a message: a layer that "
-      "already holds quads (faux edges), non-manifold edges or vertices, and a mesh where no two triangles "
-      "make an acceptable quad (isolated triangles).";
+      "Merges pairs of adjacent triangles of the current layer into quads (thesis 4.1.2), by an optimal "
+      "(blossom) or a greedy pairing; quads are stored the MeshLab way, as two triangles sharing a faux "
+      "edge.";
+  c.doc = "tri_to_quad";
+  c.advanced = QStringList{"maxDihedral"};
   c.cls = cls;
   c.postCondition = MeshModel::MM_GEOMETRY_AND_TOPOLOGY_CHANGE | MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
   addFilter(this, c);
 
   pectus::ml::FilterSpec s;
   s.id = FP_STRUCTURE;
-  s.name = "Mesh Structure Improvement";
+  s.name = "Pectus: Quad Mesh Structure Improvement";
   s.pythonName = "mesh_structure_improvement";
   s.info =
-      "The mesh structure modification operators of thesis 4.1.3 on the current layer, for a triangle mesh or a "
-      "quad (quad-dominant) mesh: <b>edge swapping</b> toward the ideal number of elements around a node (6 "
-      "triangles, 4 quads), <b>node elimination</b> of under-connected interior nodes (triangles: 3 "
-      "elements; quads: 2 or 3 elements), and <b>edge dividing</b> of long interior edges (longer than the "
-      "factor times the mean edge length; two triangles -&gt; four, two quads -&gt; three), the new node on "
-      "the C1 surface of the layer.<br>"
-      "An operation is applied only if every new element is valid, the worst quality of the elements it "
-      "replaces does not drop, the valence or the local quality improves, and the neighbourhood is nearly flat "
-      "(element normals within the dihedral limit), so the surface is kept; the boundary is never changed. In "
-      "quad mode the operators act on quads; leftover triangles stay. Passes repeat until nothing changes.<br>"
-      "The Log gives the number of each operation and the histogram of interior-node valences before and "
-      "after. Refused with a message: non-manifold edges or vertices, faux edges that do not describe quads.";
+      "The structure operators of thesis 4.1.3 on a triangle or quad-dominant mesh: edge swapping toward "
+      "the ideal valence, node elimination and edge division, until no operator improves the mesh.";
+  s.doc = "structure";
+  s.advanced = QStringList{"longEdgeFactor", "maxDihedral", "maxPasses"};
   s.cls = cls;
   s.postCondition = MeshModel::MM_GEOMETRY_AND_TOPOLOGY_CHANGE | MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
   addFilter(this, s);
 
   pectus::ml::FilterSpec w;
   w.id = FP_SAVE_POLY;
-  w.name = "Save Polygonal Mesh";
+  w.name = "Pectus: Save Polygonal Mesh";
   w.pythonName = "save_polygonal_mesh";
   w.info =
-      "Writes the current layer with real quads (faux-edge triangle pairs) and its remaining triangles to a "
-      "file: Wavefront OBJ, OFF or legacy VTK polydata (ASCII). MeshLab 2020.09 cannot save quads from "
-      "meshlabserver (its OBJ and PLY exporters write triangles, its OFF exporter writes wrong indices).<br>"
-      "The layer is not changed. An unwritable path is refused with a message.";
+      "Writes the current layer with real quads (faux-edge triangle pairs) and its remaining triangles as "
+      "OBJ, OFF or legacy VTK: MeshLab's own exporters write quads as triangles.";
+  w.doc = "save_polygonal";
   w.cls = pectus::ml::HostFilter::Polygonal;
   addFilter(this, w);
 }
@@ -183,7 +160,7 @@ void FilterQuadConvertPlugin::runConvert(FilterContext& ctx) {
   requireManifold(mm);
   if (pectus::hasFauxEdges(mm.cm))
     throw pectus::InputError("layer '" + layer + "' already holds quads or polygons (faux edges); "
-                             "convert a triangle mesh, or use 'Mesh Structure Improvement' on the quads");
+                             "convert a triangle mesh, or use 'Pectus: Quad Mesh Structure Improvement' on the quads");
   ctx.progress(5, "pairing triangles");
   const auto tri = pectus::surfaceOf(mm.cm);
   const auto r = pq::convertToQuads(tri, o);
@@ -192,7 +169,7 @@ void FilterQuadConvertPlugin::runConvert(FilterContext& ctx) {
   ctx.modify(mm);
   writeLayer(mm, r.mesh);
   const auto& s = r.stats;
-  ctx.log("Convert Triangles to Quads (" + std::string(o.pairing == pq::Pairing::Greedy ? "greedy" : "optimal") + ", " +
+  ctx.log("Pectus: Convert Triangles to Quads (" + std::string(o.pairing == pq::Pairing::Greedy ? "greedy" : "optimal") + ", " +
           (o.leftovers == pq::Leftovers::AllQuads ? "all quads" : "quad-dominant") + "): " + std::to_string(tri.F.size()) +
           " triangles, " + std::to_string(r.candidates) + " candidate pairs, " + std::to_string(r.merged) +
           " merged, " + std::to_string(r.leftoverTriangles) + " left over" +
@@ -240,7 +217,7 @@ void FilterQuadConvertPlugin::runStructure(FilterContext& ctx) {
   const std::string q = quads ? "beta" : "alpha";
   const auto& qb = quads ? b.beta : b.alpha;
   const auto& qa = quads ? a.beta : a.alpha;
-  ctx.log("Mesh Structure Improvement (" + std::string(quads ? "quads" : "triangles") + "): edge swaps " +
+  ctx.log("Pectus: Quad Mesh Structure Improvement (" + std::string(quads ? "quads" : "triangles") + "): edge swaps " +
           std::to_string(r.swaps) + ", node eliminations " + std::to_string(r.eliminations) + ", edge divisions " +
           std::to_string(r.divisions) + "; passes " + std::to_string(r.passes) + "; elements " +
           std::to_string(pm.F.size()) + " -> " + std::to_string(r.mesh.F.size()) + "; worst " + q + " " + fmt(qb.min) +
@@ -270,7 +247,7 @@ void FilterQuadConvertPlugin::runSave(FilterContext& ctx) {
   pectus::requireMesh(mm.cm, {}, mm.label().toStdString());
   const auto pm = pq::fromCMesh(mm.cm, pectus::hasFauxEdges(mm.cm));
   pq::writePolyMesh(path, pm, f == 0 ? pq::PolyFormat::OBJ : f == 1 ? pq::PolyFormat::OFF : pq::PolyFormat::VTK);
-  ctx.log("Save Polygonal Mesh: wrote " + std::to_string(pm.V.size()) + " vertices, " + std::to_string(pm.quads()) +
+  ctx.log("Pectus: Save Polygonal Mesh: wrote " + std::to_string(pm.V.size()) + " vertices, " + std::to_string(pm.quads()) +
           " quads, " + std::to_string(pm.triangles()) + " triangles to " + path);
   ctx.results().set("vertices", pm.V.size());
   ctx.results().set("quads", pm.quads());

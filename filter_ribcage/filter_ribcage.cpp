@@ -1,4 +1,4 @@
-// MeshLab adapter of the rib cage generator (core/: pectus/ribcage): 'Create Pectus Excavatum Rib Cage'. Maps
+// MeshLab adapter of the rib cage generator (core/: pectus/ribcage): 'Pectus: Create Rib Cage'. Maps
 // parameters, the new layers, progress, errors and results; no algorithm here.
 #include "filter_ribcage.h"
 
@@ -31,24 +31,13 @@ constexpr ParamRange kFunnelCenterXEnvelope{-rc::kFunnelCenterXShare * rc::kChes
 FilterRibCagePlugin::FilterRibCagePlugin() {
   pectus::ml::FilterSpec s;
   s.id = FP_CREATE_RIBCAGE;
-  s.name = "Create Pectus Excavatum Rib Cage";
+  s.name = "Pectus: Create Rib Cage";
   s.pythonName = "create_pectus_excavatum_rib_cage";
   s.info =
-      "A parametric child's rib cage with pectus excavatum (thesis ch. 6, Table 6-1): 10-12 rib pairs "
-      "(elliptic sections, sloping down from the costovertebral joints, widest at ribs 6-8), costal "
-      "cartilages (ribs 1-7 to the sternum, 8-10 to the cartilage above) and a sternum (manubrium, body, "
-      "xiphoid) depressed into a funnel whose depth reproduces the requested pectus (Haller) index "
-      "= widest inner transverse diameter / smallest sternum-to-vertebra distance.<br>"
-      "One watertight, manifold, self-intersection-free surface (implicit smooth union extracted by "
-      "marching tetrahedra, decimated to the target edge length); ribs 11-12 float (own components).<br>"
-      "Frame: mm, +x patient's left, +y anterior, +z superior, vertebral bodies' anterior surface at "
-      "x = y = 0. Every face: tissue (face colour: bone / cartilage / sternum) and anatomical part "
-      "(face quality = tissue*1000 + part; rib part = 100*side + rib, side 1 right, 2 left; "
-      "301 manubrium, 302 body, 303 xiphoid). A second layer 'ribcage landmarks' holds one vertex "
-      "per landmark (vertex quality = code: costovertebral joints 100*side+rib, 500 lower sternum end, "
-      "501 deepest funnel point, 502 jugular notch, 503 vertebra at the deepest level, "
-      "600+10*side+s bar exits at the mid-axillary line in intercostal space s = 4, 5, "
-      "700 diaphragm dome height, 701 lung apex height).";
+      "A parametric child's rib cage with pectus excavatum (thesis ch. 6): ribs, costal cartilages and "
+      "sternum sized from age or dimensions, a funnel of the given Haller index, tissue labels and a "
+      "landmark layer.";
+  s.doc = "create_ribcage";
   s.cls = pectus::ml::HostFilter::MeshCreation;
   s.arity = pectus::ml::HostFilter::NONE;
   s.needsCurrentMesh = false;

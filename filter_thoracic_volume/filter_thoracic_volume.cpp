@@ -24,15 +24,6 @@ constexpr pectus::ParamRange kHeightRange{-1e6, 1e6};
 
 namespace {
 
-const char* kRangeHelp =
-    "<br><b>Range</b> (along the body's long axis z, frame of labels.h: mm, +z superior): from the landmark layer "
-    "(vertex quality = landmark code: 700 dome of the diaphragm or 500 lower end of the sternum, up to 701 lung "
-    "apex), or between two given heights. A before layer is measured over the same range.";
-const char* kCompareHelp =
-    "<br><b>Before/after</b>: with 'Compare with a before layer', the before layer (e.g. the cage before the FE "
-    "correction; the current layer is the after state) is measured the same way and the change is logged in cm&sup3; "
-    "and % of the before value. Both must be the same mesh (same vertex count) in the same frame.";
-
 QStringList rangeSources() { return QStringList() << "Landmarks" << "Given heights"; }
 QStringList lowerLimits() {
   return QStringList() << "700 dome of the diaphragm" << "500 lower end of the sternum";
@@ -150,54 +141,37 @@ void addSoupLayer(FilterContext& ctx, const QString& label, const vol::Soup& s) 
 FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
   pectus::ml::FilterSpec s;
   s.id = FP_SLICE_VOLUME;
-  s.name = "Thoracic Volume (Slice Method)";
+  s.name = "Pectus: Thoracic Volume (Slice Method)";
   s.pythonName = "compute_thoracic_volume_slice";
-  s.info = QString(
-      "Intrathoracic volume of the rib cage in the current layer by the intersection method of thesis 6.3.1: parallel "
-      "planes across the long axis z every 'Spacing' mm (adjusted so that equal layers fill the range, planes at the "
-      "layers' middles), each plane's cut of the cage rasterised on a 'Resolution' pixel grid, summed as area x "
-      "spacing.<br><b>Intrathoracic region</b> (automatic; the thesis segmented by hand): seen from the centroid of "
-      "the cut, along 'Rays' equally spaced rays the region ends at the nearest rib/cartilage/sternum/vertebra "
-      "section (its inner side); rays through the gaps between sections get their radius by a cubic Hermite "
-      "interpolation in the angle between the neighbouring hit rays (slopes fitted on up to four hit rays each "
-      "side), so gaps are bridged by the curve continuing the walls. The pixels whose centres lie in that closed "
-      "boundary are counted.<br><b>Slices that cut nothing</b> (a plane between two ribs, or through a missing or "
-      "thin rib) are bridged: their region is interpolated ray by ray, linearly in z, between the nearest slices "
-      "with a region below and above, and rasterised like the others. Empty slices beyond the last slice with a "
-      "region at either end of the range have nothing to interpolate and count as zero; the Log gives both "
-      "numbers.") + kRangeHelp + kCompareHelp;
+  s.info =
+      "Intrathoracic volume of the rib cage in the current layer by parallel slices (thesis 6.3.1), "
+      "between two landmark heights; with a 'before' layer, also the change after the repair.";
+  s.doc = "thoracic_volume_slice";
+  s.advanced = QStringList{"spacing", "resolution", "rays"};
   s.cls = pectus::ml::HostFilter::Measure;
   addFilter(this, s);
 
   s.id = FP_ENVELOPE_VOLUME;
-  s.name = "Thoracic Volume (Ferguson Envelope)";
+  s.name = "Pectus: Thoracic Volume (Ferguson Envelope)";
   s.pythonName = "compute_thoracic_volume_envelope";
-  s.info = QString(
-      "Thoracic volume by the surface approximation method of thesis 6.3.2: a cylinder of n x m C1 Ferguson bicubic "
-      "patches around the long axis z (through the centre of the cage's bounding box in the range) is shrunk onto "
-      "the rib cage: key points move radially inward in halving steps; a move that makes the surface cut a sample "
-      "of the cage (ray-patch intersection by Newton-Raphson) is undone and the key point held. Key points with no "
-      "sample in the four patch quarters around them are tied to their closest free neighbour on the circle (Fig. "
-      "6-10). Between moves the radii are smoothed along z by eq. 6-1 (never inward; not the end rings nor the key "
-      "points around landmark 500). The volume is integrated over the patches by the divergence theorem (eqs. 6-2, "
-      "6-3) with planar caps at the range ends. The envelope is added as a new layer '&lt;layer&gt; envelope' (closed, "
-      "tessellated; the measured layer stays current); its triangle-mesh volume is logged too (compare with "
-      "'Compute Geometric Measures' after 'Change the current layer').") +
-      kRangeHelp + kCompareHelp;
-  s.cls = pectus::ml::HostFilter::FilterClass(pectus::ml::HostFilter::Measure | pectus::ml::HostFilter::MeshCreation);
+  s.info =
+      "Thoracic volume inside a cylinder of C1 Ferguson patches shrunk onto the rib cage (thesis 6.3.2), "
+      "between two landmark heights; the envelope is added as a layer. With a 'before' layer, also the "
+      "change.";
+  s.doc = "thoracic_volume_envelope";
+  s.advanced = QStringList{"patchesLong", "patchesAround", "initialStep", "minStep", "smoothing",
+                            "tessellation"};
+  s.cls = pectus::ml::HostFilter::Measure;
   addFilter(this, s);
 
   s.id = FP_PECTUS_INDEX;
-  s.name = "Pectus Index";
+  s.name = "Pectus: Pectus Index";
   s.pythonName = "compute_pectus_index";
-  s.info = QString(
-      "Haller index (inner transverse diameter / smallest sternum-to-vertebra distance) and correction index "
-      "((max - min) anterior-posterior distance / max x 100 %) measured on the slice of the model at the deepest "
-      "level: the height of landmark 501 (deepest point of the funnel; its x is the midline) with landmark 503 (the "
-      "vertebra's anterior surface), or automatically the slice with the largest correction index between the given "
-      "heights (midline at the slice centroid, vertebra measured on the slice). The inner boundary of the slice is "
-      "the automatic intrathoracic region of the slice method. Logged, and compared with a before layer.") +
-      kCompareHelp;
+  s.info =
+      "Haller index and correction index on the slice of the cage at the deepest point of the funnel "
+      "(landmark 501); with a 'before' layer, the indices before and after the repair.";
+  s.doc = "pectus_index";
+  s.advanced = QStringList{"rays"};
   s.cls = pectus::ml::HostFilter::Measure;
   addFilter(this, s);
 }

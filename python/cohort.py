@@ -3,7 +3,7 @@
 per patient, and collect one summary CSV. Standard library only (+ the project's pectus_mlx).
 
 A cohort folder holds patients.csv (columns: case,sex,age,elevation_mm) and, per case, CASE.ply (the closed
-rib cage with tissue labels as face colour + face quality, e.g. from 'Create Pectus Excavatum Rib Cage' saved
+rib cage with tissue labels as face colour + face quality, e.g. from 'Pectus: Create Rib Cage' saved
 with -m fc fq, or from a segmentation tool relabelled so) and CASE_landmarks.ply (landmark points, code in
 the vertex quality; labels.h).
 
@@ -44,7 +44,7 @@ def demo(folder: str, edge: float = 5.0, cases: int = len(THESIS)) -> int:
         for case, sex, age, haller, elev in chosen:
             w.writerow([case, sex, age, elev])
     for case, sex, age, haller, elev in chosen:
-        gen = pipeline.example("ribcage", "Create Pectus Excavatum Rib Cage").set(age=age, hallerIndex=haller, edgeLength=edge)
+        gen = pipeline.example("ribcage", "Pectus: Create Rib Cage").set(age=age, hallerIndex=haller, edgeLength=edge)
         res = mlx.run([], mlx.Script([gen]), [(os.path.join(folder, f"{case}.ply"), "fc fq", 0),
                                              (os.path.join(folder, f"{case}_landmarks.ply"), "vq", 1)])
         print(f"{case}: {'ok' if res.rc == 0 else 'FAILED'}", flush=True)

@@ -1,9 +1,9 @@
 #!/usr/bin/env python3
 """A patient's CT segmentation, from its files to the thesis' Table 6-1 results, through the real meshlabserver:
 
-  Import CT Segmentation (a folder of STL/OBJ/PLY/OFF files, TotalSegmentator's NIfTI masks, or one label map)
-  -> Prepare Patient Rib Cage (classify, repair, frame, number, join, landmark)
-  -> Nuss Procedure FE Analysis with the force calibrated to the measured elevation, or by default to the
+  Pectus: Import CT Segmentation (a folder of STL/OBJ/PLY/OFF files, TotalSegmentator's NIfTI masks, or one label map)
+  -> Pectus: Prepare Patient Rib Cage (classify, repair, frame, number, join, landmark)
+  -> Pectus: Nuss Procedure FE Analysis with the force calibrated to the measured elevation, or by default to the
      elevation that brings the lower sternum end onto the chest line (from the model)
   -> thoracic volume by the slice and the Ferguson envelope methods, before and after
   -> pectus index before and after.
@@ -80,8 +80,8 @@ def main() -> int:
         print("the analysis failed (the reason is in the Log above)")
         return 1
 
-    FE, SLICE, ENVELOPE, INDEX = ("Nuss Procedure FE Analysis", "Thoracic Volume (Slice Method)",
-                                  "Thoracic Volume (Ferguson Envelope)", "Pectus Index")
+    FE, SLICE, ENVELOPE, INDEX = ("Pectus: Nuss Procedure FE Analysis", "Pectus: Thoracic Volume (Slice Method)",
+                                  "Pectus: Thoracic Volume (Ferguson Envelope)", "Pectus: Pectus Index")
     rows = [("calibrated elevating force Fe (N)", r2.get("force_N", FE)),
             ("elevation of the lower sternum end (mm)", r2.get("elevation_mm", FE)),
             ("max von Mises stress (MPa)", r2.get("max_stress_MPa", FE)),

@@ -8,7 +8,7 @@ Standard library only. Three hosts run the scripts (`run(..., host=...)`, defaul
 meshlabserver aborts when a parameter is missing or mistyped, so every parameter is given a type:
 
     from pectus_mlx import Filter, Float, Int, Bool, Enum, Script, run
-    s = Script([Filter("Compute Element Quality (Triangle Alpha / Quad Beta)",
+    s = Script([Filter("Pectus: Element Quality (Triangle Alpha / Quad Beta)",
                        elementType=Enum(0, ["Auto", "Triangles (alpha)", "Quads (beta)"]),
                        colorize=Bool(True))])
     res = run(["in.ply"], s, outputs=[("out.ply", "fq fc")])
@@ -44,6 +44,18 @@ class _P:
 class Float(_P):
     def xml(self, name):
         return f'<Param name={quoteattr(name)} type="RichFloat" value="{float(self.value)!r}"/>'
+
+
+@dataclass
+class DynamicFloat(_P):
+    """A bounded float: the plugins declare a float this way where MeshLab's plain float field would show it
+    rounded to 3 significant digits (11500, 12.25)."""
+    lo: float = 0.0
+    hi: float = 1.0
+
+    def xml(self, name):
+        return (f'<Param name={quoteattr(name)} type="RichDynamicFloat" value="{float(self.value)!r}" '
+                f'min="{float(self.lo)!r}" max="{float(self.hi)!r}"/>')
 
 
 class Int(_P):
@@ -129,6 +141,8 @@ class Filter:
             self.params[k] = v if isinstance(v, _P) else (Enum(v, p.values) if isinstance(p, Enum) else type(p)(v))
             if isinstance(p, SaveFile) and not isinstance(v, _P):
                 self.params[k].ext = p.ext
+            if isinstance(p, DynamicFloat) and not isinstance(v, _P):
+                self.params[k].lo, self.params[k].hi = p.lo, p.hi
         return self
 
     def xml(self) -> str:
@@ -171,6 +185,8 @@ def load_script(path: str) -> list:
                 sf = SaveFile(v)
                 sf.ext = p.get("ext", ".csv")
                 params[name] = sf
+            elif t == "RichDynamicFloat":
+                params[name] = DynamicFloat(float(v), float(p.get("min")), float(p.get("max")))
             elif t == "RichOpenFile":
                 params[name] = OpenFile(v)
             elif t in ("RichFloat", "RichAbsPerc"):
@@ -295,7 +311,7 @@ _NUM = r"-?\d+(?:\.\d+)?"
 _FE_PROGRESS = [r"TetGen \(after checking the surface\)", r"Factorising \(CHOLMOD\)", rf"Driving the sternum to {_NUM} mm",
                 rf"Calibrating the force: Fe = {_NUM} N", "Solving", "Stress and strain", "Done"]
 PROGRESS_MESSAGES = [
-    # Create Pectus Excavatum Rib Cage (one layer per tissue: the tissue's name)
+    # Pectus: Create Rib Cage (one layer per tissue: the tissue's name)
     "calibrating funnel depth", "extracting the surface", "labelling", "bone", "cartilage", "sternum",
     # element quality, MGA smoothing, C1 surface, quad conversion
     "measuring elements", "writing quality", "building the C1 surface", rf"sweep \d+, mean quality {_NUM}",

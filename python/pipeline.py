@@ -58,9 +58,9 @@ def fe_settings(quick: bool) -> dict:
 
 
 def planner_filters(outdir: str, elevation: float, quick: bool, cage: int, landmarks: int, levels: str, bars: int) -> list:
-    """'Nuss Bar Planner' on `cage` (made current first) with the main job's FE settings; table in planner.csv."""
+    """'Pectus: Nuss Bar Planner' on `cage` (made current first) with the main job's FE settings; table in planner.csv."""
     current = mlx.Filter("Change the current layer", layer=mlx.Mesh(cage))  # MeshLab's filter_layer
-    plan = example("planner", "Nuss Bar Planner").set(
+    plan = example("planner", "Pectus: Nuss Bar Planner").set(
         landmarkLayer=landmarks, levels=levels, bars=bars, targetElevation=elevation,
         csvFile=mlx.SaveFile(os.path.join(outdir, "planner.csv"), ".csv"), **fe_settings(quick))
     return [current, plan]
@@ -68,13 +68,13 @@ def planner_filters(outdir: str, elevation: float, quick: bool, cage: int, landm
 
 def analysis_filters(outdir: str, elevation: float, quick: bool, cage: int, landmarks: int) -> list:
     """Nuss FE (calibrated) on the current layer, then both volumes and the pectus index, before = `cage`."""
-    nuss = example("nuss", "Nuss Procedure FE Analysis").set(
+    nuss = example("nuss", "Pectus: Nuss Procedure FE Analysis").set(
         landmarkLayer=landmarks, mode=0, targetElevation=elevation,
         resultBase=mlx.SaveFile(os.path.join(outdir, "nuss") + ".vtu", ".vtu"), **fe_settings(quick))
     return [nuss] + measure_filters(cage, landmarks)
 
 
-MEASURES = {"slice": "Thoracic Volume (Slice Method)", "envelope": "Thoracic Volume (Ferguson Envelope)", "index": "Pectus Index"}
+MEASURES = {"slice": "Pectus: Thoracic Volume (Slice Method)", "envelope": "Pectus: Thoracic Volume (Ferguson Envelope)", "index": "Pectus: Pectus Index"}
 
 
 def measure_filter(key: str, cage: int, landmarks: int, **params) -> mlx.Filter:
@@ -89,23 +89,23 @@ def measure_filters(cage: int, landmarks: int) -> list:
 
 def build_script(outdir: str, age: float, haller: float, elevation: float, quick: bool, planner: dict | None = None) -> mlx.Script:
     """planner: None, or dict(levels="3,4,5", bars=0 (one and two) / 1 (one) / 2 (two)) to add the bar planner at the end."""
-    gen = example("ribcage", "Create Pectus Excavatum Rib Cage").set(age=age, hallerIndex=haller, edgeLength=5.0)
-    quality = example("quality", "Compute Element Quality (Triangle Alpha / Quad Beta)")
+    gen = example("ribcage", "Pectus: Create Rib Cage").set(age=age, hallerIndex=haller, edgeLength=5.0)
+    quality = example("quality", "Pectus: Element Quality (Triangle Alpha / Quad Beta)")
     # the generated cage's features by the feature and singular angles: its coarse tubes are bent by 11 degrees
     # from edge to edge (median), as much as a CT surface, and crease chains find no crease on it. Its guard is
     # 0.35, not the filter's 0.7: nearly every node of the cage has a worst element below 0.7, where the guard
     # only keeps it from getting worse; 0.35 leaves the same worst alpha (0.0178) and a higher mean (0.7346
     # against 0.7307)
-    mga = example("mga", "MGA Surface Mesh Smoothing").set(maxSweeps=2 if quick else 4, featureDetection=1, worstGuard=0.35)
-    quality_after = example("quality", "Compute Element Quality (Triangle Alpha / Quad Beta)")
+    mga = example("mga", "Pectus: MGA Surface Mesh Smoothing").set(maxSweeps=2 if quick else 4, featureDetection=1, worstGuard=0.35)
+    quality_after = example("quality", "Pectus: Element Quality (Triangle Alpha / Quad Beta)")
     extra = planner_filters(outdir, elevation, quick, CAGE, LANDMARKS, **planner) if planner else []
     return mlx.Script([gen, quality, mga, quality_after] + analysis_filters(outdir, elevation, quick, CAGE, LANDMARKS) + extra)
 
 
-RIBCAGE = "Create Pectus Excavatum Rib Cage"
-QUALITY = "Compute Element Quality (Triangle Alpha / Quad Beta)"
-MGA = "MGA Surface Mesh Smoothing"
-FE = "Nuss Procedure FE Analysis"
+RIBCAGE = "Pectus: Create Rib Cage"
+QUALITY = "Pectus: Element Quality (Triangle Alpha / Quad Beta)"
+MGA = "Pectus: MGA Surface Mesh Smoothing"
+FE = "Pectus: Nuss Procedure FE Analysis"
 
 
 def parse(res: mlx.Result) -> dict:

@@ -5,7 +5,7 @@ output folder (default out/main-<timestamp>) and prints a table shaped like the 
 
     python3 python/run_main.py [OUTDIR] [--quick] [--case NAME] [--planner [--planner-levels 3,4,5] [--planner-bars both|one|two]]
 
---planner adds the 'Nuss Bar Planner' (filter_nuss_fea) to the same script, on the smoothed cage with the main job's
+--planner adds the 'Pectus: Nuss Bar Planner' (filter_nuss_fea) to the same script, on the smoothed cage with the main job's
 FE settings, and prints its table (planner.csv in the output folder). Full mode takes ~4 min per option.
 """
 from __future__ import annotations

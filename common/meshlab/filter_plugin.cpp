@@ -238,10 +238,18 @@ QString tooltipWithRange(const QString& tooltip, const ParamRange& range, bool i
   return t + (t.isEmpty() ? "" : " ") + "Range: " + QString::fromStdString(range.text(integer)) + ".";
 }
 
+bool floatFieldRoundsShownValue(double def) { return QString::number(def, 'g', 3) != QString::number(def, 'g', 7); }
+
 void addFloat(RichParameterList& par, const QString& name, double def, const QString& label, const QString& tooltip,
               const ParamRange& range) {
   record(name, range, false);
-  par.addParam(RichFloat(name, float(def), label, tooltipWithRange(tooltip, range, false)));
+  const QString tip = tooltipWithRange(tooltip, range, false);
+  // MeshLab's float field shows 3 significant digits and applies what it shows (12.25 would become 12.3);
+  // its bounded-float field shows the value as written
+  if (floatFieldRoundsShownValue(def))
+    par.addParam(RichDynamicFloat(name, float(def), float(range.lo), float(range.hi), label, tip));
+  else
+    par.addParam(RichFloat(name, float(def), label, tip));
 }
 
 void addInt(RichParameterList& par, const QString& name, int def, const QString& label, const QString& tooltip,
@@ -270,6 +278,27 @@ const FilterSpec& FilterPluginBase::spec(int id) const {
   return none;
 }
 
+namespace {
+#if PECTUS_MESHLAB_API >= 2021
+// RichParameter sets its protected 'advanced' flag only in its constructor; a derived class may name the
+// member, which lets the flag be set on a parameter already declared
+struct AdvancedFlag : RichParameter {
+  static bool RichParameter::*member() { return &AdvancedFlag::advanced; }
+};
+#endif
+
+// the parameters a filter lists as advanced: hidden until asked where MeshLab can (2021.05 and later)
+void markAdvanced(const FilterSpec& s, RichParameterList& par) {
+  for (const QString& name : s.advanced) {
+    if (!par.hasParameter(name))
+      throw std::logic_error("filter '" + q(s.name) + "' lists '" + q(name) + "' as advanced but declares no such parameter");
+#if PECTUS_MESHLAB_API >= 2021
+    par.getParameterByName(name).*AdvancedFlag::member() = true;
+#endif
+  }
+}
+}  // namespace
+
 void FilterPluginBase::declare(int id, const MeshDocument& md, RichParameterList& par) {
   DeclaredRanges ranges;
   struct Restore {
@@ -278,6 +307,7 @@ void FilterPluginBase::declare(int id, const MeshDocument& md, RichParameterList
   } restore{tDeclaring};
   tDeclaring = &ranges;
   initParameters(id, md, par);
+  markAdvanced(spec(id), par);
   QVariantMap published;
   for (const auto& [name, d] : ranges)
     published[name] = QVariantList{d.range.lo, d.range.hi, d.range.loOpen, d.range.hiOpen, d.integer};
@@ -288,7 +318,12 @@ void FilterPluginBase::declare(int id, const MeshDocument& md, RichParameterList
 }
 
 QString FilterPluginBase::filterName(int id) const { return spec(id).name; }
-QString FilterPluginBase::filterInfo(int id) const { return spec(id).info; }
+QString FilterPluginBase::filterInfo(int id) const {
+  const FilterSpec& s = spec(id);
+  if (s.doc.isEmpty()) return s.info;
+  const QString page = QStringLiteral(PECTUS_DOC_DIR "/filters/") + s.doc + ".md";
+  return s.info + "<br>Details: <a href=\"file://" + page + "\">" + s.doc + ".md</a>";
+}
 FilterArity FilterPluginBase::filterArity(ActionPtr a) const { return spec(ID(a)).arity; }
 int FilterPluginBase::getRequirements(ActionPtr a) { return spec(ID(a)).requirements; }
 int FilterPluginBase::postCondition(ActionPtr a) const { return spec(ID(a)).postCondition; }

@@ -46,6 +46,9 @@ using DeclaredRanges = std::map<QString, DeclaredRange>;
 /// plugin base collects the declaration of a filter, i.e. inside initParameters).
 void addFloat(RichParameterList& par, const QString& name, double def, const QString& label, const QString& tooltip,
               const ParamRange& range);
+/// MeshLab's float field shows a value with 3 significant digits and applies what it shows: such a default
+/// (12.25, 11500) is declared as a bounded float, whose field shows it as written.
+bool floatFieldRoundsShownValue(double def);
 /// The same for an Int parameter, read with FilterContext::intIn(name).
 void addInt(RichParameterList& par, const QString& name, int def, const QString& label, const QString& tooltip,
             const ParamRange& range);
@@ -55,7 +58,12 @@ QString tooltipWithRange(const QString& tooltip, const ParamRange& range, bool i
 struct FilterSpec {
   int id = 0;
   QString name;
-  QString info;  ///< shown as the filter's help in the GUI dialog
+  QString info;  ///< shown at the top of the GUI dialog: at most three lines
+  /// the stem of the filter's page in docs/filters/ (linked under the info); empty: no link
+  QString doc;
+  /// parameters a user rarely changes (solver, tolerances, radii): behind "advanced" in MeshLab 2021.05 and
+  /// later, which hide them until asked
+  QStringList advanced;
   /// the function name in pymeshlab (MeshSet.<pythonName>(...)); empty: MeshLab's default, the name
   /// lower-cased with every other character as '_'
   QString pythonName;

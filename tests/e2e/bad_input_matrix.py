@@ -419,8 +419,8 @@ without the filter).
 Inputs are made from a valid mesh of the filter's kind: a 6x6 saddle (open surface, 50 triangles) for the
 surface filters, a closed ellipsoid (288 triangles) for the thoracic volume filters, the generated rib
 cage (edge 8 mm, with tissue labels and its landmark layer) for the Nuss FE analysis. The patient filters
-take the ellipsoid too: *Import CT Segmentation* reads it as the file its `path` names (a valid layer is
-loaded beside it and must stay unchanged), *Prepare Patient Rib Cage* as its only layer, a blob that neither
+take the ellipsoid too: *Pectus: Import CT Segmentation* reads it as the file its `path` names (a valid layer is
+loaded beside it and must stay unchanged), *Pectus: Prepare Patient Rib Cage* as its only layer, a blob that neither
 its name nor its shape makes a rib cage of. Parameter rows change one numeric parameter of the filter's
 example script (`filter_*/examples/*.mlx`) on the valid input.
 

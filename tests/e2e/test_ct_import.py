@@ -1,4 +1,4 @@
-"""E2E: 'Import CT Segmentation' through meshlabserver on a folder of small files (binary STL cube with a
+"""E2E: 'Pectus: Import CT Segmentation' through meshlabserver on a folder of small files (binary STL cube with a
 'solid' header, ASCII STL tetrahedron, OBJ cube of quads with v/vt/vn and negative indices, PLY cube): one
 layer per file in name order, named after the file, with the shared vertices; the example script; a missing
 folder refused with no layer saved; an OBJ with a bad index refused naming the file and line."""

@@ -1,7 +1,7 @@
 """E2E, determinism: every filter, run by meshlabserver with OMP_NUM_THREADS=1 and =2 on the
 same input and seed (the valid inputs of the bad-input matrix, 6x finer, and the example parameters; the Nuss FE
 analysis on the coarse 8 mm cage, linear TET4 with the example's tet quality, calibrated to 10 mm; the Nuss Bar Planner likewise, quick mode,
-space 4 with one and with two bars, writing its CSV; Prepare Patient Rib Cage on the CT phantom's messy export,
+space 4 with one and with two bars, writing its CSV; Pectus: Prepare Patient Rib Cage on the CT phantom's messy export,
 a 5-year-old's cage on a 1.5 mm grid), gives byte-identical outputs: every layer saved after it, every file it
 writes, and its Log lines with timings masked."""
 import csv
@@ -93,7 +93,7 @@ for key in bim.FILTERS:
     dl = [(a, b) for a, b in zip(log1, log2) if a != b]
     check(log1 == log2, f"{name}: Log identical with 1 and 2 threads (timings masked)", f"{dl[:3]}")
 
-# Prepare Patient Rib Cage, whose matrix cell is a refusal: on a messy export of the CT phantom
+# Pectus: Prepare Patient Rib Cage, whose matrix cell is a refusal: on a messy export of the CT phantom
 phantom = os.path.join(os.path.dirname(h.PREFIX), "tools", "pectus_ct_phantom")
 P = os.path.join(W, "patient")
 g = subprocess.run([phantom, P, "--only", "messy", "--age", "5", "--spacing", "1.5"], capture_output=True, text=True)
@@ -108,7 +108,7 @@ for threads in (1, 2):
     files = {os.path.basename(p): open(p, "rb").read() for p, _, _ in outs if os.path.exists(p)}
     runs.append((r.rc, files, [RESULT_TIME.sub(r"\1 <t>", bim.TIMING.sub("<t>", l)) for l in r.log]))
 (rc1, f1, log1), (rc2, f2, log2) = runs
-name = "Prepare Patient Rib Cage"
+name = "Pectus: Prepare Patient Rib Cage"
 if check(rc1 == 0 and rc2 == 0 and len(f1) == 2, f"{name}: runs with 1 and 2 threads", f"rc {rc1}, {rc2}; {log1[-3:]}"):
     check(f1 == f2, f"{name}: the cage and its landmarks byte-identical with 1 and 2 threads")
     dl = [(a, b) for a, b in zip(log1, log2) if a != b]

@@ -132,7 +132,7 @@ def check_python_filters(filters: dict):
                 mine_labels = [a[f"enum_val{i}"] for i in range(int(a.get("enum_cardinality", 0)))]
                 check(mine_labels == labels and a["value"] == value, f"{where}: {name}'s labels and default as declared",
                       f"python: {a['value']} of {mine_labels}; plugin: {value} of {labels}")
-            elif kind in ("Float", "Int", "Point3f"):
+            elif kind in ("Float", "DynamicFloat", "Int", "Point3f"):
                 mine_value = f"{a['x']}, {a['y']}, {a['z']}" if kind == "Point3f" else a["value"]
                 check(all(same_number(m, v) for m, v in zip(mine_value.split(","), value.split(","))),
                       f"{where}: {name} defaults to {value}", f"python says {mine_value}")
@@ -162,6 +162,7 @@ def main():
               f"\n  page:   {doc_names}\n  plugin: {code_names}")
         by_name = {r[0].strip("`"): r for r in rows}
         for name, kind, value, labels in params:
+            kind = "Float" if kind == "DynamicFloat" else kind  # a bounded float is a float to the reader
             r = by_name.get(name)
             if r is None or len(r) != len(PARAM_COLUMNS):
                 continue

@@ -1,4 +1,4 @@
-"""End to end: 'Compute Element Quality (Triangle Alpha / Quad Beta)' through the real meshlabserver."""
+"""End to end: 'Pectus: Element Quality (Triangle Alpha / Quad Beta)' through the real meshlabserver."""
 import math
 import os
 
@@ -7,7 +7,7 @@ import numpy as np
 from pectus_meshes import alpha
 from harness import SOURCE, check, check_refused, finish, grid, read_ply, run, workdir, write_off, write_ply
 
-NAME = "Compute Element Quality (Triangle Alpha / Quad Beta)"
+NAME = "Pectus: Element Quality (Triangle Alpha / Quad Beta)"
 EXAMPLE = os.path.join(SOURCE, "filter_mga_smooth", "examples", "element_quality.mlx")
 d = workdir("quality")
 

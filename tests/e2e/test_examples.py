@@ -46,13 +46,13 @@ r = run("tri_to_quad.mlx", [saddle])
 check_range(r, "tri_to_quad.mlx", r"Quads: ([0-9.]+)% quads", 95, 100, "% quads")
 check_range(r, "tri_to_quad.mlx", r"invalid quads \(beta <= 0\): ([0-9]+)", 0, 0, "invalid quads")
 r = run("structure.mlx", [saddle])
-check_range(r, "structure.mlx", r"Mesh Structure Improvement .* mean alpha [0-9.]+ -> ([0-9.]+)", alpha0 or 0, 1, "mean alpha after")
+check_range(r, "structure.mlx", r"Pectus: Quad Mesh Structure Improvement .* mean alpha [0-9.]+ -> ([0-9.]+)", alpha0 or 0, 1, "mean alpha after")
 # the two saving examples write quads.obj and quads.off into the working directory
 for name, saved in (("save_polygonal.mlx", "quads.obj"), ("tri_to_quad_and_save.mlx", "quads.off")):
     d = os.path.join(W, name[:-4])
     os.makedirs(d)
     r = run(name, [saddle], cwd=d)
-    n = number(r, r"Save Polygonal Mesh: wrote ([0-9]+) vertices")
+    n = number(r, r"Pectus: Save Polygonal Mesh: wrote ([0-9]+) vertices")
     path = os.path.join(d, saved)
     check(n is not None and 625 <= n < 800 and os.path.exists(path) and os.path.getsize(path) > 10000,
           f"{name}: {saved} with {n} vertices")
@@ -69,7 +69,7 @@ check_range(r, "nuss_fea.mlx", r"Fe = ([0-9.]+) N \(Fs", 5, 500, "calibrated Fe 
 check_range(r, "nuss_fea.mlx", r"sternum end displacement ([0-9.]+) mm", 44.6, 44.8, "elevation (mm)")
 check(os.path.getsize(os.path.join(W, "nuss_result.vtu")) > 100000, "nuss_fea.mlx: nuss_result.vtu written")
 check(all(os.path.exists(p) for p in (before, lms, after)), "nuss_fea.mlx: the cage, its landmarks and the result saved")
-check_converged(r, "nuss_fea.mlx", "Nuss Procedure FE Analysis")
+check_converged(r, "nuss_fea.mlx", "Pectus: Nuss Procedure FE Analysis")
 
 # the envelope (from the lower sternum end) gains volume; the slice method measures from the dome of the
 # diaphragm, above the funnel's deepest part, where the bar's supports pressing the sides in can outweigh
@@ -91,5 +91,5 @@ check(hb and ha and hb > 4.5 and 1.8 < ha < hb - 1, f"pectus_index.mlx: Haller i
 r = run("nuss_bar_planner.mlx", cwd=W)
 forces = [float(x) for x in np.array([l.split("Fe = ")[1].split(" N")[0] for l in r.log if l.startswith("Planner option '")])]
 check(len(forces) == 6 and all(5 < f < 500 for f in forces), f"nuss_bar_planner.mlx: 6 options calibrated, Fe {forces}")
-check_converged(r, "nuss_bar_planner.mlx", "Nuss Bar Planner")
+check_converged(r, "nuss_bar_planner.mlx", "Pectus: Nuss Bar Planner")
 h.finish()

@@ -50,7 +50,7 @@ target = number(r, r"calibrated to ([0-9.]+) mm")
 check_range(r, "patient_nuss_analysis.mlx", r"sternum end displacement ([0-9.]+) mm", (target or 0) - 0.1,
             (target or 0) + 0.1, "elevation (mm), within the calibration tolerance of the target")
 check_range(r, "patient_nuss_analysis.mlx", r"Fe = ([0-9.]+) N \(Fs", 1, 500, "calibrated Fe (N)")
-check_converged(r, "patient_nuss_analysis.mlx", "Nuss Procedure FE Analysis")
+check_converged(r, "patient_nuss_analysis.mlx", "Pectus: Nuss Procedure FE Analysis")
 check_range(r, "patient_nuss_analysis.mlx", r"Slice method intrathoracic volume change: \+?(-?[0-9.]+) cm3", 1, 500,
             "slice volume gain (cm3)")
 hb = number(r, r"Pectus index change: Haller ([0-9.]+) ->")

@@ -95,7 +95,7 @@ compare_layers("c1", tol_rel=1e-5)
 # 4. a coarse rib cage (8 mm edges), its element quality and its pectus index, in one script
 cage = [f for f in mlx.load_script(EX("filter_ribcage", "examples", "create_ribcage.mlx"))][0]
 quality = mlx.load_script(EX("filter_mga_smooth", "examples", "element_quality.mlx"))[0]
-index = [f for f in mlx.load_script(EX("filter_thoracic_volume", "examples", "pectus_index.mlx")) if f.name == "Pectus Index"][0]
+index = [f for f in mlx.load_script(EX("filter_thoracic_volume", "examples", "pectus_index.mlx")) if f.name == "Pectus: Pectus Index"][0]
 script = mlx.Script([cage.set(edgeLength=8.0), quality, index.set(compare=False)])
 res = {h: mlx.run([], script, [(out("cage", h), "fq fc sa", 0)], host=h, timeout=1200) for h in HOSTS}
 for h, r in res.items():
@@ -123,10 +123,10 @@ for h in HOSTS:
     r = mlx.run([], script, [], host=h, cwd=cwd, timeout=1800)
     line = next((l for l in r.log if l.startswith("Nuss FE result") or " failed: " in l), "no Log line")
     check(r.rc == 0 and line.startswith("Nuss FE result"), f"FE example on {h}: a result", f"rc {r.rc}: {line}")
-    force, printed = r.get("force_N", "Nuss Procedure FE Analysis"), log_figure(r.log, r"Fe = ([0-9.]+) N \(Fs")
+    force, printed = r.get("force_N", "Pectus: Nuss Procedure FE Analysis"), log_figure(r.log, r"Fe = ([0-9.]+) N \(Fs")
     check(as_printed(force, printed, 2), f"FE example on {h}: the force returned ({force} N) is the Log's ({printed} N)")
     check(not os.listdir(cwd), f"FE example on {h}: nothing left in the working folder", str(os.listdir(cwd)))
-    fe_values[h] = {k: r.get(k, "Nuss Procedure FE Analysis") for k in ("tets", "force_N", "max_strain", "reportable")}
+    fe_values[h] = {k: r.get(k, "Pectus: Nuss Procedure FE Analysis") for k in ("tets", "force_N", "max_strain", "reportable")}
     print(f"     FE example on {h}: rc {r.rc}: {line[:150]}")
 a_, b_ = fe_values["2020.09"], fe_values[OTHER]
 check(a_["tets"] is not None and a_["tets"] == b_["tets"], f"FE example: the same tet mesh on both hosts ({a_['tets']}, {b_['tets']} tets)")

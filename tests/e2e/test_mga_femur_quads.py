@@ -17,7 +17,7 @@ femur = cgal_meshes(d, "femur")["femur"]
 
 ex = lambda *p: os.path.join(SOURCE, *p)  # noqa: E731
 convert = mlx.load_script(ex("filter_quad_convert", "examples", "tri_to_quad.mlx"))
-mga = [f.set(maxSweeps=1) if f.name == "MGA Surface Mesh Smoothing" else f
+mga = [f.set(maxSweeps=1) if f.name == "Pectus: MGA Surface Mesh Smoothing" else f
        for f in mlx.load_script(ex("filter_mga_smooth", "examples", "mga_smooth.mlx"))]
 save = lambda out: [f.set(fileName=out, format=1)  # noqa: E731
                     for f in mlx.load_script(ex("filter_quad_convert", "examples", "save_polygonal.mlx"))]

@@ -1,5 +1,5 @@
 """End to end: a scan with folds injected (libcgal-demo's cow, nodes pushed past a neighbour) smoothed by
-'MGA Surface Mesh Smoothing' and 'Gradient Surface Mesh Smoothing (Baseline)' with their example
+'Pectus: MGA Surface Mesh Smoothing' and 'Pectus: Gradient Surface Mesh Smoothing (Baseline)' with their example
 scripts through meshlabserver comes out with no fold it did not have and no more folds than it went in
 with. A fold: an element whose normal points against the mean of its edge neighbours' unit normals,
 counted here independently of the filters' code. Skipped without libcgal-demo."""

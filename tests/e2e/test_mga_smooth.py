@@ -1,4 +1,4 @@
-"""End to end: 'MGA Surface Mesh Smoothing' and 'Gradient Surface Mesh Smoothing (Baseline)' through the
+"""End to end: 'Pectus: MGA Surface Mesh Smoothing' and 'Pectus: Gradient Surface Mesh Smoothing (Baseline)' through the
 real meshlabserver, each from its example script."""
 import os
 import re

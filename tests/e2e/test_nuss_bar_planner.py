@@ -1,7 +1,7 @@
-"""E2E: 'Nuss Bar Planner' through the real meshlabserver on a coarse generated rib cage (linear TET4).
+"""E2E: 'Pectus: Nuss Bar Planner' through the real meshlabserver on a coarse generated rib cage (linear TET4).
 
 Checks: the CSV has one row per option (levels 4 and 5, one and two bars), every option reaches the target
-elevation, the one-bar row of level 4 needs the force the single 'Nuss Procedure FE Analysis' at level 4
+elevation, the one-bar row of level 4 needs the force the single 'Pectus: Nuss Procedure FE Analysis' at level 4
 needs (within 1 %), two bars need another force, the volume gains are positive and the Haller index drops,
 the best row is the lowest force and its layer (the deformed cage coloured by stress) is added; bad input
 (empty levels, a level outside the ribs, nonsense numbers) fails with a message, a non-zero exit and no
@@ -56,7 +56,7 @@ else:
 
 # the single FE analysis at level 4 needs the same force as the planner's one-bar row
 r = h.run([lms, cage], mlx.Script([nuss_fea(landmarkLayer=0, intercostalSpace=4, **FAST)]))
-single = r.values("force_N", "Nuss Procedure FE Analysis")
+single = r.values("force_N", "Pectus: Nuss Procedure FE Analysis")
 check(r.rc == 0 and len(single) == 1 and rows and abs(F["1 bar, space 4"] - single[0]) <= 0.01 * single[0],
       f"one bar at level 4: planner {rows and F['1 bar, space 4']} N, single FE analysis {single} N (within 1 %)")
 

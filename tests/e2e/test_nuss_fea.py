@@ -1,4 +1,4 @@
-"""E2E: 'Nuss Procedure FE Analysis' through the real meshlabserver on a coarse generated rib cage.
+"""E2E: 'Pectus: Nuss Procedure FE Analysis' through the real meshlabserver on a coarse generated rib cage.
 
 Checks: the result layer is the cage displaced (same vertex count, the sternum end moved by the logged
 elevation along +y, the costovertebral joints still), vertex quality = von Mises stress >= 0; the files
@@ -38,7 +38,7 @@ r = h.run([lms, cage], mlx.Script([nuss_fea(landmarkLayer=0, targetElevation=20.
           [(os.path.join(W, "result.ply"), "vq", 2)])
 print("\n".join(l for l in r.log if "Nuss" in l or "Max" in l or "Force" in l))
 check(r.rc == 0, "Nuss FE analysis runs (calibrate to 20 mm, linear TET4)", r.stdout[-1500:])
-FE = "Nuss Procedure FE Analysis"
+FE = "Pectus: Nuss Procedure FE Analysis"
 force = r.values("force_N", FE)
 elev = r.values("elevation_mm", FE)
 # every figure the filter returns is the Log's, to its printed digits

@@ -1,4 +1,4 @@
-"""E2E: 'Nuss Procedure FE Analysis' on one layer per tissue, as CT segmentation tools export them.
+"""E2E: 'Pectus: Nuss Procedure FE Analysis' on one layer per tissue, as CT segmentation tools export them.
 
 The rib cage generator writes the cage as three closed, overlapping tissue layers ('ribs', 'costal cartilage',
 'sternum'); the analysis with 'One layer per tissue' joins them into one volume (CGAL corefinement union) and
@@ -35,7 +35,7 @@ joined = [m.groups() for m in (re.search(r"joined (\d+) tissue layers: ([0-9.]+)
                                for l in r.log) if m]
 check(len(joined) == 1 and int(joined[0][0]) == 3 and float(joined[0][2]) < float(joined[0][1]),
       f"3 layers joined, the union smaller than the layers' sum (they overlap): {joined}")
-elev = r.values("elevation_mm", "Nuss Procedure FE Analysis")
+elev = r.values("elevation_mm", "Pectus: Nuss Procedure FE Analysis")
 if os.path.exists(res) and elev:
     R = h.read_ply(res)
     L = h.read_ply(lms)

@@ -110,20 +110,20 @@ check(any("12 right and 12 left ribs" in l for l in log), "12 ribs numbered on e
 pieces = log_figure(log, r"joined on the grid: (\d+) connected pieces", int)
 check(pieces == 5, f"the joined cage is one piece and the four floating ribs, as the generator's: {pieces} pieces")
 check_landmarks(log, truth, "messy STL export", joints=16.0, first=20.0)
-force = r.get("force_N", "Nuss Procedure FE Analysis")
+force = r.get("force_N", "Pectus: Nuss Procedure FE Analysis")
 
 # the generator at the prepared cage's edge length, so that both are meshed alike
 edge = prepare_patient_rib_cage().params["edgeLength"].value
 g = h.run([], mlx.Script([create_ribcage(age=truth["generator"]["age"], hallerIndex=truth["generator"]["hallerIndex"],
                                          edgeLength=edge),
                           nuss_fea(landmarkLayer=1, **FE)]), timeout=1800)
-ref = g.get("force_N", "Nuss Procedure FE Analysis")
+ref = g.get("force_N", "Pectus: Nuss Procedure FE Analysis")
 print(f"calibrated force: prepared export {force} N, generated cage {ref} N")
 check(force is not None and ref is not None and abs(force - ref) <= 0.10 * ref,
       f"calibrated force on the prepared export within 10 % of the generated cage's ({force} N vs {ref} N)")
-for what, key, filter in (("slice method", "volume_change_cm3", "Thoracic Volume (Slice Method)"),
-                          ("envelope", "volume_change_cm3", "Thoracic Volume (Ferguson Envelope)"),
-                          ("pectus index", "haller_index", "Pectus Index")):
+for what, key, filter in (("slice method", "volume_change_cm3", "Pectus: Thoracic Volume (Slice Method)"),
+                          ("envelope", "volume_change_cm3", "Pectus: Thoracic Volume (Ferguson Envelope)"),
+                          ("pectus index", "haller_index", "Pectus: Pectus Index")):
     v = r.get(key, filter)
     check(v is not None and v > 0, f"{what} before and after on the prepared cage: {v}", "\n".join(log[-12:]))
 

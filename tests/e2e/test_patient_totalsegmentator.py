@@ -1,5 +1,5 @@
 """E2E: TotalSegmentator's own output on a real CT (tests/data/totalsegmentator, Apache-2.0: a partial scan of the
-lower chest, ribs 7-12, no sternum), through 'Import CT Segmentation' and 'Prepare Patient Rib Cage'. Checks:
+lower chest, ribs 7-12, no sternum), through 'Pectus: Import CT Segmentation' and 'Pectus: Prepare Patient Rib Cage'. Checks:
   - the label map: every label it holds is a layer named from its label table (39 labels), the rib cage's
     structures among them recognised and every organ left out by its name (none is a candidate sternum);
   - the label map and the folder of masks: refused, the message naming what is missing (the sternum), the
@@ -35,7 +35,7 @@ def prepare(path):
 
 # --- the label map with its organs ----------------------------------------------------------------------------
 r = prepare(os.path.join(DATA, "labelmap.nii.gz"))
-imported = r.get("structures", "Import CT Segmentation")
+imported = r.get("structures", "Pectus: Import CT Segmentation")
 check(imported == labels_in(os.path.join(DATA, "labelmap.nii.gz")),
       f"label map: one layer per label it holds ({imported})", "\n".join(r.log[:5]))
 organs = [l for l in r.log if "': not part of the rib cage, left out" in l]

@@ -31,16 +31,16 @@ for f in ("pipeline.mlx", "nuss.vtu", "nuss.inp", "nuss_force_displacement.csv",
 # the individual filters give the table's figures: the FE alone after the same cage and smoothing (the saved
 # cage PLY has lost its label colours to the quality colours, so the cage is rebuilt in the same script)
 steps = {f.name: f for f in mlx.load_script(os.path.join(W, "pipeline.mlx"))}
-nuss = steps["Nuss Procedure FE Analysis"].set(resultBase=mlx.SaveFile("", ".vtu"))
-alone = h.run([], mlx.Script([steps["Create Pectus Excavatum Rib Cage"], steps["MGA Surface Mesh Smoothing"], nuss]))
-force = alone.get("force_N", "Nuss Procedure FE Analysis")
+nuss = steps["Pectus: Nuss Procedure FE Analysis"].set(resultBase=mlx.SaveFile("", ".vtu"))
+alone = h.run([], mlx.Script([steps["Pectus: Create Rib Cage"], steps["Pectus: MGA Surface Mesh Smoothing"], nuss]))
+force = alone.get("force_N", "Pectus: Nuss Procedure FE Analysis")
 check(alone.rc == 0 and force is not None and r["force"] is not None and abs(force - r["force"]) <= 0.01 * r["force"],
       f"Nuss FE alone after the same cage and smoothing: Fe {force} N vs the pipeline's {r['force']} N (1 %)")
 cage, lms, after = (os.path.join(W, f) for f in ("ribcage_smoothed.ply", "ribcage_landmarks.ply", "nuss_result.ply"))
-sl = [f for f in mlx.load_script(os.path.join(W, "pipeline.mlx")) if f.name == "Thoracic Volume (Slice Method)"][0]
+sl = [f for f in mlx.load_script(os.path.join(W, "pipeline.mlx")) if f.name == "Pectus: Thoracic Volume (Slice Method)"][0]
 sl.set(beforeLayer=1, landmarkLayer=0)
 alone = h.run([lms, cage, after], mlx.Script([sl]))
-d = alone.get("volume_change_cm3", "Thoracic Volume (Slice Method)")
+d = alone.get("volume_change_cm3", "Pectus: Thoracic Volume (Slice Method)")
 check(alone.rc == 0 and d is not None and abs(d - r["slice_change_cm3"]) <= 0.005 * abs(r["slice_change_cm3"]) + 0.5,
       f"slice method alone: change {d} cm3 vs the pipeline's {r['slice_change_cm3']} cm3")
 h.finish()

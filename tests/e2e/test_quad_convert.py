@@ -1,4 +1,4 @@
-"""End to end: 'Convert Triangles to Quads', 'Mesh Structure Improvement' and 'Save Polygonal Mesh' through the
+"""End to end: 'Pectus: Convert Triangles to Quads', 'Pectus: Quad Mesh Structure Improvement' and 'Pectus: Save Polygonal Mesh' through the
 real meshlabserver (filter_quad_convert)."""
 import os
 import re
@@ -117,7 +117,7 @@ check(dev < 0.02, "new nodes on the surface (|z - saddle| small)", str(dev))
 check("split into quads" in log_of(r), "Log reports the split", log_of(r))
 print(log_of(r))
 
-# 4. Save Polygonal Mesh: OBJ and VTK with real quads; the OFF reads back in MeshLab as quads (faux edges)
+# 4. Pectus: Save Polygonal Mesh: OBJ and VTK with real quads; the OFF reads back in MeshLab as quads (faux edges)
 obj = os.path.join(d, "q.obj")
 r = run([off], script("save_polygonal.mlx", "obj", fileName=obj, format=0), [])
 faces = [l.split()[1:] for l in open(obj) if l.startswith("f ")] if os.path.exists(obj) else []
@@ -137,7 +137,7 @@ def canon(f):
 check(r.rc == 0 and sorted(map(canon, BF)) == sorted(map(canon, QF)) and np.allclose(B, Q, atol=1e-6),
       "OFF re-read by MeshLab and re-saved: same quads", f"{len(BF)} faces")
 
-# 5. Mesh Structure Improvement: triangles (saddle) and quads
+# 5. Pectus: Quad Mesh Structure Improvement: triangles (saddle) and quads
 r = run([saddle], script("structure.mlx", "stri"), [(os.path.join(d, "stri.ply"), "fq sa")])
 log = log_of(r)
 m = re.search(r"edge swaps (\d+), node eliminations (\d+), edge divisions (\d+).*worst alpha ([\d.]+) -> ([\d.]+), "

@@ -1,4 +1,4 @@
-"""E2E: 'Create Pectus Excavatum Rib Cage' through meshlabserver at a coarse resolution. Asserts on the
+"""E2E: 'Pectus: Create Rib Cage' through meshlabserver at a coarse resolution. Asserts on the
 saved PLY files: closed 2-manifold surface, labels on every face (face colour palette + quality code),
 the pectus (Haller) index measured geometrically on the saved mesh, landmarks layer, determinism."""
 import os

@@ -1,4 +1,4 @@
-"""E2E: the rib cage generator (filter_nuss_fea, 'Create Pectus Excavatum Rib Cage') followed by the
+"""E2E: the rib cage generator (filter_nuss_fea, 'Pectus: Create Rib Cage') followed by the
 thoracic volume filters on its cage and landmarks layers (labels.h codes), then a before/after
 comparison against a copy of the cage whose anterior wall is lifted around the funnel (a stand-in
 for the FE correction): positive volume change by both methods, smaller Haller index."""
@@ -25,12 +25,12 @@ def common(lower, compare=False, before=0, landmarks=1):
 
 def filters(compare=False, before=0, landmarks=1):
     c = dict(compare=compare, before=before, landmarks=landmarks)
-    return [mlx.Filter("Thoracic Volume (Slice Method)", **common(1, **c), spacing=mlx.Float(2.6),
+    return [mlx.Filter("Pectus: Thoracic Volume (Slice Method)", **common(1, **c), spacing=mlx.Float(2.6),
                        resolution=mlx.Int(512), rays=mlx.Int(720)),
-            mlx.Filter("Thoracic Volume (Ferguson Envelope)", **common(1, **c), patchesLong=mlx.Int(16),
+            mlx.Filter("Pectus: Thoracic Volume (Ferguson Envelope)", **common(1, **c), patchesLong=mlx.Int(16),
                        patchesAround=mlx.Int(16), initialStep=mlx.Float(0.0), minStep=mlx.Float(0.05),
                        smoothing=mlx.Bool(True), tessellation=mlx.Int(8)),
-            mlx.Filter("Pectus Index", compare=mlx.Bool(compare), beforeLayer=mlx.Mesh(before),
+            mlx.Filter("Pectus: Pectus Index", compare=mlx.Bool(compare), beforeLayer=mlx.Mesh(before),
                        levelSource=mlx.Enum(0, ["Landmarks 501/503", "Automatic (deepest slice)"]),
                        landmarkLayer=mlx.Mesh(landmarks), zLow=mlx.Float(0.0), zHigh=mlx.Float(200.0),
                        rays=mlx.Int(720))]
@@ -41,10 +41,10 @@ def filters(compare=False, before=0, landmarks=1):
 cage, lms = os.path.join(W, "cage.ply"), os.path.join(W, "cage_landmarks.ply")
 r = h.run([], mlx.Script([GEN] + filters()), [(cage, "", 0), (lms, "vq", 1)])
 check(r.rc == 0, "generator + thoracic volume filters run", r.stdout[-1500:])
-gen_h = r.values("haller_index_measured", "Create Pectus Excavatum Rib Cage")
-sl = r.values("volume_cm3", "Thoracic Volume (Slice Method)")
-en = r.values("volume_cm3", "Thoracic Volume (Ferguson Envelope)")
-hi = r.values("haller_index", "Pectus Index")
+gen_h = r.values("haller_index_measured", "Pectus: Create Rib Cage")
+sl = r.values("volume_cm3", "Pectus: Thoracic Volume (Slice Method)")
+en = r.values("volume_cm3", "Pectus: Thoracic Volume (Ferguson Envelope)")
+hi = r.values("haller_index", "Pectus: Pectus Index")
 print("\n".join(l for l in r.log if "volume" in l or "index" in l))
 check(len(sl) == 1 and len(en) == 1 and 0.4 * en[0] < sl[0] < en[0],
       f"same range (500..701): intrathoracic {sl} cm3 inside the envelope {en} cm3")
@@ -64,9 +64,9 @@ if os.path.exists(cage) and os.path.exists(lms):
     r = h.run([cage, lms, after], mlx.Script(filters(compare=True, before=0, landmarks=1)))
     check(r.rc == 0, "before/after comparison runs", r.stdout[-1500:])
     print("\n".join(l for l in r.log if "change" in l))
-    d_sl = r.values("volume_change_cm3", "Thoracic Volume (Slice Method)")
-    d_en = r.values("volume_change_cm3", "Thoracic Volume (Ferguson Envelope)")
-    hh = r.values("before_haller_index", "Pectus Index") + r.values("haller_index", "Pectus Index")
+    d_sl = r.values("volume_change_cm3", "Pectus: Thoracic Volume (Slice Method)")
+    d_en = r.values("volume_change_cm3", "Pectus: Thoracic Volume (Ferguson Envelope)")
+    hh = r.values("before_haller_index", "Pectus: Pectus Index") + r.values("haller_index", "Pectus: Pectus Index")
     check(len(d_sl) == 1 and d_sl[0] > 0, f"slice method: positive volume change {d_sl} cm3")
     check(len(d_en) == 1 and d_en[0] > 0, f"envelope: positive volume change {d_en} cm3")
     check(len(hh) == 2 and hh[1] < hh[0], f"Haller index before/after {hh} falls")

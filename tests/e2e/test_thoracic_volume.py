@@ -67,18 +67,18 @@ def common(compare=False, before=0, source=1, landmarks=0, lower=0, z0=0.0, z1=2
 
 
 def slice_filter(**kw):
-    return mlx.Filter("Thoracic Volume (Slice Method)", **common(**kw), spacing=mlx.Float(2.6),
+    return mlx.Filter("Pectus: Thoracic Volume (Slice Method)", **common(**kw), spacing=mlx.Float(2.6),
                       resolution=mlx.Int(512), rays=mlx.Int(720))
 
 
 def envelope_filter(**kw):
-    return mlx.Filter("Thoracic Volume (Ferguson Envelope)", **common(**kw), patchesLong=mlx.Int(16),
+    return mlx.Filter("Pectus: Thoracic Volume (Ferguson Envelope)", **common(**kw), patchesLong=mlx.Int(16),
                       patchesAround=mlx.Int(16), initialStep=mlx.Float(0.0), minStep=mlx.Float(0.05),
                       smoothing=mlx.Bool(True), tessellation=mlx.Int(8))
 
 
 def index_filter(compare=False, before=0, level=0, landmarks=0, z0=0.0, z1=200.0):
-    return mlx.Filter("Pectus Index", compare=mlx.Bool(compare), beforeLayer=mlx.Mesh(before),
+    return mlx.Filter("Pectus: Pectus Index", compare=mlx.Bool(compare), beforeLayer=mlx.Mesh(before),
                       levelSource=mlx.Enum(level, ["Landmarks 501/503", "Automatic (deepest slice)"]),
                       landmarkLayer=mlx.Mesh(landmarks), zLow=mlx.Float(z0), zHigh=mlx.Float(z1), rays=mlx.Int(720))
 
@@ -98,7 +98,7 @@ lms = write_landmarks(os.path.join(W, "cage_landmarks.ply"),
                       [(700, (0, -50, 20.0)), (500, (0, B, 40.0)), (701, (0, 0, 220.0)), (501, (0, B, 120.0)),
                        (503, (0, -B, 120.0))])
 
-SLICE, ENVELOPE, INDEX = "Thoracic Volume (Slice Method)", "Thoracic Volume (Ferguson Envelope)", "Pectus Index"
+SLICE, ENVELOPE, INDEX = "Pectus: Thoracic Volume (Slice Method)", "Pectus: Thoracic Volume (Ferguson Envelope)", "Pectus: Pectus Index"
 
 
 def agree(r, key, filter, pattern, decimals):

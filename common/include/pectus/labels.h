@@ -25,7 +25,7 @@ enum class Tissue : int { Unknown = 0, Bone = 1, Cartilage = 2, Sternum = 3 };
 
 // Anatomical part id: ribs and their cartilages 100*side + rib number (side 1 = right, 2 = left),
 // sternum parts 301 manubrium, 302 body, 303 xiphoid; 400 the vertebral column (tissue bone), present only
-// when 'Prepare Patient Rib Cage' keeps it as the fixed support: the FE analysis fixes every node of its
+// when 'Pectus: Prepare Patient Rib Cage' keeps it as the fixed support: the FE analysis fixes every node of its
 // tets, and the thoracic volume filters leave its faces out (the volume is the one inside the ribs).
 inline int ribPart(int side, int rib) { return 100 * side + rib; }
 constexpr int kManubrium = 301, kSternumBody = 302, kXiphoid = 303;

@@ -58,7 +58,7 @@ CageSurface cageFromMesh(const CMeshO& m) {
   if (!labels)
     throw InputError(
         "The layer has no tissue labels: every face needs a tissue (bone, cartilage or sternum) and an anatomical part, "
-        "as 'Create Pectus Excavatum Rib Cage' writes them (attribute pectus_tissue/pectus_part, or the tissue face colours "
+        "as 'Pectus: Create Rib Cage' writes them (attribute pectus_tissue/pectus_part, or the tissue face colours "
         "with face quality = tissue*1000 + part; save PLY with face colour and quality): " + faceLabelProblem(m) + ".");
   for (size_t i = 0; i < m.vert.size(); ++i) {
     if (m.vert[i].IsD()) continue;
@@ -316,9 +316,9 @@ void place(const CageSurface& cage, const std::vector<Landmark>& lms, const Plac
   if (joints == 0)
     throw InputError(
         "No costovertebral joint landmarks (codes 100*side + rib) in the landmark layer: the analysis fixes the ribs there. "
-        "Pick the landmark layer written by 'Create Pectus Excavatum Rib Cage' or add one vertex per joint with that code as quality.");
+        "Pick the landmark layer written by 'Pectus: Create Rib Cage' or add one vertex per joint with that code as quality.");
   s.fixedAtJoints = int(std::count(fixed.begin(), fixed.end(), char(1)));
-  // the vertebral column kept as the support ('Prepare Patient Rib Cage', part kVertebralColumn): all of it
+  // the vertebral column kept as the support ('Pectus: Prepare Patient Rib Cage', part kVertebralColumn): all of it
   for (int t = 0; t < mesh.numTets(); ++t)
     if (s.tetPart[size_t(t)] == kVertebralColumn)
       for (int k = 0; k < mesh.nodesPerTet(); ++k) fixed[size_t(mesh.tets[size_t(t)][size_t(k)])] |= 2;

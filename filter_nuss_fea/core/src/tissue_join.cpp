@@ -152,7 +152,7 @@ Solid toSolid(const TissueLayer& l, Tissue tissue) {
   return s;
 }
 
-// a bone layer labelled as the vertebral column throughout (the support 'Prepare Patient Rib Cage' can keep)
+// a bone layer labelled as the vertebral column throughout (the support 'Pectus: Prepare Patient Rib Cage' can keep)
 bool column(const Solid& s) {
   return !s.part.empty() && std::all_of(s.part.begin(), s.part.end(), [](int p) { return p == kVertebralColumn; });
 }

@@ -635,7 +635,7 @@ void readMeshFile(const std::string& path, CMeshO& out, MeshFileStats& stats) {
     case Kind::Ply: readPly(path, s, stats); break;
     case Kind::Off: readOff(path, s, stats); break;
     case Kind::Nifti:
-      throw IOError("file '" + path + "' is a NIfTI label map, not a mesh: import it with 'Import CT Segmentation'");
+      throw IOError("file '" + path + "' is a NIfTI label map, not a mesh: import it with 'Pectus: Import CT Segmentation'");
     case Kind::Unknown:
       throw IOError("file '" + path + "' has an unknown extension '" + fs::path(path).extension().string() +
                        "': give " + kKnown);

@@ -1,6 +1,6 @@
 // Internal to the patient core: marching cubes on a grid of inside/outside points, with a closed, 2-manifold,
 // outward-oriented result for every mask (inside points are taken 6-connected: points meeting at a cube's edge or
-// corner only stay apart). Used for the labels of a NIfTI file and for the solids of 'Prepare Patient Rib Cage'.
+// corner only stay apart). Used for the labels of a NIfTI file and for the solids of 'Pectus: Prepare Patient Rib Cage'.
 #pragma once
 #include <array>
 #include <cstdint>

@@ -11,7 +11,7 @@
 // CageSurface::labelTets. (Letting cartilage win the whole overlap would lengthen every costal cartilage
 // by the overlaps at both of its ends and make the joined cage 34 % softer than the one-surface cage.)
 //
-// Parts: a layer carrying face labels (as 'Create Pectus Excavatum Rib Cage' writes them) keeps its
+// Parts: a layer carrying face labels (as 'Pectus: Create Rib Cage' writes them) keeps its
 // parts. Otherwise: each connected piece of a bone layer is the rib of the nearest costovertebral joint
 // landmark (100*side + rib); a cartilage face belongs to the rib nearest to it (a bone layer labelled as
 // the vertebral column, part 400, is never that rib); sternum faces are the sternum body (302). A layer

@@ -1,6 +1,6 @@
 // Import of a CT segmentation as users export it: surface files (STL binary/ASCII, OBJ, PLY, OFF) or
 // NIfTI label maps (one multi-label file, or one mask file per structure as TotalSegmentator writes
-// them), from one file or a folder. Host-free (no Qt): 'Import CT Segmentation' maps it to layers.
+// them), from one file or a folder. Host-free (no Qt): 'Pectus: Import CT Segmentation' maps it to layers.
 #pragma once
 #include <functional>
 #include <map>

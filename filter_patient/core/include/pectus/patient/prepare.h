@@ -1,7 +1,7 @@
 // A patient's rib cage from a CT segmentation, made ready for the analyses: the structures classified, put in
 // the project's frame, made solids on one grid, separated, numbered, joined into one labelled surface, and
 // landmarked.
-// Host-free (vcglib + Eigen + CGAL, no Qt): 'Prepare Patient Rib Cage' maps it to layers.
+// Host-free (vcglib + Eigen + CGAL, no Qt): 'Pectus: Prepare Patient Rib Cage' maps it to layers.
 //
 // The steps, in order (each one Logged):
 //  1. classify every layer by its name (TotalSegmentator's, 3D Slicer's, or generic names): rib (side
@@ -58,7 +58,7 @@
 
 namespace pectus::patient {
 
-// Valid ranges of PrepareOptions (preparePatientCage checks them); 'Prepare Patient Rib Cage' declares its
+// Valid ranges of PrepareOptions (preparePatientCage checks them); 'Pectus: Prepare Patient Rib Cage' declares its
 // parameters with the same constants.
 inline constexpr ParamRange kMinVolumeRange{0, 100000};  ///< PrepareOptions::minVolume (mm^3)
 inline constexpr ParamRange kGridStepRange{0.3, 3};      ///< PrepareOptions::gridStep (mm)
