@@ -67,8 +67,8 @@ FilterC1SurfacePlugin::FilterC1SurfacePlugin() {
   r.name = "Pectus: C1 Refine onto Goodman-Said Surface";
   r.pythonName = "c1_surface_refine";
   r.info =
-      "Splits every triangle of the current layer k&times;k and puts the new vertices on the layer's C1 "
-      "surface (Goodman-Said patches, thesis ch. 3): a finer mesh of the same smooth shape.";
+      "Splits every triangle of the current layer k&times;k, the new vertices on the layer's C1 "
+      "Goodman-Said surface (thesis ch. 3).";
   r.doc = "c1_refine";
   r.advanced = QStringList{"gradientMethod", "frame"};
   r.cls = pectus::ml::HostFilter::Remeshing;
@@ -81,9 +81,8 @@ FilterC1SurfacePlugin::FilterC1SurfacePlugin() {
   p.name = "Pectus: C1 Project Layer onto Goodman-Said Surface";
   p.pythonName = "c1_surface_project_layer";
   p.info =
-      "Moves every vertex of the current layer to its closest point on the C1 (Goodman-Said) surface of "
-      "another layer, e.g. a smoothed or remeshed copy back onto the original shape. The Log gives the "
-      "displacements.";
+      "Moves every vertex of the current layer to the closest point of another layer's C1 Goodman-Said "
+      "surface (thesis ch. 3).";
   p.doc = "c1_project";
   p.advanced = QStringList{"gradientMethod", "frame"};
   p.cls = pectus::ml::HostFilter::Smoothing;

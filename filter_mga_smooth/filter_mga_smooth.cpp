@@ -36,8 +36,8 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
   q.name = "Pectus: Element Quality (Triangle Alpha / Quad Beta)";
   q.pythonName = "compute_element_quality";
   q.info =
-      "Shape quality of every element of the current layer (triangles: alpha, thesis eq. 3-20; quads: "
-      "beta) as face quality and colours (red 0, poor; blue 1, ideal).";
+      "Shape quality of every element (triangle alpha, quad beta; thesis 3.4) as face quality and colours: "
+      "red 0, poor; blue 1, ideal.";
   q.doc = "element_quality";
   q.cls = pectus::ml::HostFilter::Measure;
   q.postCondition = MeshModel::MM_FACEQUALITY | MeshModel::MM_FACECOLOR;
@@ -48,8 +48,8 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
   s.name = "Pectus: MGA Surface Mesh Smoothing";
   s.pythonName = "mga_surface_mesh_smoothing";
   s.info =
-      "Improves the element shapes of a triangle or quad mesh by moving its free nodes on the mesh's own "
-      "C1 surface with a micro-genetic algorithm (thesis 4.2). No element is folded.";
+      "Better element shapes on a triangle or quad mesh: free nodes move on the mesh's own C1 surface by a "
+      "micro-genetic search (thesis 4.2).";
   s.doc = "mga_smooth";
   s.advanced = QStringList{"tolerance", "accuracy", "generations", "restarts", "population", "selection",
                             "elementSearch", "minPassBelow", "featureAngle", "singularAngle", "seed"};
@@ -63,8 +63,8 @@ FilterMgaSmoothPlugin::FilterMgaSmoothPlugin() {
   g.name = "Pectus: Gradient Surface Mesh Smoothing (Baseline)";
   g.pythonName = "gradient_surface_mesh_smoothing";
   g.info =
-      "The conjugate gradient smoothing the thesis compares MGA with (Table 4-1): the same fitness, C1 "
-      "surface, fixed nodes and guards as MGA smoothing, with a gradient search per node.";
+      "The conjugate gradient smoothing the thesis compares MGA with (Table 4-1): same fitness, surface, "
+      "fixed nodes and guards.";
   g.doc = "gradient_smooth";
   g.advanced = QStringList{"tolerance", "cgIterations", "minPassBelow", "featureAngle", "singularAngle"};
   g.cls = s.cls;

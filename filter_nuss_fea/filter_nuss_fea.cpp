@@ -29,8 +29,8 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
   n.name = "Pectus: Nuss Procedure FE Analysis";
   n.pythonName = "nuss_procedure_fe_analysis";
   n.info =
-      "Finite element analysis of a Nuss repair on the labelled rib cage (current layer) and its landmark "
-      "layer (thesis 6.1-6.4): the force that lifts the sternum to the target, stress and strain.";
+      "Finite element analysis of a Nuss repair on the labelled rib cage and its landmarks (thesis "
+      "6.1-6.4): force, stress and strain.";
   n.doc = "nuss_fea";
   n.advanced = QStringList{"maxForce", "tolerance", "calibration", "newton", "tetQuality", "maxTetVolume",
                             "nuBone", "nuCartilage", "jointRadius", "sternumLoadRadius", "ribSupportRadius",
@@ -44,8 +44,8 @@ FilterNussFeaPlugin::FilterNussFeaPlugin() {
   n.name = "Pectus: Nuss Bar Planner";
   n.pythonName = "nuss_bar_planner";
   n.info =
-      "Compares bar levels, and one bar against two, before surgery: the calibrated FE analysis of each "
-      "option with its force, stress, volume gain and pectus index after.";
+      "Compares bar levels, one bar against two: the calibrated FE analysis of each option, with force, "
+      "stress, volume gain and index.";
   n.doc = "nuss_bar_planner";
   n.advanced = QStringList{"maxForce", "tolerance", "calibration", "newton", "tetQuality", "maxTetVolume",
                             "nuBone", "nuCartilage", "jointRadius", "sternumLoadRadius", "ribSupportRadius"};
@@ -236,6 +236,9 @@ void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList&
                         "layer is the rib of the nearest costovertebral joint landmark, cartilage faces take the nearest "
                         "rib's number, sternum faces are the sternum body. The joined surface is the result layer."));
   addLandmarkParam(md, par);
+  addInt(par, "intercostalSpace", 4, "Bar intercostal space",
+         "The bar exits between ribs s and s+1 (landmarks 600+10*side+s, the generator writes s = 4, 5; "
+         "other spaces: between the ribs' lateral-most points).", {1, 11});
   par.addParam(RichEnum("mode", 0, modes(), "Force",
                         "Calibrate: find Fe so the sternum end rises by the target elevation (by the calibration method "
                         "below). Given: apply the elevating force below."));
@@ -243,9 +246,6 @@ void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList&
            "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N.", pectus::nuss::kForceRange);
   addCalibrationParams(par);
   addModelParams(par);
-  addInt(par, "intercostalSpace", 4, "Bar intercostal space",
-         "The bar exits between ribs s and s+1 (landmarks 600+10*side+s, the generator writes s = 4, 5; "
-         "other spaces: between the ribs' lateral-most points).", {1, 11});
   addPatchParams(par);
   par.addParam(RichEnum("field", 0, fields(), "Colour by",
                         "Per-vertex quality and colour of the result layer: nodal von Mises stress (MPa) or equivalent "

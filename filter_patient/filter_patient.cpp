@@ -31,8 +31,8 @@ FilterPatientPlugin::FilterPatientPlugin() {
   c.name = "Pectus: Import CT Segmentation";
   c.pythonName = "import_ct_segmentation";
   c.info =
-      "Reads a patient's CT segmentation (a file or a folder of STL, OBJ, PLY, OFF or NIfTI label maps, as "
-      "TotalSegmentator or 3D Slicer export it) and adds one layer per structure, named after it.";
+      "Reads a CT segmentation (a file or folder of STL, OBJ, PLY, OFF or NIfTI label maps) as one layer "
+      "per structure.";
   c.doc = "import_ct_segmentation";
   c.cls = pectus::ml::HostFilter::MeshCreation;
   c.arity = pectus::ml::HostFilter::NONE;
@@ -45,7 +45,7 @@ FilterPatientPlugin::FilterPatientPlugin() {
   s.pythonName = "prepare_patient_rib_cage";
   s.info =
       "Makes the visible layers of a patient's segmentation into the labelled rib cage and landmarks the "
-      "analyses take. Every decision goes to the Log.";
+      "analyses take.";
   s.doc = "prepare_patient_rib_cage";
   s.advanced = QStringList{"minVolume", "gridStep"};
   s.cls = pectus::ml::HostFilter::Remeshing;

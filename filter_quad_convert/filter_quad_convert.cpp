@@ -70,9 +70,8 @@ FilterQuadConvertPlugin::FilterQuadConvertPlugin() {
   c.name = "Pectus: Convert Triangles to Quads";
   c.pythonName = "convert_triangles_to_quads";
   c.info =
-      "Merges pairs of adjacent triangles of the current layer into quads (thesis 4.1.2), by an optimal "
-      "(blossom) or a greedy pairing; quads are stored the MeshLab way, as two triangles sharing a faux "
-      "edge.";
+      "Merges pairs of adjacent triangles into quads (thesis 4.1.2) by an optimal (blossom) or a greedy "
+      "pairing.";
   c.doc = "tri_to_quad";
   c.advanced = QStringList{"maxDihedral"};
   c.cls = cls;
@@ -84,8 +83,8 @@ FilterQuadConvertPlugin::FilterQuadConvertPlugin() {
   s.name = "Pectus: Quad Mesh Structure Improvement";
   s.pythonName = "mesh_structure_improvement";
   s.info =
-      "The structure operators of thesis 4.1.3 on a triangle or quad-dominant mesh: edge swapping toward "
-      "the ideal valence, node elimination and edge division, until no operator improves the mesh.";
+      "Edge swapping, node elimination and edge division on a triangle or quad mesh (thesis 4.1.3), until "
+      "none improves it.";
   s.doc = "structure";
   s.advanced = QStringList{"longEdgeFactor", "maxDihedral", "maxPasses"};
   s.cls = cls;
@@ -97,8 +96,8 @@ FilterQuadConvertPlugin::FilterQuadConvertPlugin() {
   w.name = "Pectus: Save Polygonal Mesh";
   w.pythonName = "save_polygonal_mesh";
   w.info =
-      "Writes the current layer with real quads (faux-edge triangle pairs) and its remaining triangles as "
-      "OBJ, OFF or legacy VTK: MeshLab's own exporters write quads as triangles.";
+      "Writes the current layer with real quads as OBJ, OFF or legacy VTK (MeshLab's own exporters write "
+      "quads as triangles).";
   w.doc = "save_polygonal";
   w.cls = pectus::ml::HostFilter::Polygonal;
   addFilter(this, w);

@@ -34,9 +34,8 @@ FilterRibCagePlugin::FilterRibCagePlugin() {
   s.name = "Pectus: Create Rib Cage";
   s.pythonName = "create_pectus_excavatum_rib_cage";
   s.info =
-      "A parametric child's rib cage with pectus excavatum (thesis ch. 6): ribs, costal cartilages and "
-      "sternum sized from age or dimensions, a funnel of the given Haller index, tissue labels and a "
-      "landmark layer.";
+      "A parametric child's rib cage with pectus excavatum (thesis ch. 6): labelled ribs, cartilages and "
+      "sternum, and a landmark layer.";
   s.doc = "create_ribcage";
   s.cls = pectus::ml::HostFilter::MeshCreation;
   s.arity = pectus::ml::HostFilter::NONE;

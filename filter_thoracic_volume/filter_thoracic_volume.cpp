@@ -144,8 +144,8 @@ FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
   s.name = "Pectus: Thoracic Volume (Slice Method)";
   s.pythonName = "compute_thoracic_volume_slice";
   s.info =
-      "Intrathoracic volume of the rib cage in the current layer by parallel slices (thesis 6.3.1), "
-      "between two landmark heights; with a 'before' layer, also the change after the repair.";
+      "Thoracic volume of the rib cage by parallel slices (thesis 6.3.1); with a 'before' layer, also the "
+      "change after the repair.";
   s.doc = "thoracic_volume_slice";
   s.advanced = QStringList{"spacing", "resolution", "rays"};
   s.cls = pectus::ml::HostFilter::Measure;
@@ -155,9 +155,8 @@ FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
   s.name = "Pectus: Thoracic Volume (Ferguson Envelope)";
   s.pythonName = "compute_thoracic_volume_envelope";
   s.info =
-      "Thoracic volume inside a cylinder of C1 Ferguson patches shrunk onto the rib cage (thesis 6.3.2), "
-      "between two landmark heights; the envelope is added as a layer. With a 'before' layer, also the "
-      "change.";
+      "Thoracic volume inside C1 Ferguson patches shrunk onto the rib cage (thesis 6.3.2); with a 'before' "
+      "layer, also the change.";
   s.doc = "thoracic_volume_envelope";
   s.advanced = QStringList{"patchesLong", "patchesAround", "initialStep", "minStep", "smoothing",
                             "tessellation"};
@@ -168,8 +167,8 @@ FilterThoracicVolumePlugin::FilterThoracicVolumePlugin() {
   s.name = "Pectus: Pectus Index";
   s.pythonName = "compute_pectus_index";
   s.info =
-      "Haller index and correction index on the slice of the cage at the deepest point of the funnel "
-      "(landmark 501); with a 'before' layer, the indices before and after the repair.";
+      "Haller and correction indices on the slice at the deepest point of the funnel; with a 'before' "
+      "layer, before and after.";
   s.doc = "pectus_index";
   s.advanced = QStringList{"rays"};
   s.cls = pectus::ml::HostFilter::Measure;

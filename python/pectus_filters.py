@@ -87,8 +87,8 @@ NUSS_PATCHES = {"jointRadius": (Float, 6.0), "sternumLoadRadius": (Float, 8.0), 
 
 def nuss_fea(**kw) -> Filter:
     return _build("Pectus: Nuss Procedure FE Analysis", {
-        "input": (Enum, 0, NUSS_INPUT), "landmarkLayer": (Mesh, 1), "mode": (Enum, 0, NUSS_MODE), "force": (Float, 140.0), **NUSS_CALIBRATION,
-        **NUSS_MODEL, "intercostalSpace": (Int, 4), **NUSS_PATCHES,
+        "input": (Enum, 0, NUSS_INPUT), "landmarkLayer": (Mesh, 1), "intercostalSpace": (Int, 4),
+        "mode": (Enum, 0, NUSS_MODE), "force": (Float, 140.0), **NUSS_CALIBRATION, **NUSS_MODEL, **NUSS_PATCHES,
         "field": (Enum, 0, NUSS_FIELD),
         "pathSide": (Enum, 0, SIDES), "pathRib": (Int, 5), "resultBase": (SaveFile, "")}, dict(kw))
 

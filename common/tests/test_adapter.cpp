@@ -26,7 +26,8 @@ class FakePlugin : public QObject, public pectus::ml::FilterPluginBase {
   FakePlugin() {
     pectus::ml::FilterSpec s;
     s.id = FP_BREAK; s.name = "Break"; s.info = "x"; addFilter(this, s);
-    s.id = FP_OK; s.name = "Ok"; addFilter(this, s);
+    s.id = FP_OK; s.name = "Ok"; s.doc = "ok"; s.advanced = QStringList{"n"}; addFilter(this, s);
+    s.doc.clear(); s.advanced.clear();
     s.id = FP_CRASH; s.name = "Crash"; addFilter(this, s);
     s.id = FP_PLAIN; s.name = "Plain"; addFilter(this, s);
   }
@@ -200,6 +201,39 @@ TEST(Adapter, DeclaredRangeIsTheToolTipAndTheCheck) {
   bad.addParam(RichFloat("x", 0.0f, "x", ""));
   bad.addParam(RichInt("n", 1, "n", ""));
   EXPECT_NE(apply(p, 1, md, bad).indexOf("parameter 'x' must be in (0, 10], got 0"), -1);
+}
+
+// MeshLab's float field shows 3 significant digits and applies what it shows: a default it would round
+// (12.25 -> 12.3, 11500 -> 1.15e+04) is declared as a bounded float, shown as written, with the same value.
+TEST(Adapter, FloatsAreShownAsWritten) {
+  RichParameterList par;
+  pectus::ml::addFloat(par, "cartilage", 12.25, "E", "", {0, 1e6, true, false});
+  pectus::ml::addFloat(par, "bone", 11500, "E", "", {0, 1e6, true, false});
+  pectus::ml::addFloat(par, "ratio", 0.4, "nu", "", {-1, 0.5, true, true});
+  EXPECT_NE(dynamic_cast<const RichDynamicFloat*>(&par.getParameterByName("cartilage")), nullptr);
+  EXPECT_NE(dynamic_cast<const RichDynamicFloat*>(&par.getParameterByName("bone")), nullptr);
+  EXPECT_EQ(dynamic_cast<const RichDynamicFloat*>(&par.getParameterByName("ratio")), nullptr);
+  EXPECT_FLOAT_EQ(par.getFloat("cartilage"), 12.25f);
+  EXPECT_FLOAT_EQ(par.getFloat("bone"), 11500.0f);
+  EXPECT_TRUE(pectus::ml::floatFieldRoundsShownValue(12.25));
+  EXPECT_FALSE(pectus::ml::floatFieldRoundsShownValue(44.7));
+}
+
+// The dialog's description links the filter's docs page; a parameter listed as advanced is hidden until asked
+// where MeshLab can (2021.05 and later).
+TEST(Adapter, DialogLinksTheDocsAndMarksAdvancedParameters) {
+  MeshDocument md;
+  md.addNewMesh("", "a");
+  FakePlugin p;
+  EXPECT_NE(p.filterInfo(action(p, 1)).indexOf("/filters/ok.md\">ok.md</a>"), -1);
+  EXPECT_EQ(p.filterInfo(action(p, 0)), QString("x"));
+  const RichParameterList par = params(p, 1, md);
+#if PECTUS_MESHLAB_API >= 2021
+  EXPECT_TRUE(par.getParameterByName("n").isAdvanced());
+  EXPECT_FALSE(par.getParameterByName("x").isAdvanced());
+#else
+  EXPECT_TRUE(par.hasParameter("n"));
+#endif
 }
 
 // A script run declares a filter's parameters before its first run only, also when the filter has no numeric

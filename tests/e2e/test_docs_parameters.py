@@ -30,6 +30,7 @@ def declared() -> tuple[dict, dict]:
         raise SystemExit(f"pectus_layer_check --params failed ({out.returncode}): {out.stderr}")
     filters, ranges = {}, {}
     for f in ET.fromstring(out.stdout).iter("filter"):
+        check_dialog_info(f.attrib["name"], f.attrib["info"])
         params = []
         ranges[f.attrib["name"]] = {
             p.attrib["name"]: (float(p.attrib["min"]), float(p.attrib["max"]), p.attrib["minOpen"] == "true",
@@ -46,6 +47,20 @@ def declared() -> tuple[dict, dict]:
             params.append((a["name"], kind, value, labels))
         filters[f.attrib["name"]] = params
     return filters, ranges
+
+
+INFO_CHARACTERS = 150  # three lines of the narrowest dialog (about 50 characters a line)
+
+
+def check_dialog_info(name: str, info: str):
+    """the dialog's description: at most three lines, then a link to the filter's page in the installed docs"""
+    text, _, link = info.partition("<br>Details: ")
+    shown = re.sub(r"&\w+;", "x", re.sub(r"<[^>]+>", "", text))
+    check(len(shown) <= INFO_CHARACTERS, f"{name}: dialog description within {INFO_CHARACTERS} characters",
+          f"{len(shown)}: {shown}")
+    page = re.search(r'href="file://[^"]*/filters/([\w.]+\.md)"', link)
+    check(page is not None and os.path.isfile(os.path.join(SOURCE, "docs", "filters", page.group(1))),
+          f"{name}: the dialog links its docs page", link)
 
 
 # a number as the docs write it: 100,000 (thousands), 0.05, 1e6, -1e6, –0.4 (an en dash as minus)

@@ -98,6 +98,7 @@ int listParameters(int argc, char** argv) {
     QDomElement e = doc.createElement("filter");
     e.setAttribute("name", f.plugin->filterName(f.action));
     e.setAttribute("library", f.library);
+    e.setAttribute("info", f.plugin->filterInfo(f.action));  // what the dialog shows above the parameters
     // the ranges the plugin base recorded during initParameterSet, on the filter's action
     // (FilterPluginBase::kRangesProperty: {lo, hi, loOpen, hiOpen, integer} by parameter name)
     const QVariantMap ranges = f.action->property("pectusParameterRanges").toMap();

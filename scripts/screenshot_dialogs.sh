@@ -1,0 +1,98 @@
+#!/usr/bin/env bash
+# Opens filter dialogs in the real MeshLab GUI under Xvfb, on a screen 1,000 px tall, through MeshLab's filter
+# search (Ctrl+F, the filter's name, Enter). For each filter it prints one line
+#   dialog <width>x<height> <filter name>
+# and saves OUTDIR/dialog_<n>.png (the screen with the dialog); with --help, the dialog is measured and shot
+# again with every parameter's help shown (the dialog's Help button), as dialog_<n>_help.png.
+# With --menu, it first saves OUTDIR/menu.png: Filters > Quality Measure and Computations, opened.
+#   scripts/screenshot_dialogs.sh [--host 2025.07] [--help] [--menu] OUTDIR MESH [MESH...] -- "Filter name" [...]
+# MESH: the layers to load first (the filters need a current layer to be enabled). Needs xvfb, xdotool and
+# imagemagick (setup.sh installs them) and a built prefix (2020.09) or build-2025.07 (scripts/host.sh 2025.07).
+set -euo pipefail
+ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
+HOST=2020.09 HELP=0 MENU=0
+while [[ "${1:-}" =~ ^--(host|help|menu)$ ]]; do
+  case "$1" in
+    --host) HOST="$2"; shift 2 ;;
+    --help) HELP=1; shift ;;
+    --menu) MENU=1; shift ;;
+  esac
+done
+OUT="$1"; shift; mkdir -p "$OUT"; OUT="$(readlink -f "$OUT")"
+MESHES=()
+while [ "$#" -gt 0 ] && [ "$1" != -- ]; do MESHES+=("$(readlink -f "$1")"); shift; done
+shift
+command -v xdotool >/dev/null || apt-get install -y -q xdotool >/dev/null
+command -v import >/dev/null || apt-get install -y -q imagemagick >/dev/null
+
+SCREEN_W=1400 SCREEN_H=1000
+export DISPLAY=":$((90 + RANDOM % 400))"
+Xvfb "$DISPLAY" -screen 0 ${SCREEN_W}x${SCREEN_H}x24 -nolisten tcp >/dev/null 2>&1 & XPID=$!
+home="$(mktemp -d /tmp/pectus-dialogs-home.XXXX)"
+cleanup() {
+  kill "${MPID:-}" 2>/dev/null || true
+  [ "$HOST" = 2020.09 ] || pkill -f "meshlab .*$home" 2>/dev/null || true
+  kill "$XPID" 2>/dev/null || true
+  rm -rf "$home"
+}
+trap cleanup EXIT
+sleep 2
+if [ "$HOST" = 2020.09 ]; then
+  HOME="$home" "$ROOT/build/prefix/bin/meshlab" "${MESHES[@]}" >/dev/null 2>&1 & MPID=$!
+else
+  # the forky userland's MeshLab (which sees this /tmp) loads build-2025.07's plugins from a fresh per-user
+  # extra-plugins folder
+  chroot "$ROOT/.hosts/forky" apt-get install -y -q --no-install-recommends libmuparser2v5 libqhull-r8.0 lib3ds-1-3 \
+    libopenctm1 >/dev/null
+  extra="$home/.local/share/VCG/MeshLab_64bit_fp/MeshLabExtraPlugins/$HOST"
+  mkdir -p "$extra" && cp "$ROOT"/build-"$HOST"/plugins/*.so "$extra/"
+  for m in "${MESHES[@]}"; do cp "$m" "$home/"; done
+  inside=""; for m in "${MESHES[@]}"; do inside+=" '$home/$(basename "$m")'"; done
+  "$ROOT/scripts/host.sh" "$HOST" run bash -c "mountpoint -q /proc || mount -t proc proc /proc; \
+    HOME='$home' DISPLAY=$DISPLAY exec meshlab $inside" >/dev/null 2>&1 & MPID=$!
+fi
+
+main=""
+for _ in $(seq 60); do
+  main="$(xdotool search --name "^MeshLab [0-9]" 2>/dev/null | head -1 || true)"
+  [ -n "$main" ] && break
+  sleep 1
+done
+[ -n "$main" ] || { echo "MeshLab did not start" >&2; exit 1; }
+sleep 4
+xdotool windowmove "$main" 0 0 windowsize "$main" "$SCREEN_W" "$SCREEN_H"; sleep 1
+
+# the dialog of `name`: MeshLab 2020.09 opens it as a floating window with the filter's name as title;
+# 2021.05 and later dock it in the main window, so the dock is found by its title among the main window's children
+shoot() {  # shoot FILE: the whole screen
+  import -window root "$1"
+}
+if [ "$MENU" = 1 ]; then
+  # Filters, then its Quality Measure and Computations entry (the menu's 9th row on both releases)
+  xdotool mousemove 118 10 click 1; sleep 1.2
+  row=$([ "$HOST" = 2020.09 ] && echo 261 || echo 240)
+  xdotool mousemove 230 "$row" sleep 0.3 mousemove 250 "$row"; sleep 1.5
+  shoot "$OUT/menu.png"
+  xdotool key Escape Escape; sleep 0.5
+fi
+n=0
+for name in "$@"; do
+  n=$((n + 1))
+  xdotool windowfocus --sync "$main" 2>/dev/null || true
+  xdotool key ctrl+f; sleep 0.8
+  xdotool type --delay 20 "$name"; sleep 1.2
+  xdotool key Down Return; sleep 2.5
+  win="$(xdotool search --name "^$(printf '%s' "$name" | sed 's/[][()\.^$*+?{}|]/\\&/g')\$" 2>/dev/null | tail -1 || true)"
+  if [ -z "$win" ]; then echo "dialog not-found $name"; shoot "$OUT/dialog_$n.png"; continue; fi
+  eval "$(xdotool getwindowgeometry --shell "$win")"
+  echo "dialog ${WIDTH}x${HEIGHT} $name"
+  shoot "$OUT/dialog_$n.png"
+  if [ "$HELP" = 1 ]; then
+    # the Help button: the right one of the first row of buttons, two button rows above the dialog's bottom
+    xdotool mousemove $((X + WIDTH * 3 / 4)) $((Y + HEIGHT - 50)) click 1; sleep 1.5
+    eval "$(xdotool getwindowgeometry --shell "$win")"
+    echo "dialog-help ${WIDTH}x${HEIGHT} $name"
+    shoot "$OUT/dialog_${n}_help.png"
+  fi
+  xdotool windowunmap "$win" 2>/dev/null || true; sleep 0.5
+done
