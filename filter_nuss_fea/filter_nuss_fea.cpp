@@ -315,13 +315,17 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
 
   // the model surface: the current labelled layer, or the visible tissue layers joined into `joined`
   const bool perTissue = ctx.enumIn("input", 2) == 1;
-  const MeshModel* lmLayer =
-      &landmarkLayerOf(ctx, perTissue ? tissueLayers(ctx) : std::vector<const MeshModel*>{&cur}, !ctx.boolean("usePoints"));
-  const auto lms = pectus::readLandmarks(lmLayer->cm);
+  const bool needSternumEnd = !ctx.boolean("usePoints");
+  std::vector<pectus::Landmark> lms;  // of the cage's landmark layer, found once the cage is known to be one
   pectus::OwnedMesh joined;
   std::string joinText;
   const auto cage = [&] {
-    if (!perTissue) return nuss::cageFromMesh(cur.cm);
+    if (!perTissue) {
+      auto c = nuss::cageFromMesh(cur.cm);
+      lms = pectus::readLandmarks(landmarkLayerOf(ctx, {&cur}, needSternumEnd).cm);
+      return c;
+    }
+    lms = pectus::readLandmarks(landmarkLayerOf(ctx, tissueLayers(ctx), needSternumEnd).cm);
     std::vector<nuss::TissueLayer> layers;
     for (const MeshModel* m : tissueLayers(ctx)) layers.push_back({m->label().toStdString(), &m->cm});
     if (layers.empty())

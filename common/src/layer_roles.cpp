@@ -152,7 +152,7 @@ LayerChoice chooseLandmarkLayer(const std::vector<LayerRef>& layers, int named, 
 std::string beforeLayerProblem(const CMeshO& m, const CMeshO& measured) {
   if (m.fn == 0) return "which has no faces";
   if (m.vn != measured.vn)
-    return "which is not the same mesh (" + std::to_string(m.vn) + " vertices; the measured layer has " + std::to_string(measured.vn) + ")";
+    return "which is not the same model (" + std::to_string(m.vn) + " vertices; the measured layer has " + std::to_string(measured.vn) + ")";
   return {};
 }
 
@@ -175,7 +175,7 @@ LayerChoice chooseBeforeLayer(const std::vector<LayerRef>& layers, int named, in
     if (can(i)) idx.push_back(i);
   const std::string cur = layerText(layers[std::size_t(current)]);
   if (idx.empty())
-    throw InputError("no before layer for " + cur + ": " + namedNote + ", and no other layer is the same mesh (" +
+    throw InputError("no before layer for " + cur + ": " + namedNote + ", and no other layer is the same model (" +
                      std::to_string(measured.vn) + " vertices), as the cage an FE result was computed from is. Load or choose the before state, or turn "
                      "'Compare' off.");
   if (idx.size() > 1)

@@ -91,7 +91,7 @@ TEST(LayerRoles, BeforeLayer) {
   EXPECT_EQ(c.note, "");
   c = pectus::chooseBeforeLayer(d.layers, 0, 3, -1, "beforeLayer");  // the box: another mesh
   EXPECT_EQ(c.index, 1);
-  EXPECT_NE(c.note.find("not the same mesh"), std::string::npos) << c.note;
+  EXPECT_NE(c.note.find("not the same model"), std::string::npos) << c.note;
   // two layers are the same mesh: the recorded source decides, else a refusal naming both
   std::vector<LayerRef> two = d.layers;
   CMeshO copy;
