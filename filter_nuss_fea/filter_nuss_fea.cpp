@@ -168,15 +168,19 @@ void addPatchParams(RichParameterList& par) {
            "to the bar exit.", pectus::nuss::kPatchRadiusRange);
 }
 
-std::vector<pectus::Landmark> readLandmarkParam(FilterContext& ctx) {
-  MeshModel& lmLayer = ctx.mesh("landmarkLayer");
-  if (&lmLayer == &ctx.current())
-    throw pectus::InputError("The landmark layer is the cage layer itself: pick the point layer of landmarks (e.g. "
-                             "'ribcage landmarks') and make the labelled cage the current layer.");
-  auto lms = pectus::readLandmarks(lmLayer.cm);
-  if (lms.empty())
-    throw pectus::InputError("The landmark layer '" + lmLayer.label().toStdString() + "' has no vertices.");
-  return lms;
+// the layers with faces the per-tissue input joins: every visible one
+std::vector<const MeshModel*> tissueLayers(FilterContext& ctx) {
+  std::vector<const MeshModel*> out;
+  for (MeshModel* m : pectus::ml::meshes(ctx.doc()))
+    if (m->isVisible() && m->cm.fn > 0) out.push_back(m);
+  return out;
+}
+// the landmark layer of the cage (the current layer, or the tissue layers), found by role (FilterContext::landmarkLayer)
+MeshModel& landmarkLayerOf(FilterContext& ctx, const std::vector<const MeshModel*>& cage, bool needSternumEnd) {
+  return ctx.landmarkLayer("landmarkLayer", cage, needSternumEnd ? std::vector<int>{pectus::kSternumLowerEnd} : std::vector<int>{},
+                           "Pick the point layer of landmarks written with the cage (e.g. 'ribcage landmarks') and make the "
+                           "labelled cage the current layer.",
+                           {&ctx.current()});
 }
 void readCalibrationParams(FilterContext& ctx, pectus::nuss::Options& o, bool calibrate) {
   o.targetElevation = calibrate ? ctx.floatIn("targetElevation") : 0.0;
@@ -261,7 +265,6 @@ void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList&
 void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   namespace nuss = pectus::nuss;
   MeshModel& cur = ctx.current();
-  const auto lms = readLandmarkParam(ctx);
 
   nuss::Options o;
   const bool calibrate = ctx.enumIn("mode", 2) == 0;
@@ -278,14 +281,19 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
 
   // the model surface: the current labelled layer, or the visible tissue layers joined into `joined`
   const bool perTissue = ctx.enumIn("input", 2) == 1;
+  const bool needSternumEnd = !ctx.boolean("usePoints");
+  std::vector<pectus::Landmark> lms;  // of the cage's landmark layer, found once the cage is known to be one
   pectus::OwnedMesh joined;
   std::string joinText;
   const auto cage = [&] {
-    if (!perTissue) return nuss::cageFromMesh(cur.cm);
+    if (!perTissue) {
+      auto c = nuss::cageFromMesh(cur.cm);
+      lms = pectus::readLandmarks(landmarkLayerOf(ctx, {&cur}, needSternumEnd).cm);
+      return c;
+    }
+    lms = pectus::readLandmarks(landmarkLayerOf(ctx, tissueLayers(ctx), needSternumEnd).cm);
     std::vector<nuss::TissueLayer> layers;
-    const MeshModel* lmLayer = &ctx.mesh("landmarkLayer");
-    for (MeshModel* m : pectus::ml::meshes(ctx.doc()))
-      if (m != lmLayer && m->isVisible() && m->cm.fn > 0) layers.push_back({m->label().toStdString(), &m->cm});
+    for (const MeshModel* m : tissueLayers(ctx)) layers.push_back({m->label().toStdString(), &m->cm});
     if (layers.empty())
       throw pectus::InputError("No visible layer with faces besides the landmark layer: load one closed surface per tissue.");
     nuss::JoinStats js;
@@ -311,6 +319,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   }
 
   MeshModel& res = addDeformedLayer(ctx, surfaceMesh, cage, a, stressField ? a.nodalStress : a.nodalStrain, "nuss fe result");
+  if (!perTissue) pectus::ml::recordSource(res, cur);  // the before layer of the volume filters
 
   std::vector<pectus::Landmark> moved = lms;
   for (auto& l : moved) l.p += a.displacementAt(l.p);
@@ -428,7 +437,7 @@ void FilterNussFeaPlugin::initBarPlanner(const MeshDocument& md, RichParameterLi
 void FilterNussFeaPlugin::runBarPlanner(FilterContext& ctx) {
   namespace nuss = pectus::nuss;
   MeshModel& cur = ctx.current();
-  const auto lms = readLandmarkParam(ctx);
+  const auto lms = pectus::readLandmarks(landmarkLayerOf(ctx, {&cur}, true).cm);
   nuss::PlanOptions o;
   o.levels = nuss::parseLevels(ctx.params().getString("levels").toStdString());
   const int bars = ctx.enumIn("bars", 3);
@@ -450,6 +459,7 @@ void FilterNussFeaPlugin::runBarPlanner(FilterContext& ctx) {
   const nuss::PlanRow& best = plan.rows[plan.best];
   MeshModel& res = addDeformedLayer(ctx, cur.cm, cage, plan.bestAnalysis, plan.bestAnalysis.nodalStress,
                                     QString::fromStdString("nuss planner best: " + best.option));
+  pectus::ml::recordSource(res, cur);
   ctx.doc().setCurrentMesh(res.id());
 
   const size_t n = plan.rows.size();

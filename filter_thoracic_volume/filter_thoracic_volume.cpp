@@ -62,9 +62,20 @@ struct Common {
 
 std::string lab(const MeshModel& m) { return m.label().toStdString(); }
 
-std::vector<pectus::Landmark> landmarksOf(FilterContext& ctx) {
-  MeshModel& lm = ctx.mesh("landmarkLayer");
-  return pectus::readLandmarks(lm.cm);
+/// The landmark layer of the cage the range is taken on: the before layer when there is one (both are measured over
+/// its range), else the measured layer; by role (FilterContext::landmarkLayer), with the codes `needed`.
+MeshModel& landmarkLayerOf(FilterContext& ctx, const MeshModel& measured, const MeshModel* before, std::vector<int> needed,
+                           const char* otherwise) {
+  const MeshModel& cage = before ? *before : measured;
+  return ctx.landmarkLayer("landmarkLayer", {&cage}, needed,
+                           std::string("Pick the point layer of landmarks written with the cage (vertex quality = landmark code, "
+                                       "e.g. 'ribcage landmarks'), or set ") + otherwise + ".",
+                           {&measured, before});
+}
+
+/// The before layer when 'Compare' is on (by role: FilterContext::beforeLayer), else nullptr.
+MeshModel* beforeLayerOf(FilterContext& ctx, const MeshModel& measured) {
+  return ctx.boolean("compare") ? &ctx.beforeLayer("beforeLayer", measured) : nullptr;
 }
 
 double needLandmark(const std::vector<pectus::Landmark>& lms, int code, const std::string& layer, const char* what) {
@@ -82,17 +93,18 @@ Common readCommon(FilterContext& ctx, bool needRange = true) {
   c.soup = vol::soupFromMesh(c.measured->cm, lab(*c.measured));
   if (c.soup.F.empty())
     throw InputError("layer '" + lab(*c.measured) + "' has no faces: the measured layer must be the rib cage surface");
-  if (ctx.boolean("compare")) {
-    c.before = &ctx.mesh("beforeLayer");
-    if (c.before == c.measured)
-      throw InputError("'Before layer' is the current layer itself: pick the before state, or turn 'Compare' off");
+  c.before = beforeLayerOf(ctx, *c.measured);
+  if (c.before) {
     c.beforeSoup = vol::soupFromMesh(c.before->cm, lab(*c.before));
     vol::requireComparablePair(c.beforeSoup, c.soup, lab(*c.before), lab(*c.measured));
   }
   const int src = ctx.enumIn("rangeSource", 2);
   const int lower = ctx.enumIn("lowerLimit", 2);
   if (src == 0 || !needRange) {
-    MeshModel& lm = ctx.mesh("landmarkLayer");
+    const std::vector<int> needed = src == 0 ? std::vector<int>{lower == 0 ? pectus::kDiaphragmDome : pectus::kSternumLowerEnd,
+                                                                pectus::kLungApex}
+                                             : std::vector<int>{};
+    MeshModel& lm = landmarkLayerOf(ctx, *c.measured, c.before, needed, "'Range from' to Given heights");
     c.landmarks = pectus::readLandmarks(lm.cm);
     if (src == 0) {
       c.range.zLo = lower == 0 ? needLandmark(c.landmarks, pectus::kDiaphragmDome, lab(lm), "dome of the diaphragm")
@@ -367,11 +379,9 @@ void FilterThoracicVolumePlugin::runIndex(FilterContext& ctx) {
   MeshModel& cur = ctx.current();
   vol::Soup soup = vol::soupFromMesh(cur.cm, lab(cur));
   if (soup.F.empty()) throw InputError("layer '" + lab(cur) + "' has no faces: the measured layer must be the rib cage");
-  MeshModel* before = nullptr;
+  MeshModel* before = beforeLayerOf(ctx, cur);
   vol::Soup beforeSoup;
-  if (ctx.boolean("compare")) {
-    before = &ctx.mesh("beforeLayer");
-    if (before == &cur) throw InputError("'Before layer' is the current layer itself: pick the before state, or turn 'Compare' off");
+  if (before) {
     beforeSoup = vol::soupFromMesh(before->cm, lab(*before));
     vol::requireComparablePair(beforeSoup, soup, lab(*before), lab(cur));
   }
@@ -379,7 +389,7 @@ void FilterThoracicVolumePlugin::runIndex(FilterContext& ctx) {
   in.rays = ctx.intIn("rays");
   const int src = ctx.enumIn("levelSource", 2);
   if (src == 0) {
-    MeshModel& lm = ctx.mesh("landmarkLayer");
+    MeshModel& lm = landmarkLayerOf(ctx, cur, before, {pectus::kFunnelDeepest}, "'Level from' to Automatic");
     const auto lms = pectus::readLandmarks(lm.cm);
     auto deep = pectus::findLandmark(lms, pectus::kFunnelDeepest);
     if (!deep)

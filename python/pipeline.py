@@ -7,8 +7,9 @@
   before and after.
 
 The script is assembled from the filters' example scripts (every parameter, typed) with a few values
-overridden, written next to the results as pipeline.mlx (it runs unchanged in the GUI: Filters >
-Load filter script... > pipeline.mlx, Apply). Results: the layers as PLY, the FE model (.vtu, .inp),
+overridden, written next to the results as pipeline.mlx (it runs unchanged in the GUI, also in a
+project that holds other layers: with a layer loaded, Filters > Show current filter script > Open Script >
+pipeline.mlx, Apply Script). Results: the layers as PLY, the FE model (.vtu, .inp),
 the force-displacement CSV/PNG, the rib strain CSV, quality histograms, summary.csv, and a table
 shaped like the thesis' Table 6-1 on stdout.
 

@@ -13,6 +13,7 @@
 
 #include "pectus/errors.h"
 #include "pectus/format.h"
+#include "pectus/layer_roles.h"
 
 namespace pectus::ml {
 
@@ -218,6 +219,64 @@ MeshModel& FilterContext::mesh(const QString& name) const {
   MeshModel* m = meshParam(par_, md_, name);
   if (m == nullptr) throw InputError("parameter '" + q(name) + "' does not name an existing layer");
   return *m;
+}
+
+// ---------------------------------------------------------------------------------------------
+// layer parameters by role (pectus/layer_roles.h)
+
+namespace {
+constexpr const char* kSourceAttr = "pectus_source_layer";
+
+/// the document's layers as the role checks see them, and the index of each of `wanted` (-1: not there)
+std::vector<LayerRef> layerRefs(const MeshDocument& md, std::vector<MeshModel*>& models) {
+  models = meshes(md);
+  std::vector<LayerRef> refs;
+  for (MeshModel* m : models) refs.push_back({q(m->label()), &m->cm, layerNumber(md, *m)});
+  return refs;
+}
+int indexOf(const std::vector<MeshModel*>& models, const MeshModel* m) {
+  const auto it = std::find(models.begin(), models.end(), m);
+  return it == models.end() ? -1 : int(it - models.begin());
+}
+void logChoice(const FilterContext& ctx, const char* role, const LayerRef& chosen, const std::string& note) {
+  if (!note.empty()) ctx.log(std::string(role) + ": '" + chosen.label + "', layer " + std::to_string(chosen.number) + " (" + note + ")");
+}
+}  // namespace
+
+MeshModel& FilterContext::landmarkLayer(const QString& name, const std::vector<const MeshModel*>& cage,
+                                        const std::vector<int>& needed, const std::string& hint,
+                                        const std::vector<const MeshModel*>& exclude) const {
+  std::vector<MeshModel*> models;
+  const auto refs = layerRefs(md_, models);
+  std::vector<const CMeshO*> surfaces;
+  for (const MeshModel* m : cage) surfaces.push_back(&m->cm);
+  std::vector<int> out;
+  for (const MeshModel* m : exclude) out.push_back(indexOf(models, m));
+  const auto c = chooseLandmarkLayer(refs, indexOf(models, meshParam(par_, md_, name)), out, surfaces, needed, q(name), hint);
+  logChoice(*this, "landmark layer", refs[std::size_t(c.index)], c.note);
+  return *models[std::size_t(c.index)];
+}
+
+MeshModel& FilterContext::beforeLayer(const QString& name, const MeshModel& measured) const {
+  std::vector<MeshModel*> models;
+  const auto refs = layerRefs(md_, models);
+  const auto c = chooseBeforeLayer(refs, indexOf(models, meshParam(par_, md_, name)), indexOf(models, &measured),
+                                   indexOf(models, recordedSource(md_, measured)), q(name));
+  logChoice(*this, "before layer", refs[std::size_t(c.index)], c.note);
+  return *models[std::size_t(c.index)];
+}
+
+void recordSource(MeshModel& result, const MeshModel& source) {
+  auto h = vcg::tri::Allocator<CMeshO>::GetPerMeshAttribute<int>(result.cm, kSourceAttr);
+  h() = int(source.id());
+}
+
+MeshModel* recordedSource(const MeshDocument& md, const MeshModel& m) {
+  auto h = vcg::tri::Allocator<CMeshO>::FindPerMeshAttribute<int>(const_cast<CMeshO&>(m.cm), kSourceAttr);
+  if (h._handle == nullptr) return nullptr;
+  for (MeshModel* other : meshes(md))
+    if (other != &m && int(other->id()) == h()) return other;
+  return nullptr;
 }
 
 // ---------------------------------------------------------------------------------------------
@@ -471,6 +530,7 @@ RichMesh richMesh(const QString& name, MeshModel* def, const MeshDocument& md, c
 MeshModel* meshParam(const RichParameterList& par, MeshDocument& md, const QString& name) {
   return md.getMesh(par.getMeshId(name));
 }
+int layerNumber(const MeshDocument&, const MeshModel& m) { return int(m.id()); }
 void updateBoxAndNormals(MeshModel& m) { m.updateBoxAndNormals(); }
 #else
 const char* hostVersion() { return "2020.09"; }
@@ -485,6 +545,7 @@ RichMesh richMesh(const QString& name, MeshModel* def, const MeshDocument& md, c
   return RichMesh(name, def, &const_cast<MeshDocument&>(md), desc, help);
 }
 MeshModel* meshParam(const RichParameterList& par, MeshDocument&, const QString& name) { return par.getMesh(name); }
+int layerNumber(const MeshDocument& md, const MeshModel& m) { return int(md.meshList.indexOf(const_cast<MeshModel*>(&m))); }
 void updateBoxAndNormals(MeshModel& m) { m.UpdateBoxAndNormals(); }
 #endif
 

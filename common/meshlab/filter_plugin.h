@@ -125,6 +125,17 @@ class FilterContext {
   bool boolean(const QString& name) const { return par_.getBool(name); }
   int enumIn(const QString& name, int count) const;
   MeshModel& mesh(const QString& name) const;
+  /// The landmark layer of the cage `cage` (its layers; empty: none known) by role, not by position
+  /// (pectus/layer_roles.h): the layer the parameter `name` names when it is a point layer of landmark codes with
+  /// the codes `needed` that lies on the cage, else the one such layer that does. Logs which layer it took when
+  /// that is not the named one; throws InputError naming the layers and what to choose (ending with `hint`)
+  /// when none or several fit. `exclude`: layers that cannot be it (the cage).
+  MeshModel& landmarkLayer(const QString& name, const std::vector<const MeshModel*>& cage, const std::vector<int>& needed,
+                           const std::string& hint, const std::vector<const MeshModel*>& exclude = {}) const;
+  /// The before state of `measured` by role: the named layer when it is the same mesh (vertex count),
+  /// else the layer `measured` was computed from (recordSource) when it is, else the one layer that is; logs and
+  /// throws as landmarkLayer does.
+  MeshModel& beforeLayer(const QString& name, const MeshModel& measured) const;
   QString string(const QString& name) const { return par_.getString(name); }
 
   void commit();
@@ -202,6 +213,12 @@ class FilterPluginBase : public HostFilter {
 /// The first layer whose label (without extension) ends in "landmarks" (labels.h), else the current one:
 /// the default of every "Landmark layer" parameter.
 MeshModel* defaultLandmarkLayer(const MeshDocument& md);
+
+/// Records in `result` (a layer a filter computed from another, e.g. the FE result from its cage) which layer it
+/// came from, for FilterContext::beforeLayer; kept while the document is open.
+void recordSource(MeshModel& result, const MeshModel& source);
+/// The layer recordSource named for `m`, or nullptr (none recorded, or that layer is gone).
+MeshModel* recordedSource(const MeshDocument& md, const MeshModel& m);
 
 /// The JSON line a filter's results take in a results file: {"filter": "<name>", "results": {...}}
 std::string resultsJsonLine(const std::string& filter, const pectus::Results& results);

@@ -80,6 +80,8 @@ void removeLayer(MeshDocument& md, MeshModel* m);
 /// A layer-choice parameter whose default is `def` (may be nullptr: the first layer).
 RichMesh richMesh(const QString& name, MeshModel* def, const MeshDocument& md, const QString& desc,
                   const QString& help);
+/// The number a script gives a layer in a RichMesh value: its position (2020.09), its id (2021.05 and later).
+int layerNumber(const MeshDocument& md, const MeshModel& m);
 /// The layer a RichMesh parameter names, or nullptr if it names none.
 MeshModel* meshParam(const RichParameterList& par, MeshDocument& md, const QString& name);
 /// Bounding box and normals after the coordinates changed.
