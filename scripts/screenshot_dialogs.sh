@@ -2,7 +2,7 @@
 # Opens filter dialogs in the real MeshLab GUI under Xvfb, on a screen 1,000 px tall, through MeshLab's filter
 # search (Ctrl+F, the filter's name, Enter). For each filter it prints one line
 #   dialog <width>x<height> <filter name>
-# and saves OUTDIR/dialog_<n>.png (the screen with the dialog); with --help, the dialog is measured and shot
+# and saves OUTDIR/dialog_<n>.png (the screen with the dialog) and dialog_<n>_window.png (the dialog alone); with --help, the dialog is measured and shot
 # again with every parameter's help shown (the dialog's Help button), as dialog_<n>_help.png.
 # With --menu, it first saves OUTDIR/menu.png: Filters > Quality Measure and Computations, opened.
 #   scripts/screenshot_dialogs.sh [--host 2025.07] [--help] [--menu] OUTDIR MESH [MESH...] -- "Filter name" [...]
@@ -87,6 +87,7 @@ for name in "$@"; do
   eval "$(xdotool getwindowgeometry --shell "$win")"
   echo "dialog ${WIDTH}x${HEIGHT} $name"
   shoot "$OUT/dialog_$n.png"
+  import -window "$win" "$OUT/dialog_${n}_window.png"
   if [ "$HELP" = 1 ]; then
     # the Help button: the right one of the first row of buttons, two button rows above the dialog's bottom
     xdotool mousemove $((X + WIDTH * 3 / 4)) $((Y + HEIGHT - 50)) click 1; sleep 1.5

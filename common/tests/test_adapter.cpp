@@ -225,8 +225,8 @@ TEST(Adapter, DialogLinksTheDocsAndMarksAdvancedParameters) {
   MeshDocument md;
   md.addNewMesh("", "a");
   FakePlugin p;
-  EXPECT_NE(p.filterInfo(action(p, 1)).indexOf("/filters/ok.md\">ok.md</a>"), -1);
-  EXPECT_EQ(p.filterInfo(action(p, 0)), QString("x"));
+  EXPECT_NE(p.filterInfo(FakePlugin::FP_OK).indexOf("/filters/ok.md\">ok.md</a>"), -1);
+  EXPECT_EQ(p.filterInfo(FakePlugin::FP_BREAK), QString("x"));
   const RichParameterList par = params(p, 1, md);
 #if PECTUS_MESHLAB_API >= 2021
   EXPECT_TRUE(par.getParameterByName("n").isAdvanced());
