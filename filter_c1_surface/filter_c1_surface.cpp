@@ -20,19 +20,8 @@ const QStringList kGradient = QStringList() << "Robust (minimum curvature / quad
 const QStringList kFrame = QStringList() << "3D surface (vertex normals)" << "Height field along Z";
 
 const char* kGradientHelp =
-    "How vertex normals (gradients) are estimated. Robust (default): for a height field, all gradients at "
-    "once by minimising the bending of the edge curves (Nielson's minimum-curvature estimate, as behind "
-    "Clough-Tocher); for a 3D surface, a weighted least-squares fit of a quadratic height over the 2-ring of "
-    "each vertex, in the frame of its averaged normal. Local quadratic fit: that per-vertex fit for height "
-    "fields too (exact for quadratic heights; the global estimate is exact for linear ones only). Thesis: the "
-    "inverse-area weighted mean of the adjacent facet gradients (eq. 3-1), extrapolated at boundary "
-    "vertices (eq. 3-2); faithful to the thesis but unstable next to sliver triangles.";
-const char* kFrameHelp =
-    "3D surface: for any oriented manifold mesh, closed ones included (bone, rib cage); the patch "
-    "interpolates the vertices and their tangent planes, exactly C0 across edges, with a normal jump "
-    "across edges that vanishes as the mesh is refined. Height field along Z: the thesis' scalar "
-    "interpolant z = f(x, y), exactly C1 and exact for quadratics; refused if the mesh folds over the "
-    "XY plane.";
+    "Vertex normals: Robust (global or quadratic fit), Thesis (inverse-area mean), Local quadratic fit.";
+const char* kFrameHelp = "3D surface: any oriented manifold mesh. Height field: the thesis' z = f(x, y), exactly C1.";
 
 c1::Options options(FilterContext& ctx) {
   c1::Options o;
@@ -93,8 +82,7 @@ FilterC1SurfacePlugin::FilterC1SurfacePlugin() {
 void FilterC1SurfacePlugin::initParameters(int id, const MeshDocument& md, RichParameterList& par) {
   if (id == FP_C1_REFINE) {
     addInt(par, "subdivisions", 3, "Subdivisions k",
-           "Every triangle is split into k&times;k triangles; k = 1 keeps the mesh. "
-           "The new vertices lie on the C1 patches.", c1::kSubdivisionsRange);
+           "Each triangle is split into k x k, new vertices on the C1 patches; 1 keeps the mesh.", c1::kSubdivisionsRange);
     par.addParam(RichEnum("gradientMethod", 0, kGradient, "Gradient estimation", kGradientHelp));
     par.addParam(RichEnum("frame", 0, kFrame, "Surface type", kFrameHelp));
     par.addParam(RichBool("newLayer", true, "Result in a new layer",
@@ -104,8 +92,7 @@ void FilterC1SurfacePlugin::initParameters(int id, const MeshDocument& md, RichP
     for (MeshModel* m : pectus::ml::meshes(md))
       if (m != pectus::ml::currentMesh(md) && m->cm.fn > 0) { def = m; break; }
     par.addParam(pectus::ml::richMesh("surfaceMesh", def, md, "Surface layer",
-                          "The triangle mesh whose C1 surface the current layer's vertices are projected onto "
-                          "(it may be the current layer itself: then vertices stay where they are)."));
+                          "Triangle mesh whose C1 surface the current layer's vertices are projected onto."));
     par.addParam(RichEnum("gradientMethod", 0, kGradient, "Gradient estimation", kGradientHelp));
     par.addParam(RichEnum("frame", 0, kFrame, "Surface type", kFrameHelp));
   }

@@ -76,36 +76,29 @@ void FilterMgaSmoothPlugin::initParameters(int id, const MeshDocument&, RichPara
   if (id == FP_ELEMENT_QUALITY) {
     par.addParam(RichEnum("elementType", 0, QStringList() << "Auto" << "Triangles (alpha)" << "Quads (beta)",
                           "Element type",
-                          "Auto: quads (beta) when the layer has faux edges (a quad or quad-dominant mesh), "
-                          "else triangles (alpha). Triangles: every face is measured with alpha, faux edges "
-                          "ignored. Quads: faux-edge pairs are measured with beta, lone triangles with alpha; "
-                          "refused if the layer has no faux edge."));
+                          "Auto: quads (beta) if the layer has faux edges, else triangles (alpha). "
+                          "Quads needs faux edges."));
     par.addParam(RichBool("colorize", true, "Colour by quality",
-                          "Colour the faces with MeshLab's red-to-blue quality ramp on the fixed range [0, 1], "
-                          "so colours compare across layers and before/after smoothing."));
+                          "Colour faces by quality on a fixed red-to-blue ramp [0, 1], comparable across layers."));
   }
   if (id == FP_MGA_SMOOTH || id == FP_GRADIENT_SMOOTH) {
     const bool mga = id == FP_MGA_SMOOTH;
     par.addParam(RichEnum("elementType", 0, QStringList() << "Auto" << "Triangles (alpha)" << "Quads (beta)",
                           "Element type",
-                          "Auto: quads (fitness beta) when the layer has faux edges (a quad or quad-dominant "
-                          "mesh), else triangles (alpha). Triangles: every face is an element, faux edges "
-                          "ignored. Quads: faux-edge pairs are quads (beta), lone triangles use alpha; refused if "
-                          "the layer has no faux edge."));
+                          "Auto: quads (beta) if the layer has faux edges, else triangles (alpha). "
+                          "Quads needs faux edges."));
     addInt(par, "maxSweeps", mga ? 10 : 15, "Maximum sweeps",
            "Upper bound on the number of passes over all free nodes (thesis step 9).", smooth::kMaxSweepsRange);
     addFloat(par, "tolerance", 1e-4f, "Convergence tolerance",
              "Stop when one sweep raises the mean element quality by less than this.", smooth::kToleranceRange);
     if (mga) {
       addFloat(par, "accuracy", 1e-3f, "Accuracy of r1, r2",
-               "Wanted accuracy of the design parameters r1, r2; sets the bits per parameter "
-               "(eq. 1-1: 2^(nl-1) < interval/accuracy <= 2^nl).", smooth::kAccuracyRange);
+               "Wanted accuracy of r1, r2; sets the bits per parameter (eq. 1-1).", smooth::kAccuracyRange);
       addInt(par, "generations", 20, "Generations per element",
-             "Micro-GA generations per adjacent element (restarts included). More: slower, better.",
+             "Micro-GA generations per element, restarts included. More: slower, better.",
              smooth::kGenerationsRange);
       addInt(par, "restarts", 4, "Restarts per element",
-             "Maximum micro-GA restarts (a new population around the kept best after nominal "
-             "convergence) per adjacent element.", smooth::kRestartsRange);
+             "Max micro-GA restarts per element (a new population around the best).", smooth::kRestartsRange);
       addInt(par, "population", 5, "Population size",
              "Micro-GA population (the thesis uses 5, after Krishnakumar).", smooth::kPopulationRange);
       par.addParam(RichEnum("selection", 0, QStringList() << "Roulette wheel" << "Tournament", "Selection",
@@ -114,58 +107,31 @@ void FilterMgaSmoothPlugin::initParameters(int id, const MeshDocument&, RichPara
                             QStringList() << "Every adjacent element (thesis)" << "Guided (faster)"
                                           << "Guided, local (fastest)",
                             "Element search",
-                            "Every adjacent element: the micro-GA runs inside each triangle around the node and the best "
-                            "is kept (thesis step 3). Guided: it starts in the element towards the centroid of the "
-                            "node's neighbours (the centroid seeds its search) and goes on across an edge only while "
-                            "the best point lies on that edge (every element when that element gives no gain): about "
-                            "2x faster, mean quality within 0.001 on the femur and bunny benchmarks. Guided, local: as "
-                            "guided, but a node whose first element gives no gain stays (every element only for a "
-                            "folded star), and a valid star's candidates are measured on the element's plane, only "
-                            "each element's best on the C1 surface: 5 to 8x faster again on the femur and bunny "
-                            "benchmarks, nearly the same mean on smooth scans (bunny), lower on rough ones (femur). "
-                            "With it, more sweeps of fewer generations (e.g. 5 x 3, mga_smooth_fast.mlx) beat fewer "
-                            "long ones."));
+                            "Thesis: every element around the node. Guided: about 2x faster. "
+                            "Guided, local: 5-8x faster again."));
     } else {
       addInt(par, "cgIterations", 10, "CG iterations per node",
-             "Conjugate gradient iterations (each: a numerical gradient and a line search) per node "
-             "and sweep.", smooth::kCgIterationsRange);
+             "CG iterations per node and sweep (each a numerical gradient and a line search).", smooth::kCgIterationsRange);
     }
     addFloat(par, "worstGuard", pectus::smooth::kMinQualityGuard, "Worst-element guard",
-             "A move is refused if the worst of the node's elements would drop below min(its current "
-             "value, this), so the sum cannot buy a better mean with one very poor element. "
-             "0 = the thesis' plain sum of qualities.", smooth::kQualityRange);
+             "A move may not drop the node's worst element below min(now, this). 0 = thesis' sum.", smooth::kQualityRange);
     addFloat(par, "minPassBelow", 0.0f, "Final worst-element pass below",
-             "After the sweeps, up to three more sweeps over the nodes whose worst element is below "
-             "this, maximising that worst element (up to this value, then the sum); 0 = off "
-             "(the thesis' algorithm).", smooth::kQualityRange);
+             "Up to 3 more sweeps lift worst elements below this (then the sum). 0 = off (thesis).", smooth::kQualityRange);
     par.addParam(RichEnum("featureDetection", 0, QStringList() << "Crease chains" << "Feature and singular angles",
                           "Feature detection",
-                          "Which nodes stay fixed as features. Crease chains (for CAD parts and scans alike): the "
-                          "nodes of chains of edges that are sharp across (bent at least 20 degrees and at least "
-                          "twice the edges beside them), consistent along (similar dihedral, turning little), far "
-                          "sharper than the mesh's noise (12 times its median dihedral) and long (4 edges, or "
-                          "corner to corner); the isolated sharp edges of a noisy scan or CT surface "
-                          "stay free; where chains meet or end are the singular nodes. The two angles below are "
-                          "not used. Feature and singular angles: every node on an edge bent more than the feature "
-                          "angle, and every node whose normal cone is wider than the singular angle."));
+                          "Fixed feature nodes: Crease chains (sharp edge chains, not noise) or the two angles below."));
     addFloat(par, "featureAngle", 60.0f, "Feature angle (degrees)",
-             "With 'Feature and singular angles': an edge whose dihedral angle (angle between the "
-             "normals of its two faces) exceeds this is sharp, and every node on a sharp edge stays "
-             "fixed; 180 disables it.", smooth::kAngleRange);
+             "Angles mode: nodes on an edge bent more than this (dihedral) are fixed; 180 = off.", smooth::kAngleRange);
     addFloat(par, "singularAngle", 90.0f, "Singular angle (degrees)",
-             "With 'Feature and singular angles': a node whose faces' normals spread by more than this "
-             "(the largest angle between two face normals around the node) is a singular node of large "
-             "curvature variation (a cone tip, a spike) and stays fixed; 180 disables it.", smooth::kAngleRange);
+             "Angles mode: nodes whose face normals spread more than this are fixed; 180 = off.", smooth::kAngleRange);
     par.addParam(RichEnum("selectionMode", 0,
                           QStringList() << "None" << "Smooth only selected vertices" << "Keep selected vertices fixed",
                           "Vertex selection",
-                          "None: the selection is ignored. Smooth only selected: unselected vertices stay "
-                          "fixed. Keep selected fixed: selected vertices stay fixed. Boundary, feature and singular "
-                          "nodes are fixed in every mode."));
+                          "None: ignored. Smooth only selected, or keep selected fixed. "
+                          "Boundary, feature nodes always fixed."));
     if (mga)
       addInt(par, "seed", 1, "Random seed",
-             "Seed of the micro-GA; per-node seeds are derived from it, the vertex index and the "
-             "sweep, so the same seed gives the same result with any number of threads.", kSeedRange);
+             "Micro-GA seed; the same seed gives the same result on any thread count.", kSeedRange);
   }
 }
 

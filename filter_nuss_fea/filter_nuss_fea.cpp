@@ -94,18 +94,11 @@ namespace {
 // parameter groups shared by 'Pectus: Nuss Procedure FE Analysis' and 'Pectus: Nuss Bar Planner' (same names, defaults, help)
 void addLandmarkParam(const MeshDocument& md, RichParameterList& par) {
   par.addParam(pectus::ml::richMesh("landmarkLayer", pectus::ml::defaultLandmarkLayer(md), md, "Landmark layer",
-                        "Point layer of landmarks (vertex quality = code, labels.h) as the rib cage generator writes it: "
-                        "costovertebral joints 100*side+rib (fixed), 500 lower sternum end (Fe), bar exits "
-                        "600+10*side+s (Fsr; without one, the exit is placed between the ribs' lateral-most points). "
-                        "By default the layer whose label ends in 'landmarks'."));
+                        "Landmark point layer (vertex quality = code); by default the layer whose name ends in 'landmarks'."));
 }
 void addCalibrationParams(RichParameterList& par) {
   addFloat(par, "targetElevation", 0.0f, "Target elevation (mm)",
-           "0 (default): from the model, the rise that brings the lower sternum end onto the chest line (the "
-           "line between the most anterior rib or cartilage points right and left of it, at its level); the Log "
-           "gives it. Otherwise the measured rise of the lower sternum end (CT before, X-ray after; thesis "
-           "Table 6-1: 34.0-44.7 mm, patient 1: 44.7 mm). A target beyond twice the chest line depth is refused "
-           "before any solve, with the reachable range.",
+           "Rise of the lower sternum end; 0 = to the chest line (model). Thesis: 34.0-44.7 mm.",
            pectus::nuss::kTargetElevationRange);
   addFloat(par, "maxForce", 1000.0f, "Maximum force (N)",
            "Calibration gives up (with a message) if this force does not reach the target.",
@@ -113,42 +106,29 @@ void addCalibrationParams(RichParameterList& par) {
   addFloat(par, "tolerance", 0.1f, "Calibration tolerance (mm)",
            "|simulated - target elevation| allowed.", pectus::nuss::kToleranceRange);
   par.addParam(RichEnum("calibration", entryOf(kCalibrations, pectus::nuss::Options{}.calibration), calibrations(), "Calibration method",
-                        "Force search: solves for trial forces until the elevation is within the tolerance (each a whole "
-                        "load path in large displacement). Displacement control: one large-displacement solve that "
-                        "prescribes the elevation and reads the force (the same result, fewer solves)."));
+                        "Force search: trial solves until within the tolerance. Displacement control: one solve, "
+                        "same result."));
 }
 void addModelParams(RichParameterList& par) {
   par.addParam(RichEnum("analysis", 0, analyses(), "Analysis",
-                        "Large displacement: total Lagrangian (the material below), Newton-Raphson with load increments "
-                        "(the thesis used ANSYS' large-displacement static solver). Small strain: linear elasticity."));
+                        "Large displacement: nonlinear, Newton-Raphson (thesis: ANSYS). Small strain: linear elasticity."));
   const pectus::nuss::Options d;  // the analysis' defaults
   par.addParam(RichEnum("material", entryOf(kMaterials, d.material), materials(), "Material (large displacement)",
-                        "Every tissue's model in the large-displacement analysis (same E and nu; small strain is "
-                        "linear elasticity whatever this says). St Venant-Kirchhoff lets a strongly compressed tet "
-                        "invert; neo-Hookean resists it (its energy grows without bound as the volume goes to zero) "
-                        "and lets a child's cage reach the elevation."));
+                        "Large displacement only. Neo-Hookean resists tet inversion; St Venant-Kirchhoff may invert."));
   par.addParam(RichEnum("newton", d.newton.lineSearch && d.newton.adaptiveSteps ? 0 : 1, newtonSteps(), "Newton steps",
-                        "Large displacement. Line search and adaptive steps: each Newton correction is scaled so that "
-                        "the residual falls, and the load increment grows where Newton converges fast and is halved "
-                        "where it does not (the curve's stops are still hit exactly). Plain: full corrections and fixed "
-                        "increments, as ANSYS' and CalculiX' default static step."));
+                        "Large displacement: line search with adaptive increments, or plain Newton with fixed steps."));
   par.addParam(RichEnum("order", 0, orders(), "Element",
-                        "TET10: quadratic tetrahedra, accurate on thin ribs; with the default tet quality within 2 % of the "
-                        "converged mesh. TET4: linear, as the thesis' SOLID185; it locks in bending on the thin ribs, so the "
-                        "calibrated force comes out higher (1.9 times TET10's on the same mesh of the thesis' patient 1), and "
-                        "the Log says the result is not one to report."));
+                        "TET10: quadratic, accurate on thin ribs. TET4: thesis' SOLID185; locks in bending (force too high)."));
   addFloat(par, "tetQuality", 2.0f, "Tet quality (radius-edge ratio)",
-           "TetGen -q bound: 0 (no refinement) or at least " + num(pectus::fe::kMinRadiusEdgeRatio) + " (smaller: better tets, more of them). "
-           "The default 2.0 gives a model about 2 % stiffer than a converged mesh, 0 about 12 %.",
+           "TetGen -q bound: 0 = no refinement, else at least " + num(pectus::fe::kMinRadiusEdgeRatio) +
+           "; smaller: more, better tets.",
            {0, 100});
   addFloat(par, "maxTetVolume", 0.0f, "Max tet volume (mm^3)",
            "TetGen -a bound; 0 = no limit.", {0, 1e9});
   addFloat(par, "boneModulus", d.eBone, "Young's modulus, bone (MPa)",
            "Ribs and sternum (thesis 11500 MPa).", pectus::nuss::kModulusRange);
   addFloat(par, "cartilageModulus", d.eCartilage, "Young's modulus, cartilage (MPa)",
-           "Costal cartilage. The thesis' 12.25 MPa is half of normal cartilage; published values: "
-           "indentation 11.1-14.6 MPa, compression 32.9 +- 17.9 MPa. The calibrated force grows about in "
-           "proportion to it.", pectus::nuss::kModulusRange);
+           "Costal cartilage (thesis 12.25 MPa); the calibrated force is about proportional.", pectus::nuss::kModulusRange);
   addFloat(par, "nuBone", 0.3f, "Poisson ratio, bone",
            "Ribs and sternum (cortical bone literature value 0.3).", pectus::nuss::kPoissonRange);
   addFloat(par, "nuCartilage", 0.4f, "Poisson ratio, cartilage",
@@ -157,15 +137,13 @@ void addModelParams(RichParameterList& par) {
 }
 void addPatchParams(RichParameterList& par) {
   addFloat(par, "jointRadius", 6.0f, "Joint radius (mm)",
-           "Nodes within this distance of a costovertebral joint landmark are fixed (head and tubercle); a joint with "
-           "fewer than 4 nodes of its rib that near (a coarse or smoothed mesh) is fixed at the 4 nodes of its rib nearest to it (more, nearest first, while those lie on one line, about which a floating rib would turn), and the Log says so.",
+           "Nodes this near a costovertebral joint are fixed (at least the rib's 4 nearest).",
            pectus::nuss::kPatchRadiusRange);
   addFloat(par, "sternumLoadRadius", 8.0f, "Fe patch radius (mm)",
-           "Fe is spread evenly over the sternum surface nodes within this distance of the lower sternum end.",
+           "Fe is spread evenly over the sternum nodes within this distance of its lower end.",
            pectus::nuss::kPatchRadiusRange);
   addFloat(par, "ribSupportRadius", 6.0f, "Fsr patch radius (mm)",
-           "Each Fsr is spread over the rib's surface nodes within this distance of the rib point nearest "
-           "to the bar exit.", pectus::nuss::kPatchRadiusRange);
+           "Each Fsr is spread over the rib nodes within this distance of the bar exit.", pectus::nuss::kPatchRadiusRange);
 }
 
 // the layers with faces the per-tissue input joins: every visible one
@@ -176,8 +154,8 @@ std::vector<const MeshModel*> tissueLayers(FilterContext& ctx) {
   return out;
 }
 // the landmark layer of the cage (the current layer, or the tissue layers), found by role (FilterContext::landmarkLayer)
-MeshModel& landmarkLayerOf(FilterContext& ctx, const std::vector<const MeshModel*>& cage, bool needSternumEnd) {
-  return ctx.landmarkLayer("landmarkLayer", cage, needSternumEnd ? std::vector<int>{pectus::kSternumLowerEnd} : std::vector<int>{},
+MeshModel& landmarkLayerOf(FilterContext& ctx, const std::vector<const MeshModel*>& cage) {
+  return ctx.landmarkLayer("landmarkLayer", cage, std::vector<int>{pectus::kSternumLowerEnd},
                            "Pick the point layer of landmarks written with the cage (e.g. 'ribcage landmarks') and make the "
                            "labelled cage the current layer.",
                            {&ctx.current()});
@@ -229,31 +207,19 @@ MeshModel& addDeformedLayer(FilterContext& ctx, CMeshO& surface, const pectus::n
 void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList& par) {
   par.addParam(RichEnum("input", 0, QStringList() << "Current layer (one labelled surface)" << "One layer per tissue (visible layers)",
                         "Model input",
-                        "Current layer: one closed surface whose faces carry tissue and part labels (as 'Create Pectus "
-                        "Excavatum Rib Cage' writes it).<br>One layer per tissue: every visible layer with faces (except the "
-                        "landmark layer) is one closed tissue surface as CT segmentation tools export them; the tissue comes "
-                        "from the layer name ('cartilag' -> costal cartilage; 'stern', 'manubr', 'xiph' -> sternum; 'rib', "
-                        "'bone', 'costa' -> bone), else from the layer's face labels if all one tissue. Hide layers that are "
-                        "not part of the cage. The layers are joined by a CGAL corefinement union into one conforming volume; "
-                        "each tet takes the tissue of the layer containing it, where layers overlap the one it lies deeper "
-                        "in (the interface in the middle of the overlap). Parts: a labelled layer keeps its own; else each piece of a bone "
-                        "layer is the rib of the nearest costovertebral joint landmark, cartilage faces take the nearest "
-                        "rib's number, sternum faces are the sternum body. The joined surface is the result layer."));
+                        "Current layer: one surface with tissue labels. One layer per tissue: the visible layers, joined."));
   addLandmarkParam(md, par);
   addInt(par, "intercostalSpace", 4, "Bar intercostal space",
-         "The bar exits between ribs s and s+1 (landmarks 600+10*side+s, the generator writes s = 4, 5; "
-         "other spaces: between the ribs' lateral-most points).", {1, 11});
+         "Bar exits between ribs s and s+1 (landmarks 600+10*side+s; generator: s = 4, 5).", {1, 11});
   par.addParam(RichEnum("mode", 0, modes(), "Force",
-                        "Calibrate: find Fe so the sternum end rises by the target elevation (by the calibration method "
-                        "below). Given: apply the elevating force below."));
+                        "Calibrate: find Fe that gives the target elevation. Given: apply the force below."));
   addFloat(par, "force", 140.0f, "Elevating force Fe (N)",
            "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N.", pectus::nuss::kForceRange);
   addCalibrationParams(par);
   addModelParams(par);
   addPatchParams(par);
   par.addParam(RichEnum("field", 0, fields(), "Colour by",
-                        "Per-vertex quality and colour of the result layer: nodal von Mises stress (MPa) or equivalent "
-                        "strain (ANSYS EPEL,EQV form; Green-Lagrange for large displacement)."));
+                        "Vertex quality and colour: nodal von Mises stress (MPa) or equivalent strain (ANSYS EPEL,EQV)."));
   par.addParam(RichEnum("pathSide", 0, sides(), "Strain path: side", "Side of the rib for the strain-path CSV (Fig. 6-18)."));
   addInt(par, "pathRib", 5, "Strain path: rib",
          "Rib (and its costal cartilage) for the strain-path CSV.", {1, 10});
@@ -281,17 +247,16 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
 
   // the model surface: the current labelled layer, or the visible tissue layers joined into `joined`
   const bool perTissue = ctx.enumIn("input", 2) == 1;
-  const bool needSternumEnd = !ctx.boolean("usePoints");
   std::vector<pectus::Landmark> lms;  // of the cage's landmark layer, found once the cage is known to be one
   pectus::OwnedMesh joined;
   std::string joinText;
   const auto cage = [&] {
     if (!perTissue) {
       auto c = nuss::cageFromMesh(cur.cm);
-      lms = pectus::readLandmarks(landmarkLayerOf(ctx, {&cur}, needSternumEnd).cm);
+      lms = pectus::readLandmarks(landmarkLayerOf(ctx, {&cur}).cm);
       return c;
     }
-    lms = pectus::readLandmarks(landmarkLayerOf(ctx, tissueLayers(ctx), needSternumEnd).cm);
+    lms = pectus::readLandmarks(landmarkLayerOf(ctx, tissueLayers(ctx)).cm);
     std::vector<nuss::TissueLayer> layers;
     for (const MeshModel* m : tissueLayers(ctx)) layers.push_back({m->label().toStdString(), &m->cm});
     if (layers.empty())
@@ -413,23 +378,20 @@ QStringList bestBy() { return QStringList() << "Lowest force" << "Lowest max str
 void FilterNussFeaPlugin::initBarPlanner(const MeshDocument& md, RichParameterList& par) {
   addLandmarkParam(md, par);
   par.addParam(RichString("levels", "3,4,5", "Bar levels (intercostal spaces)",
-                          "Intercostal spaces of the (first) bar to compare, as a list '3,4,5' or a range '3-5'; space s lies "
-                          "between ribs s and s+1."));
+                          "Intercostal spaces of the (first) bar: a list '3,4,5' or a range '3-5'; space s: ribs s and s+1."));
   par.addParam(RichEnum("bars", 0, barSets(), "Bars",
                         "One bar per level, two bars per level, or both (one row each)."));
   addInt(par, "secondOffset", -1, "Second bar: offset (spaces)",
-         "The second bar goes into space s + offset: -1 = the space above the first bar, -2 = two above. "
-         "Not 0. The first bar's load stays at the lower sternum end, so the second bar goes above it.",
+         "Second bar's space = s + offset: -1 = the space above the first bar. Not 0.",
          pectus::nuss::kSecondOffsetRange);
   addFloat(par, "secondShare", 0.5f, "Second bar: share of the force",
-           "Part of the total elevating force carried by the second bar; the first bar carries the rest.",
+           "Share of the total elevating force carried by the second bar (the first: the rest).",
            pectus::nuss::kSecondShareRange);
   addCalibrationParams(par);
   addModelParams(par);
   addPatchParams(par);
   par.addParam(RichEnum("best", 0, bestBy(), "Best option",
-                        "The option whose deformed cage is added as a layer (and marked in the table): the lowest calibrated "
-                        "force or the lowest max von Mises stress (away from the joints, load patches and tissue junctions)."));
+                        "Which option's cage is added as a layer: lowest calibrated force or lowest max von Mises stress."));
   par.addParam(RichSaveFile("csvFile", "", ".csv", "Table (CSV file)",
                             "If set, the table is written there (one row per option). Empty: Log only."));
 }
@@ -437,7 +399,7 @@ void FilterNussFeaPlugin::initBarPlanner(const MeshDocument& md, RichParameterLi
 void FilterNussFeaPlugin::runBarPlanner(FilterContext& ctx) {
   namespace nuss = pectus::nuss;
   MeshModel& cur = ctx.current();
-  const auto lms = pectus::readLandmarks(landmarkLayerOf(ctx, {&cur}, true).cm);
+  const auto lms = pectus::readLandmarks(landmarkLayerOf(ctx, {&cur}).cm);
   nuss::PlanOptions o;
   o.levels = nuss::parseLevels(ctx.params().getString("levels").toStdString());
   const int bars = ctx.enumIn("bars", 3);

@@ -71,36 +71,25 @@ void FilterPatientPlugin::run(int id, FilterContext& ctx) {
 void FilterPatientPlugin::initPreparePatient(RichParameterList& par) {
   const pectus::patient::PrepareOptions d;
   par.addParam(RichEnum("units", 0, QStringList() << "Automatic" << "Millimetres" << "Centimetres" << "Metres", "Units",
-                        "Units of the input layers. Automatic: from the size of the whole (a rib cage spans 150-700 mm): "
-                        "under 3 units metres, under 60 centimetres, else millimetres."));
+                        "Units of the input layers. Automatic: from the overall size (metres, centimetres or mm)."));
   par.addParam(RichEnum("frame", 0,
                         QStringList() << "Automatic (from the anatomy)" << "RAS (x right, y anterior, z superior)"
                                       << "LPS (x left, y posterior, z superior)" << "Project frame (x left, y anterior, z superior)",
                         "Frame",
-                        "Axes of the input layers. Automatic: anterior from the bone's centre to the sternum, the long axis "
-                        "along the sternum (snapped to the file's axes within 30 degrees), superior from the rib numbers or "
-                        "the ribs' slope, the patient's left from the right-handed scanner frame (or from the names)."));
+                        "Axes of the input layers. Automatic: from the anatomy (sternum, ribs); or RAS, LPS, project frame."));
   addFloat(par, "minVolume", d.minVolume, "Fragment volume (mm^3)",
-           "Connected pieces smaller than this are fragments and are dropped (a child's rib "
-           "holds 2000-10000 mm^3).", pectus::patient::kMinVolumeRange);
+           "Smaller pieces are dropped as fragments (a child's rib: 2000-10000 mm^3).", pectus::patient::kMinVolumeRange);
   addFloat(par, "gridStep", d.gridStep, "Grid step (mm)",
-           "Every structure becomes a solid on a grid of this step (about the CT's voxel size); between grid points "
-           "the surface follows the input's faces. Smaller: finer features kept, more time and memory.",
+           "Solid grid step, about the CT voxel size. Smaller: finer features, slower.",
            pectus::patient::kGridStepRange);
   addFloat(par, "edgeLength", d.edgeLength, "Target edge length (mm)",
-           "The joined surface is decimated to this edge length; 0 keeps every face, else " + num(kMinEdgeLength) + " mm at least. The FE analysis's "
-           "time and memory grow with the cube of 1/edge: 4 mm suits it, 2 mm shows the anatomy finer.",
+           "Decimation edge length; 0 keeps every face, else at least " + num(kMinEdgeLength) + ". 4 mm suits the FE.",
            kEdgeLengthRange);
   par.addParam(RichEnum("spine", int(d.spine),
                         QStringList() << "cut at the costovertebral joints" << "keep as the fixed support", "Spine",
-                        "The vertebral column (bone fused to the ribs in one layer, and vertebra layers). Cut: left out of "
-                        "the model, the ribs cut at the costovertebral joints, where the FE analysis fixes them (the "
-                        "thesis). Keep: joined to the ribs as bone, part 400; the FE analysis fixes all of it as well as "
-                        "the joints, and the thoracic volume filters leave it out. The landmarks are the same."));
+                        "Cut: left out, ribs cut at the joints (thesis). Keep: as bone (part 400), fixed by the FE analysis."));
   par.addParam(RichString("pickedPoints", "", "Picked points (.pp)",
-                          "Optional: a MeshLab PickPoints file (Edit > PickPoints, Save) with points picked on the input "
-                          "layers, each named by its landmark code ('500', '501 deepest point', ...). Each replaces the "
-                          "automatic landmark of its code."));
+                          "Optional MeshLab PickPoints file; points named by landmark code ('500') replace the automatic ones."));
 }
 
 void FilterPatientPlugin::runPreparePatient(FilterContext& ctx) {
@@ -188,17 +177,11 @@ void FilterPatientPlugin::runPreparePatient(FilterContext& ctx) {
 
 void FilterPatientPlugin::initImportCt(RichParameterList& par) {
   par.addParam(RichString("path", "", "Path (file or folder)",
-                          "A segmentation file (.stl, .obj, .ply, .off, .nii, .nii.gz) or a folder of them (every such "
-                          "file in it, in name order). Absolute, or relative to the working folder."));
+                          "A segmentation file (.stl .obj .ply .off .nii .nii.gz) or a folder of them; may be relative."));
   par.addParam(RichString("labelTable", "", "Label table",
-                          "Names of a NIfTI label map's values when the file has no table of its own: entries "
-                          "'value name' separated by ';' or new lines (e.g. '1 rib_left_1; 2 rib_left_2'; also "
-                          "'value,name'), a JSON object {\"1\": \"rib_left_1\"}, or the path of a file with such "
-                          "lines (3D Slicer colour tables work). Empty: a table beside the file (NAME.txt/.csv/.json "
-                          "or NAME_labels.*, for NAME.nii.gz). Not used for mesh files and one-structure masks."));
+                          "Names of a NIfTI map's labels if the file has none: '1 rib_left_1; 2 ...', JSON, or a file path."));
   addInt(par, "minVoxels", 1, "Minimum voxels",
-         "NIfTI only: a label or mask with fewer voxels is skipped (listed in the Log). "
-         "1 keeps every label present.", pectus::patient::kMinVoxelsRange);
+         "NIfTI only: labels with fewer voxels are skipped (Log). 1 keeps every label.", pectus::patient::kMinVoxelsRange);
 }
 
 void FilterPatientPlugin::runImportCt(FilterContext& ctx) {

@@ -107,17 +107,15 @@ void FilterQuadConvertPlugin::initParameters(int id, const MeshDocument&, RichPa
   if (id == FP_TRI_TO_QUAD) {
     par.addParam(RichEnum("pairing", 0, QStringList() << "Optimal (maximum-weight matching)" << "Greedy (by quad quality)",
                           "Pairing",
-                          "Optimal: maximum-cardinality, maximum total beta matching of the dual graph (Blossom). "
-                          "Greedy: the thesis' scheme, best quads first."));
+                          "Optimal: maximum total beta matching of the dual graph (Blossom). "
+                          "Greedy: thesis, best quads first."));
     par.addParam(RichEnum("leftovers", 0, QStringList() << "All quads" << "Quad-dominant", "Leftover triangles",
-                          "All quads: if triangles remain unpaired, split every element once into quads (new nodes on "
-                          "the C1 surface). Quad-dominant: keep the unpaired triangles."));
+                          "All quads: split every element once if triangles remain (C1 surface). "
+                          "Quad-dominant: keep them."));
     addFloat(par, "minQuality", 0.0f, "Minimum quad quality (beta)",
-             "Pairs whose quad has beta at or below this are never merged; 0 only "
-             "excludes non-convex and inverted quads.", {0, 1, false, true});
+             "Pairs with quad beta <= this stay apart; 0 excludes only non-convex, inverted quads.", {0, 1, false, true});
     addFloat(par, "maxDihedral", 60.0f, "Dihedral limit (degrees)",
-             "Pairs whose two triangles' normals differ by more than this angle are never merged "
-             "(keeps creases).", kDihedralRange);
+             "Pairs whose normals differ by more than this are not merged (keeps creases).", kDihedralRange);
   }
   if (id == FP_STRUCTURE) {
     par.addParam(RichBool("edgeSwap", true, "Edge swapping", "Swap edges toward the ideal valence (6 / 4)."));
@@ -127,8 +125,7 @@ void FilterQuadConvertPlugin::initParameters(int id, const MeshDocument&, RichPa
     addFloat(par, "longEdgeFactor", 1.6f, "Long edge factor",
              "An interior edge longer than this times the mean edge length is divided.", {1, 100, true, false});
     addFloat(par, "maxDihedral", 30.0f, "Dihedral limit (degrees)",
-             "Operators act only where the normals of the elements involved differ by at most this "
-             "angle, so the surface is kept.", kDihedralRange);
+             "Operators act only where element normals differ by at most this (keeps the shape).", kDihedralRange);
     addInt(par, "maxPasses", 10, "Maximum passes",
            "Upper bound on the passes over the mesh.", {1, 1000});
   }

@@ -57,14 +57,13 @@ void FilterRibCagePlugin::run(int id, FilterContext& ctx) {
 void FilterRibCagePlugin::initCreateRibCage(RichParameterList& par) {
   const pectus::ribcage::RibCageParams d;
   par.addParam(RichEnum("sizeMode", 0, QStringList() << "From age" << "Explicit dimensions", "Size",
-                        "From age: every dimension from the child's age. Explicit: chest width, depth and "
-                        "spine height below (rib and sternum sections still follow the equivalent age)."));
+                        "From age: every dimension from the age. Explicit: the width, depth and spine height below."));
   addFloat(par, "age", d.age, "Age (years)",
            "The child's age (thesis patients: 5-8).", rc::kAgeRange);
   addFloat(par, "chestWidth", 181.0f, "Chest inner width (mm)",
            "Explicit size: widest inner transverse diameter of the cage.", rc::kChestWidthRange);
   addFloat(par, "chestDepth", 74.0f, "Chest depth (mm)",
-           "Explicit size: sternum-to-vertebra distance without funnel at the jugular notch, "
+           "Explicit: sternum-vertebra distance at the jugular notch, "
            + num(rc::kChestDepthShare.lo) + "-" + num(rc::kChestDepthShare.hi) + " x chest width.",
            kChestDepthEnvelope);
   addFloat(par, "spineHeight", 172.0f, "Thoracic spine height (mm)",
@@ -72,16 +71,12 @@ void FilterRibCagePlugin::initCreateRibCage(RichParameterList& par) {
   addInt(par, "ribPairs", d.ribPairs, "Rib pairs",
          "Ribs 11 and 12 are floating.", rc::kRibPairsRange);
   addFloat(par, "hallerIndex", d.hallerIndex, "Pectus (Haller) index",
-           "Requested index: inner transverse diameter / smallest sternum-to-vertebra distance. "
-           "Normal ~2.5, pectus excavatum > 3.25 (thesis patients 3.6-5.3). The lower end is "
-           "at least the index of the same chest without funnel.", rc::kHallerIndexRange);
+           "Transverse diameter / least sternum-vertebra distance; normal ~2.5, pectus > 3.25.", rc::kHallerIndexRange);
   addFloat(par, "funnelCenterX", d.funnelCenterX, "Funnel centre, lateral (mm)",
-           "Lateral offset of the funnel centre (+ = patient's left), |x| <= " + num(rc::kFunnelCenterXShare) + " x funnel width.",
+           "Funnel centre offset (+ = patient's left), |x| <= " + num(rc::kFunnelCenterXShare) + " x funnel width.",
            kFunnelCenterXEnvelope);
   addFloat(par, "funnelCenterZ", d.funnelCenterZ, "Funnel centre, along sternum",
-           "0 = jugular notch, 1 = xiphisternal junction (the xiphoid's tip lies near 1.14). The default 1.1 puts "
-           "the deepest point around the lower end of the sternum, where pectus excavatum is deepest and the Nuss "
-           "FE analysis lifts the sternum.", rc::kFunnelCenterZRange);
+           "0 = jugular notch, 1 = xiphisternal junction; 1.1 (default): lower sternum end.", rc::kFunnelCenterZRange);
   addFloat(par, "funnelWidth", d.funnelWidth, "Funnel width (mm)",
            "Transverse extent of the depression, up to the chest's inner width.", kFunnelWidthEnvelope);
   addFloat(par, "funnelHeight", d.funnelHeight, "Funnel height (mm)",
@@ -92,16 +87,10 @@ void FilterRibCagePlugin::initCreateRibCage(RichParameterList& par) {
            "1 mm ~300k.", rc::kEdgeLengthRange);
   par.addParam(RichEnum("cartilageSection", 0, QStringList() << "The rib's" << "Circular, twice the rib's area (CT)",
                         "Costal cartilage section",
-                        "The rib's: each costal cartilage has its rib's elliptic section (0.85 x its height by 1.05 x its "
-                        "thickness). Circular, twice the rib's area: the section that matched radiologists' CT masks of "
-                        "costal cartilage best (a circle of twice the rib's mean cross-section area, PMID 25027382); "
-                        "3.5-7 times stiffer in bending."));
+                        "The rib's: its elliptic section. Circular, twice the rib's area: matches CT, 3.5-7x stiffer."));
   par.addParam(RichEnum("output", 0, QStringList() << "One labelled surface" << "One layer per tissue (as CT segmentation)",
                         "Output",
-                        "One labelled surface: the smooth union of all tissues, tissue per face. One layer per tissue: "
-                        "closed surfaces 'ribs', 'costal cartilage' and 'sternum' that overlap at the costochondral "
-                        "junctions and the sternum, as CT segmentation tools export them (the input of 'Nuss Procedure FE "
-                        "Analysis' with 'One layer per tissue')."));
+                        "One labelled surface (tissue per face), or closed 'ribs', 'costal cartilage', 'sternum' layers."));
 }
 
 void FilterRibCagePlugin::runCreateRibCage(FilterContext& ctx) {

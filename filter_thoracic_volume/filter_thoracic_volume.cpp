@@ -31,25 +31,19 @@ QStringList lowerLimits() {
 
 void addCommon(const MeshDocument& md, RichParameterList& par, int lowerDefault) {
   par.addParam(RichBool("compare", false, "Compare with a before layer",
-                        "Also measure the 'Before layer' and log the change (current minus before) in cm3 and % of "
-                        "the before value. The current layer is the after state (e.g. the FE-corrected cage)."));
+                        "Also measure the 'Before layer' and log the change (current minus before) in cm3 and %."));
   par.addParam(pectus::ml::richMesh("beforeLayer", pectus::ml::currentMesh(md), md, "Before layer",
-                        "The layer measured as the before state when 'Compare with a before layer' is on; the same "
-                        "mesh as the current layer (same vertex count, same frame). Ignored otherwise."));
+                        "The before state (same mesh and frame as the current layer), when comparing."));
   par.addParam(RichEnum("rangeSource", 0, rangeSources(), "Range from",
-                        "Landmarks: the lower and upper heights come from the landmark layer (codes 700/500 and "
-                        "701 of labels.h). Given heights: 'Lower height' and 'Upper height' below."));
+                        "Landmarks: heights from landmarks 700/500 and 701. Given heights: 'Lower/Upper height' below."));
   par.addParam(pectus::ml::richMesh("landmarkLayer", defaultLandmarkLayer(md), md, "Landmark layer",
-                        "Point layer of landmarks (vertex quality = landmark code, labels.h), as written by the rib "
-                        "cage generator; by default the layer whose label ends in 'landmarks'. Used when the range "
-                        "comes from landmarks."));
+                        "Landmark point layer (vertex quality = code); used when the range comes from landmarks."));
   par.addParam(RichEnum("lowerLimit", lowerDefault, lowerLimits(), "Lower limit landmark",
-                        "Lower end of the range when it comes from landmarks: 700 the dome of the diaphragm (thesis "
-                        "6.3.1, slice method) or 500 the lower end of the sternum (thesis 6.3.2, envelope)."));
+                        "Lower end from landmarks: 700 diaphragm dome (thesis 6.3.1) or 500 lower sternum end (6.3.2)."));
   addFloat(par, "zLow", 0.0f, "Lower height (mm)",
-           "Lower end of the range in mm along z, used with 'Range from' = Given heights.", kHeightRange);
+           "Lower end of the range along z; used with Range from = Given heights.", kHeightRange);
   addFloat(par, "zHigh", 200.0f, "Upper height (mm)",
-           "Upper end of the range in mm along z, used with 'Range from' = Given heights.", kHeightRange);
+           "Upper end of the range along z; used with Range from = Given heights.", kHeightRange);
 }
 
 struct Common {
@@ -191,32 +185,25 @@ void FilterThoracicVolumePlugin::initParameters(int id, const MeshDocument& md, 
   if (id == FP_SLICE_VOLUME) {
     addCommon(md, par, 0);
     addFloat(par, "spacing", 2.6f, "Spacing (mm)",
-             "Distance between the cutting planes along z (thesis: about 2.6 mm); adjusted down so that "
-             "a whole number of layers fills the range.", vol::kSpacingRange);
+             "Distance between cutting planes (thesis ~2.6 mm); adjusted to fit the range.", vol::kSpacingRange);
     addInt(par, "resolution", 512, "Resolution (pixels)",
            "Pixels along the longer side of the slices' common raster (thesis: 512 x 512).", vol::kResolutionRange);
     addInt(par, "rays", 720, "Rays",
-           "Rays from the slice centroid that find the inner boundary of the sections; more rays follow "
-           "the wall more closely.", vol::kRaysRange);
+           "Rays from the slice centroid that find the inner wall; more follow it closer.", vol::kRaysRange);
   } else if (id == FP_ENVELOPE_VOLUME) {
     addCommon(md, par, 1);
     addInt(par, "patchesLong", 16, "Patches along z (n)",
-           "Number of Ferguson patches along the long axis (thesis 16). Denser patches fall into the "
-           "intercostal gaps (thesis Fig. 6-11).", vol::kPatchesLongRange);
+           "Ferguson patches along the long axis (thesis 16); denser ones fall into rib gaps.", vol::kPatchesLongRange);
     addInt(par, "patchesAround", 16, "Patches around (m)",
            "Number of Ferguson patches around the axis (thesis 16).", vol::kPatchesAroundRange);
     addFloat(par, "initialStep", 0.0f, "Initial step (mm)",
-             "First radial step of the key points; 0 = a quarter of the start radius. Halved after "
-             "every key point is held.", {0, 1e5});
+             "First radial step of the key points; 0 = a quarter of the start radius.", {0, 1e5});
     addFloat(par, "minStep", 0.05f, "Final step (mm)",
-             "The convergence stops once the halved step falls below this value: the envelope's "
-             "accuracy in mm.", vol::kMinStepRange);
+             "Stop once the halved step is below this: the envelope's accuracy in mm.", vol::kMinStepRange);
     par.addParam(RichBool("smoothing", true, "Smoothing (eq. 6-1)",
-                          "Raise each key point to the mean radius of its neighbours along z when that is larger, "
-                          "so that the envelope does not fall into the intercostal gaps."));
+                          "Eq. 6-1: raise key points to their z-neighbours' mean radius, to bridge intercostal gaps."));
     addInt(par, "tessellation", 8, "Output samples per patch",
-           "Samples per patch side of the envelope layer (the volume is integrated on the patches "
-           "themselves).", {1, 64});
+           "Samples per patch side of the envelope layer (the volume uses the patches).", {1, 64});
   } else if (id == FP_PECTUS_INDEX) {
     par.addParam(RichBool("compare", false, "Compare with a before layer",
                           "Also measure the 'Before layer' and log both indices side by side."));
@@ -224,12 +211,9 @@ void FilterThoracicVolumePlugin::initParameters(int id, const MeshDocument& md, 
                           "The before state (same mesh, same frame) when 'Compare with a before layer' is on."));
     par.addParam(RichEnum("levelSource", 0, QStringList() << "Landmarks 501/503" << "Automatic (deepest slice)",
                           "Level from",
-                          "Landmarks: the slice at the height of landmark 501 (deepest funnel point; its x is the "
-                          "midline), vertebra at landmark 503. Automatic: the slice between the given heights with the "
-                          "largest correction index."));
+                          "Landmarks: the slice at landmark 501, vertebra 503. Automatic: deepest slice between the heights."));
     par.addParam(pectus::ml::richMesh("landmarkLayer", defaultLandmarkLayer(md), md, "Landmark layer",
-                          "Point layer of landmarks (vertex quality = code); by default the layer whose label ends in "
-                          "'landmarks'."));
+                          "Landmark point layer (vertex quality = code); by default the layer whose name ends in 'landmarks'."));
     addFloat(par, "zLow", 0.0f, "Lower height (mm)",
              "Automatic level: lower end of the search along z.", kHeightRange);
     addFloat(par, "zHigh", 200.0f, "Upper height (mm)",

@@ -2,7 +2,9 @@
 declares (the plugins loaded in-process by pectus_layer_check --params), in the declared order, with the
 same type and default, and every numeric parameter with the range the plugin declares; the README links every page; no relative link of the README or docs/ is broken.
 Every filter python/pectus_filters.py defines has the plugin's parameters, in order, with the same types,
-defaults and enum labels."""
+defaults and enum labels.
+Every parameter's tool-tip (the filter's help text, with " Range: [lo, hi]." for numeric parameters) is at most
+TOOLTIP_MAX characters: MeshLab 2020.09's dialog shows it in two lines of about 50 characters and cuts the rest."""
 from __future__ import annotations
 
 import os
@@ -19,19 +21,24 @@ from harness import check, finish
 
 BUILD = os.environ.get("PECTUS_BUILD", os.path.join(SOURCE, "build"))
 PLUGINS = os.environ.get("PECTUS_PLUGINS", os.path.join(BUILD, "plugins"))
+# MeshLab 2020.09's filter dialog ("Help"): each tool-tip is word-wrapped to about 50 characters in a row two
+# lines tall; longer text is cut. The details belong in the parameter tables of docs/filters.
+TOOLTIP_MAX = 100
 
 
-def declared() -> tuple[dict, dict]:
-    """filter name -> [(name, type, default text, enum labels)] as the plugins declare them, and
-    filter name -> {parameter name -> (lo, hi, lo open, hi open)} for the numeric parameters"""
+def declared() -> tuple[dict, dict, dict]:
+    """filter name -> [(name, type, default text, enum labels)] as the plugins declare them,
+    filter name -> {parameter name -> (lo, hi, lo open, hi open)} for the numeric parameters, and
+    filter name -> {parameter name -> tool-tip as the dialog shows it}"""
     out = subprocess.run(["xvfb-run", "-a", os.path.join(BUILD, "bin", "pectus_layer_check"), "--params", PLUGINS],
                          capture_output=True, text=True, timeout=300)
     if out.returncode != 0:
         raise SystemExit(f"pectus_layer_check --params failed ({out.returncode}): {out.stderr}")
-    filters, ranges = {}, {}
+    filters, ranges, tooltips = {}, {}, {}
     for f in ET.fromstring(out.stdout).iter("filter"):
         check_dialog_info(f.attrib["name"], f.attrib["info"])
         params = []
+        tooltips[f.attrib["name"]] = {p.attrib["name"]: p.attrib.get("tooltip", "") for p in f.iter("Param")}
         ranges[f.attrib["name"]] = {
             p.attrib["name"]: (float(p.attrib["min"]), float(p.attrib["max"]), p.attrib["minOpen"] == "true",
                                p.attrib["maxOpen"] == "true")
@@ -46,7 +53,17 @@ def declared() -> tuple[dict, dict]:
                 value = a.get("value", "")
             params.append((a["name"], kind, value, labels))
         filters[f.attrib["name"]] = params
-    return filters, ranges
+    return filters, ranges, tooltips
+
+
+def check_tooltips(tooltips: dict):
+    """every tool-tip fits the dialog of MeshLab 2020.09 (TOOLTIP_MAX characters)"""
+    count = sum(len(tips) for tips in tooltips.values())
+    check(count >= 50, f"the plugins declare {count} parameters with tool-tips")
+    for fname, tips in tooltips.items():
+        for name, tip in tips.items():
+            check(len(tip) <= TOOLTIP_MAX, f"{fname}: the tool-tip of {name} is at most {TOOLTIP_MAX} characters",
+                  f"it has {len(tip)}: {tip!r}")
 
 
 INFO_CHARACTERS = 150  # three lines of the narrowest dialog (about 50 characters a line)
@@ -157,7 +174,8 @@ def check_python_filters(filters: dict):
 
 
 def main():
-    filters, ranges = declared()
+    filters, ranges, tooltips = declared()
+    check_tooltips(tooltips)
     check_python_filters(filters)
     check(len(filters) >= 14, f"the plugins declare {len(filters)} filters")
     pages = {}
