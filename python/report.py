@@ -481,15 +481,22 @@ def _peaks(outdir: str) -> dict:
         return {}
 
 
-def _picture(make, needs: list[str], what: str):
-    """(png, None) or (None, why the picture is missing)"""
-    absent = [os.path.basename(p) for p in needs if not os.path.exists(p)]
-    if absent:
-        return None, f"{what}: the run wrote no {', '.join(absent)}."
+def can_draw() -> bool:
+    """matplotlib and numpy import"""
     try:
         import matplotlib  # noqa: F401
         import numpy  # noqa: F401
     except ImportError:
+        return False
+    return True
+
+
+def _picture(make, needs: list[str], what: str):
+    """(make(), None) or (None, why the picture is missing)"""
+    absent = [os.path.basename(p) for p in needs if not os.path.exists(p)]
+    if absent:
+        return None, f"{what}: the run wrote no {', '.join(absent)}."
+    if not can_draw():
         return None, f"{what}: drawing it needs matplotlib and numpy (Debian: python3-matplotlib python3-numpy)."
     return make(), None
 
@@ -503,9 +510,9 @@ def pictures(outdir: str, s: dict) -> dict:
     out = {"stress": (stress, why, "Colours: von Mises stress on the surface of the bone and cartilage, in MPa (blue "
                       f"low, red high). The scale ends at {cap:.1f} MPa ({STRESS_CAP_PERCENTILE} % of the surface lies "
                       "below it) so that the peaks do not wash out the picture; the peaks are in the table and marked.")}
-    lms = landmarks(j("ribcage_landmarks.ply")) if os.path.exists(j("ribcage_landmarks.ply")) else {}
+    lms = landmarks(j("ribcage_landmarks.ply")) if os.path.exists(j("ribcage_landmarks.ply")) and can_draw() else {}
     needs = [j("ribcage_smoothed.ply"), j("nuss_result.ply"), j("ribcage_landmarks.ply")]
-    if all(os.path.exists(p) for p in needs) and FUNNEL_DEEPEST not in lms:
+    if all(os.path.exists(p) for p in needs) and can_draw() and FUNNEL_DEEPEST not in lms:
         sec, why = None, "the sections: the landmarks have no deepest point of the funnel (code 501)."
     else:
         sec, why = _picture(lambda: sections_picture(j("ribcage_smoothed.ply"), j("nuss_result.ply"), lms,
