@@ -403,13 +403,17 @@ def case_line(s: dict) -> str:
 def not_reportable(s: dict) -> list[str]:
     """Plain reasons why the figures are not a result to report ([] when they are)"""
     reasons = []
-    if s.get("fe_converged") != "1":
+    # fe_converged is 0 when the FE analysis returned no figures; a summary.csv older than the column has no value
+    failed = s.get("fe_converged") == "0" or (s.get("fe_converged", "") == "" and s.get("force_N", "") == "")
+    if failed:
         reasons.append("The simulation gave no valid result: it did not finish, or it did not reach a balanced "
                        "(converged) state.")
     if s.get("run_mode") == "quick":
         reasons.append("This is a quick test run on a coarse model, which is stiffer than the real chest: "
                        "its forces are too high and its stresses not reliable.")
-    elif s.get("reportable") != "1" and s.get("fe_converged") == "1":
+    elif not failed and s.get("reportable") == "":
+        reasons.append("The run does not say whether its model is fine enough for its figures to be reported.")
+    elif not failed and s.get("reportable") != "1":
         reasons.append("The model is coarser than the one the figures were checked against.")
     return reasons
 
@@ -429,8 +433,10 @@ def _where(s: dict, key: str) -> str:
 
 
 def figures_table(s: dict) -> str:
-    strain = s.get("max_strain", "")
-    strain_pct = f" ({float(strain) * 100:.1f} %)" if strain else ""
+    try:
+        strain_pct = f" ({float(s.get('max_strain', '')) * 100:.1f} %)"
+    except ValueError:
+        strain_pct = ""
     hb, ha = s.get("haller_index_before", ""), s.get("haller_index_after", "")
     rows = [
         ("Force needed to lift the sternum (on its lower end)", _num(s, "force_N", "N"), ""),
