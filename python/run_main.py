@@ -7,18 +7,21 @@ output folder (default out/main-<timestamp>) and prints a table shaped like the 
 
 --planner adds the 'Pectus: Nuss Bar Planner' (filter_nuss_fea) to the same script, on the smoothed cage with the main job's
 FE settings, and prints its table (planner.csv in the output folder). Full mode takes ~4 min per option.
+Every run ends with report.html, one page for the surgeon (python/report.py).
 """
 from __future__ import annotations
 
 import argparse
 import datetime
 import os
+import shlex
 import sys
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.dirname(HERE)
 sys.path.insert(0, HERE)
 import pipeline  # noqa: E402
+import report  # noqa: E402
 
 
 def plot_histograms(path: str, hists: list[list[int]], labels: list[str]):
@@ -76,9 +79,11 @@ def main(argv: list[str]) -> int:
           "envelope) and pectus index before/after, through MeshLab " + pipeline.mlx.default_host() + " headless ...", flush=True)
     rc, r, res = pipeline.run_pipeline(out, quick=quick, planner=dict(levels=levels, bars=bars) if with_planner else None,
                                        case=a.case)
+    command = shlex.join(["python3"] + argv)
     if rc != 0:
         print(res.stdout[-4000:], file=sys.stderr)
         print(f"pipeline failed (MeshLab {pipeline.mlx.default_host()} exit {rc}); log in {out}/meshlabserver.log", file=sys.stderr)
+        print(f"Report: {report.write_report(out, command)}", file=sys.stderr)
         return 1
     print(pipeline.table(r, 8, "M", 44.7))
     q = {k: round(r[k], 4) for k in ("quality_mean_before", "quality_mean_after", "quality_min_before", "quality_min_after")}
@@ -90,9 +95,11 @@ def main(argv: list[str]) -> int:
         print_planner(r, out)
     if len(r["histograms"]) >= 2:
         plot_histograms(os.path.join(out, "quality_histograms.png"), r["histograms"][:2], ["before MGA", "after MGA"])
+    path = report.write_report(out, command)
     print(f"Output folder: {out}")
     for f in sorted(os.listdir(out)):
         print(f"  {f}")
+    print(f"Report (one page, for the surgeon; open it in a browser): {path}")
     return 0
 
 

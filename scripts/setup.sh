@@ -18,7 +18,10 @@ PKGS=(meshlab qtbase5-dev libqt5opengl5-dev libglew-dev libeigen3-dev
       libtet1.5-dev libsuitesparse-dev libomp-dev libgtest-dev
       xvfb xauth cmake g++ make dpkg-dev python3 python3-numpy
       python3-matplotlib python3-scipy imagemagick libcgal-dev calculix-ccx libopenblas0-pthread
-      liblemon-dev gmsh libcgal-demo parallel libopenmesh-apps libnifti2-dev ccache debootstrap universal-ctags)
+      liblemon-dev gmsh libcgal-demo parallel libopenmesh-apps libnifti2-dev ccache debootstrap universal-ctags
+      chromium)
+# chromium (22 packages without recommends, 122 MB): tests/e2e/test_report.py shows the main job's report.html in
+# headless Chromium and checks the screenshot
 
 missing=()
 for p in "${PKGS[@]}"; do
