@@ -129,8 +129,8 @@ void FilterPatientPlugin::runPreparePatient(FilterContext& ctx) {
     layers.push_back({name, &m->cm});
   }
   if (layers.empty())
-    throw pectus::InputError("No visible layer with faces: import the segmentation first (File > Import Mesh, or 'Import CT "
-                             "Segmentation').");
+    throw pectus::InputError("No visible layer with faces: import the segmentation first (File > Import Mesh, or 'Pectus: "
+                             "Import CT Segmentation').");
 
   pectus::OwnedMesh cage;
   pectus::patient::PrepareResult r;

@@ -7,6 +7,7 @@
 set -euo pipefail
 ROOT="$(cd "$(dirname "${BASH_SOURCE[0]}")/.." && pwd)"
 CAGE="$1" LANDMARKS="$2" OUT="${3:-$ROOT/docs/img}"
+mkdir -p "$OUT"
 work="$(mktemp -d /tmp/pectus-gui-images.XXXX)"
 trap 'rm -rf "$work"' EXIT
 rows=()

@@ -75,14 +75,28 @@ if [ "$MENU" = 1 ]; then
   shoot "$OUT/menu.png"
   xdotool key Escape Escape; sleep 0.5
 fi
+close_dialog() {  # close_dialog WINDOW: its Close button, the left one of the bottom row
+  eval "$(xdotool getwindowgeometry --shell "$1")"
+  xdotool mousemove $((X + WIDTH / 4)) $((Y + HEIGHT - 20)) click 1; sleep 1
+}
 n=0
 for name in "$@"; do
   n=$((n + 1))
-  xdotool windowfocus --sync "$main" 2>/dev/null || true
-  xdotool key ctrl+f; sleep 0.8
-  xdotool type --delay 20 "$name"; sleep 1.2
-  xdotool key Down Return; sleep 2.5
-  win="$(xdotool search --name "^$(printf '%s' "$name" | sed 's/[][()\.^$*+?{}|]/\\&/g')\$" 2>/dev/null | tail -1 || true)"
+  # the search lists the best matches first; the words after 'Pectus: ' tell the filters apart, and when
+  # the first match is another filter the next ones are tried
+  pattern="^$(printf '%s' "$name" | sed 's/[][()\.^$*+?{}|]/\\&/g')\$"
+  win=""
+  for k in 1 2 3 4 5; do
+    xdotool windowfocus --sync "$main" 2>/dev/null || true
+    xdotool key ctrl+f; sleep 0.8
+    xdotool type --delay 20 "${name#Pectus: }"; sleep 1.2
+    for _ in $(seq "$k"); do xdotool key Down; done
+    xdotool key Return; sleep 2.5
+    win="$(xdotool search --onlyvisible --name "$pattern" 2>/dev/null | tail -1 || true)"
+    [ -n "$win" ] && break
+    other="$(xdotool search --onlyvisible --name "^Pectus: " 2>/dev/null | tail -1 || true)"
+    if [ -n "$other" ]; then close_dialog "$other"; fi
+  done
   if [ -z "$win" ]; then echo "dialog not-found $name"; shoot "$OUT/dialog_$n.png"; continue; fi
   eval "$(xdotool getwindowgeometry --shell "$win")"
   echo "dialog ${WIDTH}x${HEIGHT} $name"
@@ -95,5 +109,5 @@ for name in "$@"; do
     echo "dialog-help ${WIDTH}x${HEIGHT} $name"
     shoot "$OUT/dialog_${n}_help.png"
   fi
-  xdotool windowunmap "$win" 2>/dev/null || true; sleep 0.5
+  close_dialog "$win"
 done

@@ -111,7 +111,7 @@ std::string faceLabelProblem(const CMeshO& m) {
     off += hit ? 0 : 1;
   }
   return std::to_string(off) + " of " + std::to_string(live) +
-         " face colours are not tissue colours (a filter that colours faces, e.g. 'Compute Element Quality' with "
+         " face colours are not tissue colours (a filter that colours faces, e.g. 'Pectus: Element Quality' with "
          "'Colour by quality', overwrote the labels of a saved file: label before colouring, or keep the labelled copy)";
 }
 

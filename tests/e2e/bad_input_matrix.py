@@ -202,7 +202,7 @@ def numeric_params(key: str) -> list:
     """(name, kind) of the filter's numeric parameters, in the example's order"""
     out = []
     for name, p in base_filter(key).params.items():
-        if type(p) is mlx.Float:
+        if type(p) in (mlx.Float, mlx.DynamicFloat):
             out.append((name, "Float"))
         elif type(p) is mlx.Int:
             out.append((name, "Int"))
@@ -222,7 +222,7 @@ def param_lines(f: mlx.Filter) -> str:
     """the filter's parameters for pectus_layer_check: "<type> <name> <value>" lines"""
     out = []
     for name, p in f.params.items():
-        kind = {mlx.Float: "Float", mlx.AbsPerc: "Float", mlx.Int: "Int", mlx.Mesh: "Mesh", mlx.Enum: "Enum",
+        kind = {mlx.Float: "Float", mlx.DynamicFloat: "DynamicFloat", mlx.AbsPerc: "Float", mlx.Int: "Int", mlx.Mesh: "Mesh", mlx.Enum: "Enum",
                 mlx.Bool: "Bool", mlx.Point3: "Point3", mlx.SaveFile: "SaveFile", mlx.OpenFile: "String",
                 mlx.String: "String"}[type(p)]
         v = " ".join(repr(float(c)) for c in p.value) if kind == "Point3" else (

@@ -1,6 +1,6 @@
 """E2E: tissue labels and the filters that overwrite face colour and quality.
 The rib cage generator keeps the labels as named face attributes and writes them as face colour/quality
-for files. 'Compute Element Quality' (and MGA/gradient smoothing, which call it, and the quad filters)
+for files. 'Pectus: Element Quality' (and MGA/gradient smoothing, which call it, and the quad filters)
 overwrite face colour and quality: in the same meshlabserver run the Nuss FE analysis still reads the
 attributes; a cage saved after such a filter has lost its labels, and the analysis says so and why."""
 import os
@@ -24,6 +24,6 @@ check(r.rc == 0, "same run: the analysis runs after the cage is coloured by qual
 # the coloured cage saved and loaded again: the labels are gone, and the message says why
 r = h.run([lms, cage], mlx.Script([nuss_fea(landmarkLayer=0, **FAST)]))
 msg = [l for l in r.log if "no tissue labels" in l]
-check(r.rc != 0 and msg and "are not tissue colours" in msg[0] and "Compute Element Quality" in msg[0],
+check(r.rc != 0 and msg and "are not tissue colours" in msg[0] and "Pectus: Element Quality" in msg[0],
       "saved after colouring: non-zero exit, the message names the lost labels and the cause", "\n".join(r.log[-3:]))
 h.finish()

@@ -11,7 +11,7 @@
 // addInt in common/meshlab/filter_plugin.h) also has the attributes min, max, minOpen and maxOpen ("true" for
 // an end that excludes its bound). The document holds the given layers, or one tetrahedron.
 //
-// params file: one parameter per line, "<type> <name> <value...>" with type Float, Int, Bool, Enum,
+// params file: one parameter per line, "<type> <name> <value...>" with type Float, DynamicFloat, Int, Bool, Enum,
 // Mesh (layer index), Point3 (x y z), String or SaveFile (the rest of the line). Parameters not listed
 // keep the filter's defaults. Writes <out prefix>before_<i>.ply and <out prefix>after_<i>.ply (ascii,
 // vertex/face quality and colour) and prints "applyFilter <0|1>". Exit code 0 unless the tool itself fails.
@@ -153,6 +153,7 @@ int main(int argc, char** argv) {
     const QString n = QString::fromStdString(name);
     if (!par.hasParameter(n)) return fail("the filter has no parameter " + name);
     if (type == "Float") { double v; s >> v; par.setValue(n, FloatValue(float(v))); }
+    else if (type == "DynamicFloat") { double v; s >> v; par.setValue(n, DynamicFloatValue(float(v))); }
     else if (type == "Int") { long long v; s >> v; par.setValue(n, IntValue(int(v))); }
     else if (type == "Enum") { int v; s >> v; par.setValue(n, EnumValue(v)); }
     else if (type == "Bool") { int v; s >> v; par.setValue(n, BoolValue(v != 0)); }
