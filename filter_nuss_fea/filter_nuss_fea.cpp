@@ -94,56 +94,54 @@ namespace {
 // parameter groups shared by 'Pectus: Nuss Procedure FE Analysis' and 'Pectus: Nuss Bar Planner' (same names, defaults, help)
 void addLandmarkParam(const MeshDocument& md, RichParameterList& par) {
   par.addParam(pectus::ml::richMesh("landmarkLayer", pectus::ml::defaultLandmarkLayer(md), md, "Landmark layer",
-                        "Landmark point layer (vertex quality = code); by default the layer whose name ends in 'landmarks'."));
+                        "Point layer of landmark codes (vertex quality), written with the cage."));
 }
 void addCalibrationParams(RichParameterList& par) {
   addFloat(par, "targetElevation", 0.0f, "Target elevation (mm)",
-           "Rise of the lower sternum end; 0 = to the chest line (model). Thesis: 34.0-44.7 mm.",
+           "Rise of the lower sternum end; 0: up to the chest line.",
            pectus::nuss::kTargetElevationRange);
   addFloat(par, "maxForce", 1000.0f, "Maximum force (N)",
-           "Calibration gives up (with a message) if this force does not reach the target.",
+           "Calibration stops at this force.",
            pectus::nuss::kMaxForceRange);
   addFloat(par, "tolerance", 0.1f, "Calibration tolerance (mm)",
-           "|simulated - target elevation| allowed.", pectus::nuss::kToleranceRange);
+           "Allowed |simulated - target| elevation.", pectus::nuss::kToleranceRange);
   par.addParam(RichEnum("calibration", entryOf(kCalibrations, pectus::nuss::Options{}.calibration), calibrations(), "Calibration method",
-                        "Force search: trial solves until within the tolerance. Displacement control: one solve, "
-                        "same result."));
+                        "Force search: trial forces. Displacement control: one solve."));
 }
 void addModelParams(RichParameterList& par) {
   par.addParam(RichEnum("analysis", 0, analyses(), "Analysis",
-                        "Large displacement: nonlinear, Newton-Raphson (thesis: ANSYS). Small strain: linear elasticity."));
+                        "Large displacement: nonlinear (thesis: ANSYS). Small strain: linear."));
   const pectus::nuss::Options d;  // the analysis' defaults
   par.addParam(RichEnum("material", entryOf(kMaterials, d.material), materials(), "Material (large displacement)",
-                        "Large displacement only. Neo-Hookean resists tet inversion; St Venant-Kirchhoff may invert."));
+                        "Large displacement. Neo-Hookean resists tet inversion; SVK may invert."));
   par.addParam(RichEnum("newton", d.newton.lineSearch && d.newton.adaptiveSteps ? 0 : 1, newtonSteps(), "Newton steps",
-                        "Large displacement: line search with adaptive increments, or plain Newton with fixed steps."));
+                        "Line search with adaptive increments, or plain Newton, fixed steps."));
   par.addParam(RichEnum("order", 0, orders(), "Element",
-                        "TET10: quadratic, accurate on thin ribs. TET4: thesis' SOLID185; locks in bending (force too high)."));
+                        "TET10: quadratic, accurate. TET4: the thesis' SOLID185, too stiff in bending."));
   addFloat(par, "tetQuality", 2.0f, "Tet quality (radius-edge ratio)",
-           "TetGen -q bound: 0 = no refinement, else at least " + num(pectus::fe::kMinRadiusEdgeRatio) +
-           "; smaller: more, better tets.",
+           "TetGen -q: 0 none, else >= " + num(pectus::fe::kMinRadiusEdgeRatio) + "; smaller: finer.",
            {0, 100});
   addFloat(par, "maxTetVolume", 0.0f, "Max tet volume (mm^3)",
-           "TetGen -a bound; 0 = no limit.", {0, 1e9});
+           "TetGen -a; 0: no limit.", {0, 1e9});
   addFloat(par, "boneModulus", d.eBone, "Young's modulus, bone (MPa)",
-           "Ribs and sternum (thesis 11500 MPa).", pectus::nuss::kModulusRange);
+           "Ribs and sternum (thesis 11500).", pectus::nuss::kModulusRange);
   addFloat(par, "cartilageModulus", d.eCartilage, "Young's modulus, cartilage (MPa)",
-           "Costal cartilage (thesis 12.25 MPa); the calibrated force is about proportional.", pectus::nuss::kModulusRange);
+           "Costal cartilage (thesis 12.25).", pectus::nuss::kModulusRange);
   addFloat(par, "nuBone", 0.3f, "Poisson ratio, bone",
-           "Ribs and sternum (cortical bone literature value 0.3).", pectus::nuss::kPoissonRange);
+           "Ribs and sternum (literature 0.3).", pectus::nuss::kPoissonRange);
   addFloat(par, "nuCartilage", 0.4f, "Poisson ratio, cartilage",
-           "Costal cartilage (hydrated, nearly incompressible tissue; literature 0.4-0.45).",
+           "Costal cartilage (literature 0.4-0.45).",
            pectus::nuss::kPoissonRange);
 }
 void addPatchParams(RichParameterList& par) {
   addFloat(par, "jointRadius", 6.0f, "Joint radius (mm)",
-           "Nodes this near a costovertebral joint are fixed (at least the rib's 4 nearest).",
+           "Nodes this near a costovertebral joint are fixed.",
            pectus::nuss::kPatchRadiusRange);
   addFloat(par, "sternumLoadRadius", 8.0f, "Fe patch radius (mm)",
-           "Fe is spread evenly over the sternum nodes within this distance of its lower end.",
+           "Fe acts on the sternum nodes this near its lower end.",
            pectus::nuss::kPatchRadiusRange);
   addFloat(par, "ribSupportRadius", 6.0f, "Fsr patch radius (mm)",
-           "Each Fsr is spread over the rib nodes within this distance of the bar exit.", pectus::nuss::kPatchRadiusRange);
+           "Each Fsr acts on the rib nodes this near the bar exit.", pectus::nuss::kPatchRadiusRange);
 }
 
 // the layers with faces the per-tissue input joins: every visible one
@@ -207,25 +205,24 @@ MeshModel& addDeformedLayer(FilterContext& ctx, CMeshO& surface, const pectus::n
 void FilterNussFeaPlugin::initNussFea(const MeshDocument& md, RichParameterList& par) {
   par.addParam(RichEnum("input", 0, QStringList() << "Current layer (one labelled surface)" << "One layer per tissue (visible layers)",
                         "Model input",
-                        "Current layer: one surface with tissue labels. One layer per tissue: the visible layers, joined."));
+                        "One labelled surface, or every visible layer as one tissue, joined."));
   addLandmarkParam(md, par);
   addInt(par, "intercostalSpace", 4, "Bar intercostal space",
-         "Bar exits between ribs s and s+1 (landmarks 600+10*side+s; generator: s = 4, 5).", {1, 11});
+         "The bar exits between ribs s and s+1.", {1, 11});
   par.addParam(RichEnum("mode", 0, modes(), "Force",
-                        "Calibrate: find Fe that gives the target elevation. Given: apply the force below."));
+                        "Calibrate: Fe for the target elevation. Given: the force below."));
   addFloat(par, "force", 140.0f, "Elevating force Fe (N)",
-           "Used with 'Given elevating force'. Thesis: 70-190 N; Weber et al.: 181 +- 48 N.", pectus::nuss::kForceRange);
+           "With 'Given elevating force'. Thesis: 70-190 N.", pectus::nuss::kForceRange);
   addCalibrationParams(par);
   addModelParams(par);
   addPatchParams(par);
   par.addParam(RichEnum("field", 0, fields(), "Colour by",
-                        "Vertex quality and colour: nodal von Mises stress (MPa) or equivalent strain (ANSYS EPEL,EQV)."));
+                        "Vertex quality and colour: von Mises stress (MPa) or equivalent strain."));
   par.addParam(RichEnum("pathSide", 0, sides(), "Strain path: side", "Side of the rib for the strain-path CSV (Fig. 6-18)."));
   addInt(par, "pathRib", 5, "Strain path: rib",
          "Rib (and its costal cartilage) for the strain-path CSV.", {1, 10});
   par.addParam(RichSaveFile("resultBase", "", ".vtu", "Result files (base name)",
-                            "If set: BASE.vtu, BASE.inp, BASE_force_displacement.csv/.png, BASE_rib_strain.csv. "
-                            "Empty: no files."));
+                            "If set: BASE.vtu, .inp, _force_displacement.csv/.png, _rib_strain.csv."));
 }
 
 void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
@@ -378,20 +375,20 @@ QStringList bestBy() { return QStringList() << "Lowest force" << "Lowest max str
 void FilterNussFeaPlugin::initBarPlanner(const MeshDocument& md, RichParameterList& par) {
   addLandmarkParam(md, par);
   par.addParam(RichString("levels", "3,4,5", "Bar levels (intercostal spaces)",
-                          "Intercostal spaces of the (first) bar: a list '3,4,5' or a range '3-5'; space s: ribs s and s+1."));
+                          "Spaces of the (first) bar, '3,4,5' or '3-5'; space s: ribs s and s+1."));
   par.addParam(RichEnum("bars", 0, barSets(), "Bars",
                         "One bar per level, two bars per level, or both (one row each)."));
   addInt(par, "secondOffset", -1, "Second bar: offset (spaces)",
-         "Second bar's space = s + offset: -1 = the space above the first bar. Not 0.",
+         "Second bar's space: s + offset (-1: one above). Not 0.",
          pectus::nuss::kSecondOffsetRange);
   addFloat(par, "secondShare", 0.5f, "Second bar: share of the force",
-           "Share of the total elevating force carried by the second bar (the first: the rest).",
+           "Second bar's share of the total force.",
            pectus::nuss::kSecondShareRange);
   addCalibrationParams(par);
   addModelParams(par);
   addPatchParams(par);
   par.addParam(RichEnum("best", 0, bestBy(), "Best option",
-                        "Which option's cage is added as a layer: lowest calibrated force or lowest max von Mises stress."));
+                        "The option whose cage is added: lowest force or lowest max stress."));
   par.addParam(RichSaveFile("csvFile", "", ".csv", "Table (CSV file)",
                             "If set, the table is written there (one row per option). Empty: Log only."));
 }

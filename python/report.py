@@ -33,12 +33,12 @@ STRESS_CAP_PERCENTILE = 98  # the colour scale ends here, as the FE filter's own
 # ---------------------------------------------------------------------------------------------
 # PLY (ascii and binary, as the MeshLab hosts write it)
 
-_PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
+PLY_TYPES = {"char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1", "short": "i2", "int16": "i2",
               "ushort": "u2", "uint16": "u2", "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
               "float": "f4", "float32": "f4", "double": "f8", "float64": "f8"}
 
 
-def _ply_header(data: bytes):
+def ply_header(data: bytes):
     """(format, [(element, count, [(property, type or ('list', count type, item type))])], body offset)"""
     end = data.index(b"end_header") + len(b"end_header")
     end = data.index(b"\n", end) + 1
@@ -82,12 +82,12 @@ def _ply_binary_element(np, body: bytes, pos: int, count: int, props, order: str
     lengths, fields, probe = {}, [], pos
     for pname, ptype in props:
         if isinstance(ptype, tuple):
-            ct = np.dtype(order + _PLY_TYPES[ptype[1]])
+            ct = np.dtype(order + PLY_TYPES[ptype[1]])
             lengths[pname] = int(np.frombuffer(body, ct, 1, probe)[0])
-            fields += [(pname + "#n", ct), (pname, np.dtype(order + _PLY_TYPES[ptype[2]]), (lengths[pname],))]
+            fields += [(pname + "#n", ct), (pname, np.dtype(order + PLY_TYPES[ptype[2]]), (lengths[pname],))]
             probe += ct.itemsize + lengths[pname] * fields[-1][1].itemsize
         else:
-            fields.append((pname, np.dtype(order + _PLY_TYPES[ptype])))
+            fields.append((pname, np.dtype(order + PLY_TYPES[ptype])))
             probe += fields[-1][1].itemsize
     dt = np.dtype(fields)
     if pos + count * dt.itemsize <= len(body):
@@ -99,13 +99,13 @@ def _ply_binary_element(np, body: bytes, pos: int, count: int, props, order: str
     for _ in range(count):
         for pname, ptype in props:
             if isinstance(ptype, tuple):
-                ct, it = order + _PLY_TYPES[ptype[1]], order + _PLY_TYPES[ptype[2]]
+                ct, it = order + PLY_TYPES[ptype[1]], order + PLY_TYPES[ptype[2]]
                 n = int(np.frombuffer(body, ct, 1, pos)[0])
                 pos += np.dtype(ct).itemsize
                 cols[pname].append(np.frombuffer(body, it, n, pos).astype(int))
                 pos += n * np.dtype(it).itemsize
             else:
-                t = np.dtype(order + _PLY_TYPES[ptype])
+                t = np.dtype(order + PLY_TYPES[ptype])
                 cols[pname].append(float(np.frombuffer(body, t, 1, pos)[0]))
                 pos += t.itemsize
     return {p: (cols[p] if isinstance(t, tuple) else np.array(cols[p])) for p, t in props}, pos
@@ -117,7 +117,7 @@ def read_ply(path: str) -> dict:
     import numpy as np
     with open(path, "rb") as fh:
         data = fh.read()
-    fmt, elements, start = _ply_header(data)
+    fmt, elements, start = ply_header(data)
     body = data[start:]
     if fmt == "ascii":
         out = _ply_ascii(np, body, elements)

@@ -13,6 +13,7 @@ import numpy as np
 
 import pectus_mlx as mlx
 from pectus_meshes import write_off, write_ply  # noqa: F401  (the tests import them from here)
+from report import ply_header  # the PLY header, as the run report reads it
 
 SOURCE = os.environ.get("PECTUS_SOURCE", os.path.abspath(os.path.join(os.path.dirname(__file__), "..", "..")))
 PREFIX = os.environ.get("PECTUS_PREFIX", os.path.join(SOURCE, "build", "prefix"))
@@ -129,27 +130,7 @@ def read_ply(path: str) -> dict:
     'vertex_indices': list of lists}} plus 'V' (n,3) and 'F' (list of index lists)."""
     with open(path, "rb") as fh:
         data = fh.read()
-    end = data.index(b"end_header") + len(b"end_header")
-    while data[end:end + 1] in (b"\r", b"\n"):
-        end += 1
-        if data[end - 1:end] == b"\n":
-            break
-    header = data[:end].decode("ascii", "replace").splitlines()
-    fmt = "ascii"
-    elements = []
-    for line in header:
-        t = line.split()
-        if not t:
-            continue
-        if t[0] == "format":
-            fmt = t[1]
-        elif t[0] == "element":
-            elements.append((t[1], int(t[2]), []))
-        elif t[0] == "property":
-            if t[1] == "list":
-                elements[-1][2].append((t[4], ("list", t[2], t[3])))
-            else:
-                elements[-1][2].append((t[2], t[1]))
+    fmt, elements, end = ply_header(data)
     out = {}
     body = data[end:]
     if fmt == "ascii":
