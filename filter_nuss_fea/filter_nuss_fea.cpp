@@ -323,9 +323,7 @@ void FilterNussFeaPlugin::runNussFea(FilterContext& ctx) {
   ctx.log("Force-displacement (N:mm)" + curve + "; " + std::to_string(a.nonlinearSolves) + " nonlinear solves, " +
           std::to_string(a.newtonIterations) + " Newton iterations; mesh " + fmt(a.secondsMesh, 1) + " s, solve " +
           fmt(a.secondsSolve, 1) + " s, total " + fmt(secs, 1) + " s" + files);
-  if (!a.newtonHistory.empty())
-    ctx.debug("Newton residuals |r| / max(|f_ext|, |reactions|) per increment (in brackets: the ratio to the iteration before): " +
-              nuss::newtonHistoryText(a));
+  for (const std::string& line : nuss::newtonHistoryLines(a)) ctx.debug("Newton " + line);
 
   auto& values = ctx.results();
   reportMeshConvergence(ctx, o.mesh, cage);

@@ -3,8 +3,9 @@
 // process against whole process (bench/fe_vs_ccx.py --cases cage).
 //   pectus_fe_solve deck.inp [--vtu out.vtu] [--trace] [--no-predictor] [--tolerances residual displacement]
 // Linear unless the deck's *STEP says NLGEOM (then Newton with the deck's increments and the library's
-// defaults; --trace prints each iteration's relative residual to stderr, --no-predictor starts each
-// increment from the converged state, --tolerances sets NewtonOptions' tolResidual and tolDisplacement).
+// defaults; --trace prints one line per iteration to stderr: the residual, its reference and the
+// correction, with their ratios to the iteration before; --no-predictor starts each increment from the
+// converged state, --tolerances sets NewtonOptions' tolResidual and tolDisplacement).
 // Prints one line of key=value figures (tets, dofs, phase times) and the mean displacement of the
 // *NODE PRINT nodes.
 #include <chrono>
@@ -53,9 +54,11 @@ int main(int argc, char** argv) {
     no.extrapolate = predictor;
     if (tolR > 0) no.tolResidual = tolR;
     if (tolD > 0) no.tolDisplacement = tolD;
+    NewtonIteration before;
     if (trace)
-      no.onIteration = [](int inc, int it, double rn, double ref) {
-        std::fprintf(stderr, "increment %d iteration %d |r|/ref %.3e\n", inc + 1, it, rn / ref);
+      no.onIteration = [&before](const NewtonIteration& it) {
+        std::fprintf(stderr, "%s\n", newtonIterationText(it, it.iteration > 0 ? &before : nullptr).c_str());
+        before = it;
       };
     const Result r = model->options.nlgeom ? s.solveNonlinear(no) : s.solveLinear();
     const double tSolve = secs(t2);

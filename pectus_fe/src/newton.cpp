@@ -3,10 +3,12 @@
 // The physics (the assembly, the factorisation, the stresses) is the solver's (solver_impl.h).
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <sstream>
 #include <string>
 
 #include "pectus/errors.h"
+#include "pectus/format.h"
 #include "solver_impl.h"
 
 namespace pectus::fe {
@@ -118,27 +120,27 @@ struct Solver::Impl::NewtonPath {
     for (; it <= opt.maxIterations; ++it) {
       const Eigen::VectorXd r = residual(uTrial, factorAt(Lt, target), true);
       const double ref = referenceForce(Lt, target), rn = r.norm();
-      if (opt.onIteration) opt.onIteration(res.increments, it, rn, ref);
+      NewtonIteration rec{res.increments, it, rn, ref, std::numeric_limits<double>::quiet_NaN()};
       if (!std::isfinite(rn)) {
+        report(rec);
         if (inversion.empty()) inversion = I.invertedAt(uTrial);
         return false;
       }
       const double g = ctrl ? ctrl->dot(I.freePart(uTrial)) - target * dTarget : 0.0;  // constraint violation
       const bool balanced = rn <= opt.tolResidual * ref && std::abs(g) <= opt.tolDisplacement * std::abs(dTarget);
-      if (balanced && res.factorizations == 0) return converged();  // no factor yet: balanced at the start
-      if (it == opt.maxIterations) return false;
+      const bool atStart = balanced && res.factorizations == 0;  // no factor yet: balanced at the start
+      if (atStart || it == opt.maxIterations) {
+        report(rec);
+        return atStart && converged();
+      }
       const bool refactor = !opt.modified || it == 0 || !(rn < lastRn / 3);
       lastRn = rn;
       Eigen::VectorXd du;
       double dL = 0;
-      if (balanced) {  // the correction with the factor in hand decides
-        if (!newtonStep(false, it, uTrial, r, g, du, dL)) return false;
-        if (du.lpNorm<Eigen::Infinity>() <= opt.tolDisplacement * std::max(uTrial.lpNorm<Eigen::Infinity>(), 1e-30))
-          return converged();
-        if (refactor && !newtonStep(true, it, uTrial, r, g, du, dL)) return false;
-      } else if (!newtonStep(refactor, it, uTrial, r, g, du, dL)) {
-        return false;
-      }
+      const Outcome o = correction(balanced, refactor, it, uTrial, r, g, du, dL);
+      if (o != Outcome::Failed) rec.correction = du.lpNorm<Eigen::Infinity>();
+      report(rec);
+      if (o != Outcome::Step) return o == Outcome::Converged && converged();
       const double a = opt.lineSearch ? lineSearch(uTrial, Lt, target, r, du, dL) : 1;
       for (size_t d = 0; d < I.freeIndex.size(); ++d)
         if (I.freeIndex[d] >= 0) uTrial(d) += a * du(I.freeIndex[d]);
@@ -146,6 +148,25 @@ struct Solver::Impl::NewtonPath {
       ++res.newtonIterations;
     }
     return false;
+  }
+
+  void report(const NewtonIteration& rec) const {
+    if (opt.onIteration) opt.onIteration(rec);
+  }
+
+  enum class Outcome { Failed, Converged, Step };
+  // the correction du (dL) at residual r: where the state is balanced, the one the factor in hand gives
+  // decides whether it has converged; else (or when that correction is too large) the Newton step
+  Outcome correction(bool balanced, bool refactor, int it, const Eigen::VectorXd& uTrial, const Eigen::VectorXd& r,
+                     double g, Eigen::VectorXd& du, double& dL) {
+    if (balanced) {
+      if (!newtonStep(false, it, uTrial, r, g, du, dL)) return Outcome::Failed;
+      if (du.lpNorm<Eigen::Infinity>() <= opt.tolDisplacement * std::max(uTrial.lpNorm<Eigen::Infinity>(), 1e-30))
+        return Outcome::Converged;
+      if (refactor && !newtonStep(true, it, uTrial, r, g, du, dL)) return Outcome::Failed;
+      return Outcome::Step;
+    }
+    return newtonStep(refactor, it, uTrial, r, g, du, dL) ? Outcome::Step : Outcome::Failed;
   }
 
   bool converged() {
@@ -265,6 +286,19 @@ struct Solver::Impl::NewtonPath {
     return res;
   }
 };
+
+std::string newtonIterationText(const NewtonIteration& it, const NewtonIteration* before) {
+  const auto ratio = [](double now, double was) {
+    return was > 0 && std::isfinite(now) ? " (x" + scientificText(now / was) + ")" : std::string();
+  };
+  std::string s = "increment " + std::to_string(it.increment + 1) + ", iteration " + std::to_string(it.iteration) +
+                  ": |r| " + scientificText(it.residual) + " N = " + scientificText(it.residual / it.reference) + " of " +
+                  significantText(it.reference, 3) + " N";
+  if (before) s += ratio(it.residual, before->residual);
+  s += ", |du| " + (std::isfinite(it.correction) ? scientificText(it.correction) + " mm" : std::string("none"));
+  if (before) s += ratio(it.correction, before->correction);
+  return s;
+}
 
 // Newton with load increments (ctrl null: load factor target * scale on the forces and prescribed
 // displacements) or displacement control (ctrl: free-dof weights w, w . u stepped to target; the load

@@ -537,12 +537,18 @@ TEST(FeSolver, NeoHookeanNewtonConvergesQuadratically) {
     o.tolDisplacement = 1e-12;
     o.extrapolate = false;  // each increment from the converged state: the rate from a residual far above the floor
     std::vector<std::vector<double>> rs;
-    o.onIteration = [&](int inc, int, double rn, double) {
-      if (int(rs.size()) <= inc) rs.resize(std::size_t(inc) + 1);
-      rs[std::size_t(inc)].push_back(rn);
+    int reports = 0, withCorrection = 0;
+    o.onIteration = [&](const NewtonIteration& it) {
+      if (int(rs.size()) <= it.increment) rs.resize(std::size_t(it.increment) + 1);
+      rs[std::size_t(it.increment)].push_back(it.residual);
+      ++reports;
+      withCorrection += std::isfinite(it.correction) && it.correction >= 0;
     };
     const Result r = solveNonlinear(p, o);
     ASSERT_EQ(rs.size(), 4u);
+    // one report per iteration: each step taken, and the state that converged (with its check correction)
+    EXPECT_EQ(reports, r.newtonIterations + r.increments);
+    EXPECT_EQ(withCorrection, reports);
     double worstRate = 10;
     for (const auto& v : rs) {
       std::printf("[quadratic] %s increment residuals:", materialModelName(model));

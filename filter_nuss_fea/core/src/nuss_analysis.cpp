@@ -513,17 +513,14 @@ double elevationOf(const Eigen::VectorXd& u, const Analysis& a, const Vector3d& 
 
 }  // namespace
 
-std::string newtonHistoryText(const Analysis& a) {
-  std::string s;
+std::vector<std::string> newtonHistoryLines(const Analysis& a) {
+  std::vector<std::string> lines;
   for (std::size_t k = 0; k < a.newtonHistory.size(); ++k) {
     const auto& h = a.newtonHistory[k];
     const bool first = k == 0 || a.newtonHistory[k - 1].increment != h.increment;
-    if (first) s += (k ? "; " : "") + std::to_string(h.increment + 1) + ":";
-    s += " " + scientificText(h.relativeResidual);
-    if (!first && a.newtonHistory[k - 1].relativeResidual > 0)
-      s += " (x" + scientificText(h.relativeResidual / a.newtonHistory[k - 1].relativeResidual) + ")";
+    lines.push_back(fe::newtonIterationText(h, first ? nullptr : &a.newtonHistory[k - 1]));
   }
-  return s;
+  return lines;
 }
 
 std::string notReportableBecause(const fe::TetgenOptions& mesh, const CageSurface& cage) {
@@ -754,14 +751,15 @@ fe::Result linearAt(const Solves& s, double F, Curve* curve) {
   return r;
 }
 
-// the Newton options of a solve that records each iteration's relative residual into a.newtonHistory
-// (increments numbered on from the solves before)
+// the Newton options of a solve that records each iteration into a.newtonHistory (increments numbered on
+// from the solves before)
 fe::NewtonOptions withHistory(const fe::NewtonOptions& o, Analysis& a) {
   fe::NewtonOptions no = o;
   const int first = a.newtonHistory.empty() ? 0 : a.newtonHistory.back().increment + 1;
-  no.onIteration = [&a, first, user = o.onIteration](int inc, int it, double rn, double ref) {
-    a.newtonHistory.push_back({first + inc, rn / ref});
-    if (user) user(inc, it, rn, ref);
+  no.onIteration = [&a, first, user = o.onIteration](const fe::NewtonIteration& it) {
+    a.newtonHistory.push_back(it);
+    a.newtonHistory.back().increment += first;
+    if (user) user(it);
   };
   return no;
 }

@@ -71,6 +71,24 @@ struct Problem {
   void addForce(int node, const Eigen::Vector3d& f);
 };
 
+/// One Newton iteration of a nonlinear solve, as NewtonOptions::onIteration reports it. Quadratic
+/// convergence shows in the residual's and the correction's ratios to the iteration before (each about the
+/// square of the one before, at the end of an increment).
+struct NewtonIteration {
+  int increment = 0;        ///< the increment, counted from 0 over the solve's converged increments
+  int iteration = 0;        ///< 0: the increment's first state (the predictor's)
+  double residual = 0;      ///< ||r_free||_2 at the iteration's state, N
+  double reference = 0;     ///< the residual's reference max(||f_ext||_2, ||reactions||_2), N
+  /// max |du| of the Newton correction computed for that residual, mm (the step taken is it times the line
+  /// search's factor); at the iteration that converged, the check correction; NaN where none was computed
+  double correction = 0;
+};
+
+/// One line for a Newton iteration: "increment 3, iteration 2: |r| 1.2e-02 N = 1.0e-03 of 12.3 N
+/// (x1.2e-02), |du| 4.5e-03 mm (x3.4e-02)", the ratios to `before` (the iteration before in the same
+/// increment; none for an increment's first)
+std::string newtonIterationText(const NewtonIteration& it, const NewtonIteration* before = nullptr);
+
 struct NewtonOptions {
   int loadSteps = 10;         ///< equal load increments
   int maxIterations = 25;     ///< per increment
@@ -88,9 +106,9 @@ struct NewtonOptions {
   std::vector<double> stops;
   /// called after every converged increment with (load factor, displacements)
   std::function<void(double, const Eigen::VectorXd&)> onIncrement;
-  /// called at every Newton iteration with (increment, iteration, ||r_free||, the residual's reference
-  /// max(||f_ext||, ||reactions||)) before the convergence test
-  std::function<void(int, int, double, double)> onIteration;
+  /// called once per Newton iteration (NewtonIteration: the residual, its reference and the correction
+  /// computed for it), after the correction and before the step
+  std::function<void(const NewtonIteration&)> onIteration;
   /// predictor: each increment starts from the converged state extrapolated along the last increment's
   /// path (u_n + s (u_n - u_n-1), s the ratio of the steps); off: from the converged state
   bool extrapolate = true;

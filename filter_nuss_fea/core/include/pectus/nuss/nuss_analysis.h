@@ -247,18 +247,17 @@ struct Analysis {
   double secondShare = 0;                        ///< share of Fe on the second bar
   int components = 0;
   int nonlinearSolves = 0, newtonIterations = 0, factorizations = 0;
-  /// every Newton iteration of the nonlinear solves, in order: the increment (counted over all solves) and
-  /// the residual over its reference (max(|f_ext|, |reactions|)); newtonHistoryText() writes it for the Log
-  struct NewtonStep { int increment; double relativeResidual; };
-  std::vector<NewtonStep> newtonHistory;
+  /// every Newton iteration of the nonlinear solves, in order, the increments counted over all solves;
+  /// newtonHistoryLines() writes it for the Log
+  std::vector<fe::NewtonIteration> newtonHistory;
   double secondsMesh = 0, secondsSolve = 0;
   Eigen::Vector3d displacementAt(const Eigen::Vector3d& p) const;  ///< of the nearest node
 };
 
-/// The Newton history of an analysis, per increment: "1: 1.0e+00 1.2e+04 (x1.2e+04) 8.5e-01 (x7.1e-05) ...",
-/// each iteration's |r| / reference and, in brackets, its ratio to the iteration before (quadratic convergence
-/// squares the residual: the ratios fall fast). Empty for a linear analysis.
-std::string newtonHistoryText(const Analysis& a);
+/// The Newton history of an analysis, one line per iteration (fe::newtonIterationText): the residual, its
+/// reference and the correction, each with its ratio to the iteration before in the same increment (quadratic
+/// convergence squares them: the ratios fall fast). Empty for a linear analysis.
+std::vector<std::string> newtonHistoryLines(const Analysis& a);
 
 /// Runs the analysis: tetrahedralise, place the BCs/loads, solve (calibrating if asked), post-process.
 /// Throws InputError with a message naming what to fix: TopologyError for an open/self-intersecting surface
