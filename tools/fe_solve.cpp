@@ -1,11 +1,12 @@
 // pectus_fe_solve: solves a CalculiX deck of the kind the Nuss FE filter writes (BASE.inp, or
 // pectus_nuss_cli --inp) with pectus_fe, so the same deck can be run by both programs and timed whole
 // process against whole process (bench/fe_vs_ccx.py --cases cage).
-//   pectus_fe_solve deck.inp [--vtu out.vtu] [--trace] [--no-predictor] [--tolerances residual displacement]
+//   pectus_fe_solve deck.inp [--vtu out.vtu] [--trace] [--no-predictor] [--tolerances residual displacement] [--between d]
 // Linear unless the deck's *STEP says NLGEOM (then Newton with the deck's increments and the library's
 // defaults; --trace prints one line per iteration to stderr: the residual, its reference and the
 // correction, with their ratios to the iteration before; --no-predictor starts each increment from the
-// converged state, --tolerances sets NewtonOptions' tolResidual and tolDisplacement).
+// converged state, --tolerances sets NewtonOptions' tolResidual and tolDisplacement, --between its
+// tolDisplacementBetween).
 // Prints one line of key=value figures (tets, dofs, phase times) and the mean displacement of the
 // *NODE PRINT nodes.
 #include <chrono>
@@ -22,21 +23,22 @@ using namespace pectus::fe;
 int main(int argc, char** argv) {
   std::string deck, vtu;
   bool trace = false, predictor = true;
-  double tolR = 0, tolD = 0;
+  double tolR = 0, tolD = 0, tolBetween = 0;
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--vtu" && i + 1 < argc) vtu = argv[++i];
     else if (a == "--trace") trace = true;
     else if (a == "--no-predictor") predictor = false;
     else if (a == "--tolerances" && i + 2 < argc) tolR = std::atof(argv[++i]), tolD = std::atof(argv[++i]);
+    else if (a == "--between" && i + 1 < argc) tolBetween = std::atof(argv[++i]);
     else if (deck.empty() && !a.empty() && a[0] != '-') deck = a;
     else {
-      std::fprintf(stderr, "usage: pectus_fe_solve deck.inp [--vtu out.vtu] [--trace] [--no-predictor] [--tolerances r d] (unknown argument %s)\n", a.c_str());
+      std::fprintf(stderr, "usage: pectus_fe_solve deck.inp [--vtu out.vtu] [--trace] [--no-predictor] [--tolerances r d] [--between d] (unknown argument %s)\n", a.c_str());
       return 2;
     }
   }
   if (deck.empty()) {
-    std::fprintf(stderr, "usage: pectus_fe_solve deck.inp [--vtu out.vtu] [--trace] [--no-predictor] [--tolerances r d]\n");
+    std::fprintf(stderr, "usage: pectus_fe_solve deck.inp [--vtu out.vtu] [--trace] [--no-predictor] [--tolerances r d] [--between d]\n");
     return 2;
   }
   using Clock = std::chrono::steady_clock;
@@ -54,6 +56,7 @@ int main(int argc, char** argv) {
     no.extrapolate = predictor;
     if (tolR > 0) no.tolResidual = tolR;
     if (tolD > 0) no.tolDisplacement = tolD;
+    if (tolBetween > 0) no.tolDisplacementBetween = tolBetween;
     NewtonIteration before;
     if (trace)
       no.onIteration = [&before](const NewtonIteration& it) {

@@ -43,6 +43,7 @@ struct Solver::Impl::NewtonPath {
   const double maxStep;
   double L = 0;  // displacement control: load factor of the converged state
   int cut = 0;
+  double tolD = 0;  // the displacement criterion of the increment in hand
   // the converged state before u (the predictor extrapolates through it and u, once lam > lamPrev)
   Eigen::VectorXd uPrev;
   double lamPrev = 0, LPrev = 0;
@@ -64,6 +65,7 @@ struct Solver::Impl::NewtonPath {
   // one increment: Newton iterations towards the next load factor; taken if they converge, else the step is cut
   void increment() {
     const double target = nextTarget();
+    tolD = kept(target) ? opt.tolDisplacement : std::max(opt.tolDisplacement, opt.tolDisplacementBetween);
     double Lt = L;  // load factor of the trial state (displacement control)
     Eigen::VectorXd uTrial = trialStart(target, Lt);
     int it = 0;
@@ -77,6 +79,12 @@ struct Solver::Impl::NewtonPath {
     for (double st : opt.stops)
       if (st > lam + 1e-12 && st < target - 1e-12) { target = st; break; }
     return target;
+  }
+
+  // whether the state at load factor `target` is kept (the end or a stop), not only passed through
+  bool kept(double target) const {
+    if (!(target < 1.0 - 1e-12)) return true;
+    return std::any_of(opt.stops.begin(), opt.stops.end(), [&](double st) { return std::abs(st - target) <= 1e-12; });
   }
 
   // the increment's first state: the converged one, moved along the path the last increment took in
@@ -114,7 +122,7 @@ struct Solver::Impl::NewtonPath {
   // Newton iterations from uTrial (load factor Lt) at the target; true if they converged (it: their count).
   // Converged: the residual within tolResidual of its reference, and the correction the factor in hand
   // gives for it (one back-substitution, no factorisation: the step modified Newton would take) within
-  // tolDisplacement of the largest displacement. The state taken is the one whose residual was checked.
+  // tolD of the largest displacement. The state taken is the one whose residual was checked.
   bool iterate(double target, Eigen::VectorXd& uTrial, double& Lt, int& it) {
     double lastRn = 1e300;
     for (; it <= opt.maxIterations; ++it) {
@@ -161,7 +169,7 @@ struct Solver::Impl::NewtonPath {
                      double g, Eigen::VectorXd& du, double& dL) {
     if (balanced) {
       if (!newtonStep(false, it, uTrial, r, g, du, dL)) return Outcome::Failed;
-      if (du.lpNorm<Eigen::Infinity>() <= opt.tolDisplacement * std::max(uTrial.lpNorm<Eigen::Infinity>(), 1e-30))
+      if (du.lpNorm<Eigen::Infinity>() <= tolD * std::max(uTrial.lpNorm<Eigen::Infinity>(), 1e-30))
         return Outcome::Converged;
       if (refactor && !newtonStep(true, it, uTrial, r, g, du, dL)) return Outcome::Failed;
       return Outcome::Step;

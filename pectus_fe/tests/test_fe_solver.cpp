@@ -596,6 +596,33 @@ TEST(FeSolver, DefaultCriteriaAndThePredictor) {
   EXPECT_LT(byDefault.newtonIterations, ref.newtonIterations);
 }
 
+// The increments the solve only passes through converge to tolDisplacementBetween, the end and the stops
+// to tolDisplacement: the end state is as accurate as with tolDisplacement throughout (2e-5 of a solve
+// converged to round-off), in no more iterations, and the stops' states are those of the strict solve
+TEST(FeSolver, PassedThroughIncrementsConvergeLooserThanTheEnd) {
+  const double L = 30;
+  const TetMesh q = toQuadratic(structuredBox(kB, kB, L, 2, 2, 6, 1));
+  const Problem p = stubbyCantilever(q, L, MaterialModel::NeoHookean);
+  Solver s(p);
+  NewtonOptions tight, strict, byDefault;
+  tight.tolResidual = tight.tolDisplacement = tight.tolDisplacementBetween = 1e-12;
+  strict.tolDisplacementBetween = strict.tolDisplacement;
+  strict.stops = byDefault.stops = {0.5};
+  std::vector<Eigen::VectorXd> atStop(2);
+  strict.onIncrement = [&](double f, const Eigen::VectorXd& u) { if (std::abs(f - 0.5) < 1e-12) atStop[0] = u; };
+  byDefault.onIncrement = [&](double f, const Eigen::VectorXd& u) { if (std::abs(f - 0.5) < 1e-12) atStop[1] = u; };
+  const Result ref = s.solveNonlinear(tight), a = s.solveNonlinear(strict), b = s.solveNonlinear(byDefault);
+  const auto err = [&](const Result& r) { return (r.u - ref.u).lpNorm<Eigen::Infinity>() / ref.u.lpNorm<Eigen::Infinity>(); };
+  const double stopDiff = (atStop[1] - atStop[0]).lpNorm<Eigen::Infinity>() / atStop[0].lpNorm<Eigen::Infinity>();
+  std::printf("[between] tolDisplacement throughout: %d iterations, error %.1e; between increments %.0e: %d iterations, "
+              "error %.1e; the stop's states differ by %.1e\n", a.newtonIterations, err(a), byDefault.tolDisplacementBetween,
+              b.newtonIterations, err(b), stopDiff);
+  EXPECT_LT(err(a), 2e-5);
+  EXPECT_LT(err(b), 2e-5);
+  EXPECT_LE(b.newtonIterations, a.newtonIterations);
+  EXPECT_LT(stopDiff, 2e-5);
+}
+
 // Line search and automatic steps -------------------------------------------------------------------
 
 // a neo-Hookean cantilever loaded in one increment to a linear tip deflection of 1.2 x its length: full

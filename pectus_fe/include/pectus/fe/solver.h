@@ -98,6 +98,12 @@ struct NewtonOptions {
   /// |w . u - target| <= tolDisplacement * |target|. The state taken is the one whose residual was checked.
   double tolResidual = 1e-4;
   double tolDisplacement = 1e-5;
+  /// The displacement criterion of the increments whose state the solve only passes through (neither the
+  /// end nor a stop): max |du| <= tolDisplacementBetween * max |u| (tolDisplacement where that is larger).
+  /// Such a state is the start of the next increment, whose iterations remove the error it carries, so
+  /// the end state is as accurate as with tolDisplacement throughout; onIncrement sees these states with
+  /// this accuracy. 1e-3 is CalculiX's C_n^alpha = 0.01 of the increment's change at ten increments.
+  double tolDisplacementBetween = 1e-3;
   int maxCutbacks = 4;        ///< halve a failing increment at most this many times
   /// modified Newton: keep the factorisation while the residual falls at least 3x per iteration,
   /// refactorise otherwise (a factorisation costs ~20 solves on a 100k-dof TET10 model)
