@@ -42,10 +42,8 @@ if [ "$HOST" = 2020.09 ]; then
 else
   # the forky userland's MeshLab (which sees this /tmp) loads build-2025.07's plugins from a fresh per-user
   # extra-plugins folder
-  chroot "$ROOT/.hosts/forky" apt-get install -y -q --no-install-recommends libmuparser2v5 libqhull-r8.0 lib3ds-1-3 \
-    libopenctm1 >/dev/null
-  extra="$home/.local/share/VCG/MeshLab_64bit_fp/MeshLabExtraPlugins/$HOST"
-  mkdir -p "$extra" && cp "$ROOT"/build-"$HOST"/plugins/*.so "$extra/"
+  . "$ROOT/scripts/gui_plugins.sh"
+  gui_plugins "$HOST" "$home"
   for m in "${MESHES[@]}"; do cp "$m" "$home/"; done
   inside=""; for m in "${MESHES[@]}"; do inside+=" '$home/$(basename "$m")'"; done
   "$ROOT/scripts/host.sh" "$HOST" run bash -c "mountpoint -q /proc || mount -t proc proc /proc; \

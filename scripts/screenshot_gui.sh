@@ -14,13 +14,9 @@ if [ "${1:-}" = --host ]; then HOST="$2"; shift 2; fi
 MESH="$(readlink -f "$1")"; OUT="$2"; mkdir -p "$OUT"
 command -v xdotool >/dev/null || apt-get install -y -q xdotool >/dev/null
 if [ "$HOST" = 2025.07 ]; then
-  # MeshLab 2025.07 skips the per-user plugins when one of its own fails to load: install the libraries
-  # its plugins need that the userland's minimal install left out
-  chroot "$ROOT/.hosts/forky" apt-get install -y -q --no-install-recommends libmuparser2v5 libqhull-r8.0 lib3ds-1-3 \
-    libopenctm1 >/dev/null
   home="$(mktemp -d /tmp/pectus-meshlab-home.XXXX)"
-  extra="$home/.local/share/VCG/MeshLab_64bit_fp/MeshLabExtraPlugins/2025.07"
-  mkdir -p "$extra" && cp "$ROOT"/build-2025.07/plugins/*.so "$extra/"
+  . "$ROOT/scripts/gui_plugins.sh"
+  gui_plugins 2025.07 "$home"
   export DISPLAY=:94
   Xvfb $DISPLAY -screen 0 1280x860x24 >/dev/null 2>&1 & XPID=$!
   "$ROOT/scripts/host.sh" 2025.07 run bash -c "mount -t proc proc /proc && HOME='$home' DISPLAY=$DISPLAY exec meshlab '$MESH'" \
